@@ -1,0 +1,38 @@
+//! # tmrotor
+//!
+//! Nonlinear, thermo-mechanically coupled vibration of rotor–bearing systems, solved by
+//! harmonic balance with continuation in rotor speed and Floquet stability, recorded as
+//! protobuf messages in MCAP files.
+//!
+//! ## The pipeline
+//!
+//! ```text
+//! model file (TOML) ─► model: FE rotor + bearings + thermal network      [model], [bearing], [thermal], [coupled]
+//!                        │ implements System (residual terms + exact derivatives)   [system]
+//!                        ▼
+//!                  harmonic balance: basis, AFT, Newton (modified IHB)              [hb]
+//!                        ▼
+//!                  continuation in ω (pseudo-arclength)                             [continuation]
+//!                        ▼
+//!                  Floquet stability, bifurcation detection / location / type       [stability]
+//!                        ▼
+//!                  sink ─► MCAP file (protobuf messages on topics)                  [record]
+//! ```
+//!
+//! Linear analyses of the assembled rotor (modes, Campbell diagram) live in [`linear`];
+//! reference problems with known answers (Duffing, absorber, Jeffcott) in [`systems`];
+//! the time integrator used as an independent reference in [`integrate`].
+
+pub mod bearing;
+pub mod cli;
+pub mod continuation;
+pub mod coupled;
+pub mod hb;
+pub mod integrate;
+pub mod linear;
+pub mod model;
+pub mod record;
+pub mod stability;
+pub mod system;
+pub mod systems;
+pub mod thermal;
