@@ -185,3 +185,18 @@ pub trait System: Sync {
         out.iter_mut().for_each(|v| *v = 0.0);
     }
 }
+
+/// A periodic solution `x(t)`, `ẋ(t)`, `T(t)` of a [`System`], as the stability layer
+/// needs it: the engine's harmonic-balance solution implements it, and so does a
+/// time-integrated orbit in tests.
+pub trait PeriodicOrbit {
+    /// Continuation parameter `ω` (rad/s) the orbit belongs to.
+    fn omega(&self) -> f64;
+
+    /// Period in physical time (s).
+    fn period(&self) -> f64;
+
+    /// Full state at physical time `t`: `x` and `v` (length `n_mech`) and `temp`
+    /// (length `n_therm`).
+    fn state_at(&self, t: f64, x: &mut [f64], v: &mut [f64], temp: &mut [f64]);
+}
