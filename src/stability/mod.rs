@@ -1,1 +1,180 @@
-//! See the crate docs for where this layer sits in the pipeline.
+//! Floquet stability of periodic solutions and the classification of bifurcations
+//! (paper Section 4.2).
+//!
+//! The shared vocabulary lives here: [`FloquetResult`] (multipliers + stable flag),
+//! [`BifurcationKind`], the [`StabilityMethod`] seam the continuation calls at every
+//! point, and [`classify_crossing`], which tells from the multipliers on both sides of a
+//! stability change how they left the unit circle: through +1 (saddle-node / fold),
+//! through −1 (period doubling) or as a complex pair (Neimark–Sacker).
+
+use num_complex::Complex64;
+use thiserror::Error;
+
+use crate::system::{PeriodicOrbit, System};
+
+/// Floquet multipliers of one periodic solution.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FloquetResult {
+    /// Eigenvalues of the monodromy matrix (full period), in no particular order.
+    pub multipliers: Vec<Complex64>,
+    /// True when every multiplier lies inside the unit circle (within the method's
+    /// tolerance, see [`FloquetResult::unstable_count`]).
+    pub stable: bool,
+}
+
+impl FloquetResult {
+    /// Builds a result, deciding `stable` with [`UNIT_CIRCLE_TOL`].
+    pub fn new(multipliers: Vec<Complex64>) -> Self {
+        let stable = unstable_count(&multipliers) == 0;
+        Self {
+            multipliers,
+            stable,
+        }
+    }
+
+    /// Number of multipliers with modulus above `1 + UNIT_CIRCLE_TOL`.
+    pub fn unstable_count(&self) -> usize {
+        unstable_count(&self.multipliers)
+    }
+
+    /// Largest multiplier modulus.
+    pub fn spectral_radius(&self) -> f64 {
+        self.multipliers
+            .iter()
+            .map(|m| m.norm())
+            .fold(0.0, f64::max)
+    }
+}
+
+/// A multiplier counts as outside the unit circle when `|μ| > 1 + UNIT_CIRCLE_TOL`.
+///
+/// Why 1e-6: slow thermal modes give real multipliers `exp(−P/τ_th)` just below +1
+/// (thermal time constants of minutes against periods of milliseconds), and the
+/// trivial multiplier of an autonomous direction sits at +1 to within the accuracy of
+/// the monodromy matrix; a tolerance keeps both from flipping the stable flag.
+pub const UNIT_CIRCLE_TOL: f64 = 1e-6;
+
+fn unstable_count(multipliers: &[Complex64]) -> usize {
+    multipliers
+        .iter()
+        .filter(|m| m.norm() > 1.0 + UNIT_CIRCLE_TOL)
+        .count()
+}
+
+/// How a periodic solution loses or gains stability.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BifurcationKind {
+    /// A real multiplier crosses the unit circle at +1 (fold / saddle-node; also
+    /// transcritical or symmetry breaking).
+    SaddleNode,
+    /// A real multiplier crosses at −1.
+    PeriodDoubling,
+    /// A complex-conjugate pair crosses away from the real axis.
+    NeimarkSacker,
+}
+
+impl BifurcationKind {
+    /// Short lower-case label used in CSV output and recordings.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::SaddleNode => "saddle-node",
+            Self::PeriodDoubling => "period-doubling",
+            Self::NeimarkSacker => "neimark-sacker",
+        }
+    }
+}
+
+/// Errors of the stability layer.
+#[derive(Debug, Error)]
+pub enum StabilityError {
+    #[error("monodromy matrix has non-finite entries at ω = {omega} rad/s")]
+    NonFinite { omega: f64 },
+    #[error("eigenvalue solver failed for the {dim}×{dim} monodromy matrix: {reason}")]
+    Eigen { dim: usize, reason: String },
+    #[error("invalid stability setting {field} = {value}: {reason}")]
+    Setting {
+        field: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// A way of computing the Floquet multipliers of a periodic solution. The continuation
+/// calls it at every point; implementations live in this module's submodules.
+pub trait StabilityMethod: Sync {
+    /// Multipliers of `orbit`, a periodic solution of `system`.
+    fn multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError>;
+}
+
+/// Classifies the stability change between two neighbouring points of a branch from
+/// their multipliers, or `None` when the number of multipliers outside the unit circle is
+/// the same on both sides.
+///
+/// The multiplier(s) that crossed are taken from the side where they are outside: the
+/// ones outside the circle there that lie closest to it. A crossing multiplier with an
+/// imaginary part above `0.05·|μ|` (a genuine complex pair) is Neimark–Sacker; otherwise the
+/// sign of its real part decides between saddle-node (+1) and period doubling (−1).
+pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Option<BifurcationKind> {
+    let (nb, na) = (before.unstable_count(), after.unstable_count());
+    if nb == na {
+        return None;
+    }
+    let outside = if na > nb { after } else { before };
+    let crossing = outside
+        .multipliers
+        .iter()
+        .filter(|m| m.norm() > 1.0 + UNIT_CIRCLE_TOL)
+        .min_by(|a, b| a.norm().total_cmp(&b.norm()))?;
+    Some(if crossing.im.abs() > 0.05 * crossing.norm() {
+        BifurcationKind::NeimarkSacker
+    } else if crossing.re > 0.0 {
+        BifurcationKind::SaddleNode
+    } else {
+        BifurcationKind::PeriodDoubling
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn res(m: &[(f64, f64)]) -> FloquetResult {
+        FloquetResult::new(m.iter().map(|&(re, im)| Complex64::new(re, im)).collect())
+    }
+
+    #[test]
+    fn crossings_are_classified_by_where_they_leave_the_circle() {
+        let stable = res(&[(0.9, 0.0), (0.2, 0.3), (0.2, -0.3)]);
+        let fold = res(&[(1.1, 0.0), (0.2, 0.3), (0.2, -0.3)]);
+        let flip = res(&[(-1.05, 0.0), (0.2, 0.3), (0.2, -0.3)]);
+        let ns = res(&[(0.9, 0.0), (0.6, 0.9), (0.6, -0.9)]);
+        assert!(stable.stable && !fold.stable);
+        assert_eq!(
+            classify_crossing(&stable, &fold),
+            Some(BifurcationKind::SaddleNode)
+        );
+        assert_eq!(
+            classify_crossing(&fold, &stable),
+            Some(BifurcationKind::SaddleNode)
+        );
+        assert_eq!(
+            classify_crossing(&stable, &flip),
+            Some(BifurcationKind::PeriodDoubling)
+        );
+        assert_eq!(
+            classify_crossing(&stable, &ns),
+            Some(BifurcationKind::NeimarkSacker)
+        );
+        assert_eq!(classify_crossing(&stable, &stable), None);
+    }
+
+    #[test]
+    fn thermal_multipliers_just_below_one_stay_stable() {
+        let r = res(&[(1.0 - 1e-9, 0.0), (1.0 + 1e-9, 0.0)]);
+        assert!(r.stable);
+    }
+}
