@@ -147,6 +147,8 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
             -minv_d[(i - n, j - n)]
         }
     });
+    let mut a = a;
+    let scale = balance(&mut a);
     let eig = a
         .eigen()
         .map_err(|e| LinearError::Eigen(format!("{e:?}")))?;
@@ -158,7 +160,7 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
         if lam.im.is_nan() || lam.im <= 0.0 {
             continue;
         }
-        let mut shape: Vec<Complex<f64>> = (0..n).map(|i| u[(i, k)]).collect();
+        let mut shape: Vec<Complex<f64>> = (0..n).map(|i| u[(i, k)] * scale[i]).collect();
         let pivot = shape
             .iter()
             .copied()
@@ -180,6 +182,61 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
     out.sort_by(|a, b| a.undamped_rad_s.total_cmp(&b.undamped_rad_s));
     out.truncate(count);
     Ok(out)
+}
+
+/// Diagonal balancing (Parlett & Reinsch, Numer. Math. 13 (1969) 293–304, as in LAPACK
+/// `dgebal` without permutation): replaces `a` by `D⁻¹ a D` with `D` a diagonal of powers
+/// of two chosen so that each row and column have similar norms, and returns `D`. The
+/// eigenvalues are unchanged; an eigenvector `v` of the balanced matrix gives `D v`.
+/// Rotor state matrices mix translations and rotations, and stiff supports with light
+/// nodes, so their entries span many decades; without balancing the low modes lose
+/// accuracy to the largest entries.
+pub fn balance(a: &mut Mat<f64>) -> Vec<f64> {
+    let n = a.nrows();
+    let mut d = vec![1.0; n];
+    let radix = 2.0_f64;
+    for _sweep in 0..100 {
+        let mut done = true;
+        for i in 0..n {
+            let (mut c, mut r) = (0.0, 0.0);
+            for j in 0..n {
+                if j != i {
+                    c += a[(j, i)].abs();
+                    r += a[(i, j)].abs();
+                }
+            }
+            if c == 0.0 || r == 0.0 {
+                continue;
+            }
+            let total = c + r;
+            let mut f = 1.0;
+            let (mut cc, mut rr) = (c, r);
+            while cc < rr / radix {
+                cc *= radix;
+                rr /= radix;
+                f *= radix;
+            }
+            while cc >= rr * radix {
+                cc /= radix;
+                rr *= radix;
+                f /= radix;
+            }
+            if (cc + rr) < 0.95 * total {
+                done = false;
+                d[i] *= f;
+                for j in 0..n {
+                    a[(i, j)] /= f;
+                }
+                for j in 0..n {
+                    a[(j, i)] *= f;
+                }
+            }
+        }
+        if done {
+            break;
+        }
+    }
+    d
 }
 
 /// Frequencies of one speed of a Campbell diagram.
