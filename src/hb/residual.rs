@@ -215,7 +215,7 @@ impl<'a> HarmonicBalance<'a> {
     /// 2-norms of the mechanical and thermal parts of `r`.
     pub fn norms(&self, r: &[f64]) -> ResidualNorms {
         let m = self.n_mech_unknowns();
-        let n2 = |s: &[f64]| s.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let n2 = |s: &[f64]| (s.iter().map(|v| v * v).sum::<f64>() + 0.0).sqrt();
         ResidualNorms {
             mech: n2(&r[..m]),
             therm: n2(&r[m..]),
