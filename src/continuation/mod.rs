@@ -1,1 +1,597 @@
-//! See the crate docs for where this layer sits in the pipeline.
+//! Pseudo-arclength continuation of harmonic-balance solutions in the continuation
+//! parameter ω, with stability per point and located bifurcations.
+//!
+//! ## Method
+//! Unknowns `X = (A, ω)` are measured in scaled units `u = A / s` (`s = s_mech` for
+//! mechanical, `s_therm` for thermal coefficients) and `ϖ = ω / s_ω`, so that
+//! displacements, temperatures and speed weigh comparably in the arclength (see
+//! [`ContinuationOptions`] for the scales). From an accepted point with unit tangent `τ`:
+//!
+//! * predictor `X + ds·τ`; corrector: damped Newton ([`crate::hb::newton`]) on
+//!   `R(A, ω) = 0` plus `τ·(X − X_prev) = ds` (the bordered system stays regular at folds,
+//!   so folds are passed and unstable parts traced);
+//! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
+//!   orientation (`τ_prev·t > 0`), i.e. direction control;
+//! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
+//!   after a failed corrector or a turn of the tangent by more than 60°;
+//! * the start point is Newton at `ω_start` from zero coefficients (its first iterate is the
+//!   linear response); its tangent is oriented towards `ω_end`;
+//! * stops when ω leaves `[min(ω_start, ω_end), max(…)]` (the last point is re-solved on the
+//!   bound), after `max_points`, or when the step falls below `ds_min`.
+//!
+//! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
+//! [`HbSolution`]. When the number of multipliers outside the unit circle differs between
+//! neighbours, the change is located by bisection in arclength (re-correcting from the
+//! earlier point at intermediate arclength) until the bracket is shorter than
+//! `bifurcation_tol_arclength`, classified with [`classify_crossing`], and emitted as a
+//! labelled point. One change per step is located (the first along the step).
+//!
+//! The driver follows argmin's split: [`Continuation::step`] returns a [`StepOutcome`],
+//! [`Continuation::run`] loops and calls an observer per outcome.
+
+pub mod csv;
+
+use thiserror::Error;
+
+use crate::hb::newton::{self, ArcConstraint, NewtonError, NewtonOptions};
+use crate::hb::{HarmonicBalance, HbError, HbSolution, LinearSolver, SolveError, condense::Border};
+use crate::stability::{BifurcationKind, FloquetResult, StabilityMethod, classify_crossing};
+
+/// Continuation settings. Every default is given in the field's doc.
+#[derive(Clone, Debug)]
+pub struct ContinuationOptions {
+    /// Start of the sweep (rad/s).
+    pub omega_start: f64,
+    /// End of the sweep (rad/s); the sweep direction is from start to end.
+    pub omega_end: f64,
+    /// First step in scaled arclength (default 0.02: 2 % of the ω range when the response
+    /// is flat).
+    pub ds_initial: f64,
+    /// Smallest step before giving up (default 1e-7).
+    pub ds_min: f64,
+    /// Largest step (default 0.1).
+    pub ds_max: f64,
+    /// Newton iterations the step control aims at (default 4).
+    pub target_iterations: usize,
+    /// Maximum number of accepted points (default 2000).
+    pub max_points: usize,
+    /// Newton settings of the corrector (defaults of [`NewtonOptions`]).
+    pub newton: NewtonOptions,
+    /// Scale of mechanical coefficients; default (`None`): the largest mechanical
+    /// coefficient magnitude of the start solution (1 if that is zero).
+    pub scale_mech: Option<f64>,
+    /// Scale of thermal coefficients; default: as `scale_mech` for the thermal part.
+    pub scale_therm: Option<f64>,
+    /// Scale of ω; default `|ω_end − ω_start|`.
+    pub scale_omega: Option<f64>,
+    /// Bisection stops when the arclength bracket is shorter than this (scaled units,
+    /// default 1e-6).
+    pub bifurcation_tol_arclength: f64,
+    /// Maximum bisection steps per located bifurcation (default 60).
+    pub max_bisections: usize,
+}
+
+impl ContinuationOptions {
+    /// Defaults for a sweep from `omega_start` to `omega_end`.
+    pub fn new(omega_start: f64, omega_end: f64) -> Self {
+        Self {
+            omega_start,
+            omega_end,
+            ds_initial: 0.02,
+            ds_min: 1e-7,
+            ds_max: 0.1,
+            target_iterations: 4,
+            max_points: 2000,
+            newton: NewtonOptions::default(),
+            scale_mech: None,
+            scale_therm: None,
+            scale_omega: None,
+            bifurcation_tol_arclength: 1e-6,
+            max_bisections: 60,
+        }
+    }
+}
+
+/// Errors of the continuation.
+#[derive(Debug, Error)]
+pub enum ContinuationError {
+    #[error("invalid continuation setting {field} = {value}: {reason}")]
+    Setting {
+        field: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+    #[error("no start solution at ω = {omega} rad/s: {source}")]
+    Start {
+        omega: f64,
+        #[source]
+        source: NewtonError,
+    },
+    #[error(transparent)]
+    Hb(#[from] HbError),
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+}
+
+/// One point of a branch.
+#[derive(Clone, Debug)]
+pub struct BranchPoint {
+    /// Running number among accepted points (located bifurcations carry the number of the
+    /// point after them).
+    pub index: usize,
+    /// Scaled arclength from the start point.
+    pub arclength: f64,
+    pub solution: HbSolution,
+    /// Floquet result, when a stability method is set and succeeded.
+    pub stability: Option<FloquetResult>,
+    /// The stability method's error message, if it failed at this point.
+    pub stability_error: Option<String>,
+    /// Set on located bifurcation points.
+    pub bifurcation: Option<BifurcationKind>,
+}
+
+impl BranchPoint {
+    /// Stable flag, `None` when unknown.
+    pub fn stable(&self) -> Option<bool> {
+        self.stability.as_ref().map(|f| f.stable)
+    }
+}
+
+/// Why a step was rejected.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RejectReason {
+    /// The corrector failed (message with numbers); the step is halved.
+    Corrector { ds: f64, message: String },
+    /// The tangent turned by more than 60°; the step is halved.
+    Turn { ds: f64, cos_angle: f64 },
+}
+
+/// Why the continuation stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub enum FinishReason {
+    /// ω reached a bound of the sweep.
+    Bound { omega: f64 },
+    /// `max_points` accepted.
+    MaxPoints,
+    /// The step fell below `ds_min` at `omega`.
+    StepTooSmall { omega: f64, ds: f64 },
+}
+
+/// Result of one [`Continuation::step`].
+#[derive(Clone, Debug)]
+pub enum StepOutcome {
+    Accepted {
+        point: Box<BranchPoint>,
+        /// Bifurcations located between the previous point and this one.
+        bifurcations: Vec<BranchPoint>,
+    },
+    Rejected(RejectReason),
+    Finished(FinishReason),
+}
+
+/// A traced branch.
+#[derive(Clone, Debug)]
+pub struct Branch {
+    pub points: Vec<BranchPoint>,
+    pub bifurcations: Vec<BranchPoint>,
+    pub finish: FinishReason,
+    pub rejected_steps: usize,
+}
+
+struct Current {
+    a: Vec<f64>,
+    omega: f64,
+    tangent: Vec<f64>, // scaled, unknowns then ω, unit length
+    arclength: f64,
+    stability: Option<FloquetResult>,
+}
+
+/// The continuation driver.
+pub struct Continuation<'a> {
+    hb: HarmonicBalance<'a>,
+    opts: ContinuationOptions,
+    stability: Option<&'a dyn StabilityMethod>,
+    scales: Vec<f64>, // per unknown, then ω
+    current: Option<Current>,
+    ds: f64,
+    n_points: usize,
+    finished: Option<FinishReason>,
+    finish_after: Option<FinishReason>,
+}
+
+impl<'a> Continuation<'a> {
+    pub fn new(
+        hb: HarmonicBalance<'a>,
+        opts: ContinuationOptions,
+        stability: Option<&'a dyn StabilityMethod>,
+    ) -> Result<Self, ContinuationError> {
+        let check = |field: &'static str, value: f64, ok: bool, reason: &'static str| {
+            if ok {
+                Ok(())
+            } else {
+                Err(ContinuationError::Setting {
+                    field,
+                    value,
+                    reason,
+                })
+            }
+        };
+        check(
+            "omega_start",
+            opts.omega_start,
+            opts.omega_start.is_finite() && opts.omega_start > 0.0,
+            "must be positive",
+        )?;
+        check(
+            "omega_end",
+            opts.omega_end,
+            opts.omega_end.is_finite()
+                && opts.omega_end > 0.0
+                && opts.omega_end != opts.omega_start,
+            "must be positive and differ from omega_start",
+        )?;
+        check(
+            "ds_initial",
+            opts.ds_initial,
+            opts.ds_initial > 0.0
+                && opts.ds_initial >= opts.ds_min
+                && opts.ds_initial <= opts.ds_max,
+            "must lie in [ds_min, ds_max]",
+        )?;
+        check("ds_min", opts.ds_min, opts.ds_min > 0.0, "must be positive")?;
+        let ds = opts.ds_initial;
+        Ok(Self {
+            hb,
+            opts,
+            stability,
+            scales: Vec::new(),
+            current: None,
+            ds,
+            n_points: 0,
+            finished: None,
+            finish_after: None,
+        })
+    }
+
+    /// The harmonic-balance problem.
+    pub fn harmonic_balance(&self) -> &HarmonicBalance<'a> {
+        &self.hb
+    }
+
+    /// Current step in scaled arclength.
+    pub fn step_size(&self) -> f64 {
+        self.ds
+    }
+
+    fn lo_hi(&self) -> (f64, f64) {
+        let (a, b) = (self.opts.omega_start, self.opts.omega_end);
+        (a.min(b), a.max(b))
+    }
+
+    fn make_point(
+        &self,
+        a: &[f64],
+        omega: f64,
+        stats: &newton::NewtonStats,
+        arclength: f64,
+    ) -> BranchPoint {
+        let solution =
+            HbSolution::from_unknowns(omega, self.hb.basis(), self.hb.n_mech(), a, stats);
+        let (stability, stability_error) = match self.stability {
+            None => (None, None),
+            Some(m) => match m.multipliers(self.hb.system(), &solution) {
+                Ok(f) => (Some(f), None),
+                Err(e) => (None, Some(e.to_string())),
+            },
+        };
+        BranchPoint {
+            index: self.n_points,
+            arclength,
+            solution,
+            stability,
+            stability_error,
+            bifurcation: None,
+        }
+    }
+
+    /// Tangent (scaled, unit) at `(a, omega)`. With `prev`, oriented along it; without,
+    /// oriented towards `omega_end`.
+    fn tangent(
+        &self,
+        a: &[f64],
+        omega: f64,
+        prev: Option<&[f64]>,
+    ) -> Result<Vec<f64>, ContinuationError> {
+        let nu = self.hb.n_unknowns();
+        let mut r = vec![0.0; nu];
+        let parts = self.hb.residual_jacobian(a, omega, &mut r)?;
+        let mut r_omega = vec![0.0; nu];
+        self.hb.d_residual_d_omega(a, omega, &mut r_omega)?;
+        let solver = LinearSolver {
+            condense: self.opts.newton.condense,
+        };
+        let s = &self.scales;
+        let (z, zeta) = match prev {
+            Some(t) => {
+                let row: Vec<f64> = (0..nu).map(|i| t[i] / s[i]).collect();
+                let border = Border {
+                    column: &r_omega,
+                    row: &row,
+                    corner: t[nu] / s[nu],
+                };
+                solver.solve(&self.hb, &parts, Some(border), &vec![0.0; nu], 1.0)?
+            }
+            None => {
+                let neg: Vec<f64> = r_omega.iter().map(|v| -v).collect();
+                let (z, _) = solver.solve(&self.hb, &parts, None, &neg, 0.0)?;
+                (z, 1.0)
+            }
+        };
+        let mut t: Vec<f64> = z.iter().zip(s).map(|(v, si)| v / si).collect();
+        t.push(zeta / s[nu]);
+        let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let sign = if prev.is_none() && (self.opts.omega_end - self.opts.omega_start) * t[nu] < 0.0
+        {
+            -1.0
+        } else {
+            1.0
+        };
+        Ok(t.into_iter().map(|v| sign * v / norm).collect())
+    }
+
+    fn start(&mut self) -> Result<StepOutcome, ContinuationError> {
+        let omega = self.opts.omega_start;
+        let zero = vec![0.0; self.hb.n_unknowns()];
+        let (a, stats) = newton::solve_fixed(&self.hb, omega, &zero, &self.opts.newton)
+            .map_err(|source| ContinuationError::Start { omega, source })?;
+        let nm = self.hb.n_mech_unknowns();
+        let maxabs = |s: &[f64]| s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let or1 = |v: f64| if v > 0.0 && v.is_finite() { v } else { 1.0 };
+        let sm = self
+            .opts
+            .scale_mech
+            .unwrap_or_else(|| or1(maxabs(&a[..nm])));
+        let st = self
+            .opts
+            .scale_therm
+            .unwrap_or_else(|| or1(maxabs(&a[nm..])));
+        let sw = self
+            .opts
+            .scale_omega
+            .unwrap_or((self.opts.omega_end - self.opts.omega_start).abs());
+        self.scales = (0..a.len()).map(|i| if i < nm { sm } else { st }).collect();
+        self.scales.push(sw);
+        let tangent = self.tangent(&a, omega, None)?;
+        let point = self.make_point(&a, omega, &stats, 0.0);
+        self.current = Some(Current {
+            a,
+            omega,
+            tangent,
+            arclength: 0.0,
+            stability: point.stability.clone(),
+        });
+        self.n_points = 1;
+        Ok(StepOutcome::Accepted {
+            point: Box::new(point),
+            bifurcations: Vec::new(),
+        })
+    }
+
+    /// Corrects from `cur` at arclength offset `ds` along its tangent.
+    fn correct(
+        &self,
+        cur: &Current,
+        ds: f64,
+    ) -> Result<(Vec<f64>, f64, newton::NewtonStats), NewtonError> {
+        let nu = self.hb.n_unknowns();
+        let s = &self.scales;
+        let t = &cur.tangent;
+        let pred: Vec<f64> = (0..nu).map(|i| cur.a[i] + ds * t[i] * s[i]).collect();
+        let w_pred = cur.omega + ds * t[nu] * s[nu];
+        let row: Vec<f64> = (0..nu).map(|i| t[i] / s[i]).collect();
+        let arc = ArcConstraint {
+            anchor: &cur.a,
+            anchor_omega: cur.omega,
+            row: &row,
+            corner: t[nu] / s[nu],
+            ds,
+        };
+        newton::solve_arclength(&self.hb, &pred, w_pred, &arc, &self.opts.newton)
+    }
+
+    /// One continuation step (the first call computes the start point).
+    pub fn step(&mut self) -> Result<StepOutcome, ContinuationError> {
+        if let Some(f) = &self.finished {
+            return Ok(StepOutcome::Finished(f.clone()));
+        }
+        if let Some(f) = self.finish_after.take() {
+            self.finished = Some(f.clone());
+            return Ok(StepOutcome::Finished(f));
+        }
+        let Some(cur) = self.current.take() else {
+            return self.start();
+        };
+        let outcome = self.advance(&cur);
+        if self.current.is_none() {
+            self.current = Some(cur);
+        }
+        outcome
+    }
+
+    fn advance(&mut self, cur: &Current) -> Result<StepOutcome, ContinuationError> {
+        let ds = self.ds;
+        let nu = self.hb.n_unknowns();
+        let (a, omega, stats) = match self.correct(cur, ds) {
+            Ok(v) => v,
+            Err(e) => {
+                return Ok(self.reject(
+                    RejectReason::Corrector {
+                        ds,
+                        message: e.to_string(),
+                    },
+                    cur.omega,
+                ));
+            }
+        };
+        let tangent = match self.tangent(&a, omega, Some(&cur.tangent)) {
+            Ok(t) => t,
+            Err(e) => {
+                return Ok(self.reject(
+                    RejectReason::Corrector {
+                        ds,
+                        message: e.to_string(),
+                    },
+                    cur.omega,
+                ));
+            }
+        };
+        let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
+        if cos_angle < 0.5 {
+            return Ok(self.reject(RejectReason::Turn { ds, cos_angle }, cur.omega));
+        }
+        let (lo, hi) = self.lo_hi();
+        let mut arclength = cur.arclength + ds;
+        let (a, omega, stats, tangent) = if omega < lo || omega > hi {
+            // re-solve on the bound from the interpolation between the two points
+            let wb = if omega < lo { lo } else { hi };
+            let f = (wb - cur.omega) / (omega - cur.omega);
+            let guess: Vec<f64> = cur
+                .a
+                .iter()
+                .zip(&a)
+                .map(|(x0, x1)| x0 + f * (x1 - x0))
+                .collect();
+            match newton::solve_fixed(&self.hb, wb, &guess, &self.opts.newton) {
+                Ok((ab, st)) => {
+                    arclength = cur.arclength + f * ds;
+                    self.finish_after = Some(FinishReason::Bound { omega: wb });
+                    (ab, wb, st, tangent)
+                }
+                Err(e) => {
+                    return Ok(self.reject(
+                        RejectReason::Corrector {
+                            ds,
+                            message: e.to_string(),
+                        },
+                        cur.omega,
+                    ));
+                }
+            }
+        } else {
+            (a, omega, stats, tangent)
+        };
+        let point = self.make_point(&a, omega, &stats, arclength);
+        let mut bifurcations = Vec::new();
+        if let (Some(fa), Some(fb)) = (&cur.stability, &point.stability)
+            && fa.unstable_count() != fb.unstable_count()
+        {
+            let span = arclength - cur.arclength;
+            if let Some(b) = self.locate(cur, fa, span, fb) {
+                bifurcations.push(b);
+            }
+        }
+        // step control
+        let factor = if stats.iterations == 0 {
+            2.0
+        } else {
+            (self.opts.target_iterations as f64 / stats.iterations as f64)
+                .sqrt()
+                .clamp(0.5, 2.0)
+        };
+        self.ds = (self.ds * factor).clamp(self.opts.ds_min, self.opts.ds_max);
+        self.n_points += 1;
+        if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
+            self.finish_after = Some(FinishReason::MaxPoints);
+        }
+        debug_assert_eq!(tangent.len(), nu + 1);
+        self.current = Some(Current {
+            a,
+            omega,
+            tangent,
+            arclength,
+            stability: point.stability.clone(),
+        });
+        Ok(StepOutcome::Accepted {
+            point: Box::new(point),
+            bifurcations,
+        })
+    }
+
+    fn reject(&mut self, reason: RejectReason, omega: f64) -> StepOutcome {
+        self.ds *= 0.5;
+        if self.ds < self.opts.ds_min {
+            self.finish_after = Some(FinishReason::StepTooSmall { omega, ds: self.ds });
+        }
+        StepOutcome::Rejected(reason)
+    }
+
+    /// Bisection in arclength between `cur` (σ = 0) and the point at σ = `span`.
+    fn locate(
+        &self,
+        cur: &Current,
+        f_a: &FloquetResult,
+        span: f64,
+        f_b: &FloquetResult,
+    ) -> Option<BranchPoint> {
+        let n_a = f_a.unstable_count();
+        let (mut lo, mut hi) = (0.0, span);
+        let (mut f_lo, mut f_hi) = (f_a.clone(), f_b.clone());
+        let mut best: Option<BranchPoint> = None;
+        for _ in 0..self.opts.max_bisections {
+            if hi - lo <= self.opts.bifurcation_tol_arclength {
+                break;
+            }
+            let mid = 0.5 * (lo + hi);
+            let Ok((a, w, st)) = self.correct(cur, mid) else {
+                break;
+            };
+            let p = self.make_point(&a, w, &st, cur.arclength + mid);
+            let Some(fm) = p.stability.clone() else { break };
+            if fm.unstable_count() == n_a {
+                lo = mid;
+                f_lo = fm;
+            } else {
+                hi = mid;
+                f_hi = fm;
+            }
+            best = Some(p);
+        }
+        let kind = classify_crossing(&f_lo, &f_hi)?;
+        let mut p = best?;
+        p.bifurcation = Some(kind);
+        p.index = self.n_points;
+        Some(p)
+    }
+
+    /// Runs to the end, calling `observer` after every step.
+    pub fn run(
+        &mut self,
+        mut observer: impl FnMut(&StepOutcome),
+    ) -> Result<Branch, ContinuationError> {
+        let mut points = Vec::new();
+        let mut bifs = Vec::new();
+        let mut rejected = 0;
+        loop {
+            let out = self.step()?;
+            observer(&out);
+            match out {
+                StepOutcome::Accepted {
+                    point,
+                    bifurcations,
+                } => {
+                    points.push(*point);
+                    bifs.extend(bifurcations);
+                }
+                StepOutcome::Rejected(_) => rejected += 1,
+                StepOutcome::Finished(f) => {
+                    return Ok(Branch {
+                        points,
+                        bifurcations: bifs,
+                        finish: f,
+                        rejected_steps: rejected,
+                    });
+                }
+            }
+        }
+    }
+}

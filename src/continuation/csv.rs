@@ -1,0 +1,50 @@
+//! The branch as CSV text, as the examples print it.
+//!
+//! Columns: `omega,amplitude,stable,bifurcation,rms_amplitude,arclength,newton_iterations,residual_mech,residual_therm`.
+//! `amplitude` is `max_t |x_dof(t)|` over one period of the chosen mechanical DoF
+//! ([`HbSolution::max_abs`](crate::hb::HbSolution::max_abs)); `rms_amplitude` is paper
+//! Eq. 35 for the same DoF; `stable` is `true`/`false`, empty when no stability method ran
+//! (or it failed at that point); `bifurcation` is the label of a located bifurcation
+//! ([`BifurcationKind::label`](crate::stability::BifurcationKind::label)), empty
+//! otherwise. Rows are ordered by arclength; located bifurcations are rows of their own.
+
+use std::fmt::Write;
+
+use super::{Branch, BranchPoint};
+
+/// CSV of `branch` with amplitudes of mechanical DoF `dof` (0-based); the first line is a
+/// `#` comment explaining the columns.
+pub fn branch_csv(branch: &Branch, dof: usize) -> String {
+    let mut rows: Vec<&BranchPoint> = branch.points.iter().chain(&branch.bifurcations).collect();
+    rows.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# amplitude = max |x(t)| over one period of mechanical DoF {} (index {dof}); rms_amplitude = paper Eq. 35 of that DoF; stable empty = not computed",
+        dof + 1
+    );
+    s.push_str("omega,amplitude,stable,bifurcation,rms_amplitude,arclength,newton_iterations,residual_mech,residual_therm\n");
+    for p in rows {
+        let stable = match p.stable() {
+            Some(true) => "true",
+            Some(false) => "false",
+            None => "",
+        };
+        let label = p.bifurcation.map_or("", |k| k.label());
+        let sol = &p.solution;
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{:e},{:e}",
+            sol.omega,
+            sol.max_abs(dof),
+            stable,
+            label,
+            sol.rms_amplitude(dof, None),
+            p.arclength,
+            sol.iterations,
+            sol.residual.mech,
+            sol.residual.therm
+        );
+    }
+    s
+}

@@ -1,0 +1,268 @@
+//! Damped Newton iteration of the modified IHB method (paper Eq. 25 and 29), optionally
+//! with a pseudo-arclength constraint (the continuation corrector).
+//!
+//! Each iteration solves `J δA = −R` (or the bordered system with the arclength row, see
+//! [`super::condense`]) with the exact Jacobian and updates `A ← A + λ δA`. The step factor
+//! `λ` starts at 1 and is halved (at most [`NewtonOptions::max_backtracks`] times) until the
+//! merit `φ = (ε_mech / tol_mech)² + (ε_therm / tol_therm)²` decreases.
+//!
+//! ## Convergence test (paper: separate dynamic and thermal tolerances)
+//!
+//! `ε_mech = ‖R_mech‖₂ / ‖P[F]‖₂` and `ε_therm = ‖R_therm‖₂ / ‖F_T‖₂`: the 2-norm of the
+//! mechanical (thermal) residual coefficients divided by the 2-norm of the mechanical
+//! (thermal) load coefficients at the same `ω` (1 when that load is zero, i.e. the test is
+//! then absolute). Converged when `ε_mech ≤ tol_mech` and `ε_therm ≤ tol_therm`; defaults
+//! `1e-8` and `1e-3` as in the paper (Section 4.1).
+//!
+//! ## Scaling
+//! Displacements (~1e-5 m) and temperatures (~50 K) differ by orders of magnitude. The
+//! Newton step itself is invariant to a scaling of the unknowns; what is not invariant is
+//! handled explicitly: the convergence tests and the line-search merit use the two
+//! normalised residuals above, and the continuation measures arclength in scaled unknowns
+//! (see [`crate::continuation`]).
+
+use thiserror::Error;
+
+use super::condense::{Border, LinearSolver, SolveError};
+use super::residual::{HarmonicBalance, HbError, ResidualNorms};
+
+/// Newton settings. Every field's default is given in its doc.
+#[derive(Clone, Copy, Debug)]
+pub struct NewtonOptions {
+    /// Maximum iterations (default 25).
+    pub max_iterations: usize,
+    /// Mechanical tolerance on `ε_mech` (default 1e-8, paper).
+    pub tol_mech: f64,
+    /// Thermal tolerance on `ε_therm` (default 1e-3, paper).
+    pub tol_therm: f64,
+    /// Maximum step halvings per iteration (default 10).
+    pub max_backtracks: usize,
+    /// Condense the linear DoFs (default true).
+    pub condense: bool,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        Self {
+            max_iterations: 25,
+            tol_mech: 1e-8,
+            tol_therm: 1e-3,
+            max_backtracks: 10,
+            condense: true,
+        }
+    }
+}
+
+/// Errors of the Newton iteration; numbers are the normalised residuals `ε` of the last
+/// accepted iterate.
+#[derive(Debug, Error)]
+pub enum NewtonError {
+    #[error(
+        "Newton did not converge in {iterations} iterations: relative residuals mechanical {residual_mech:.3e}, thermal {residual_therm:.3e}"
+    )]
+    Diverged {
+        iterations: usize,
+        residual_mech: f64,
+        residual_therm: f64,
+    },
+    #[error(
+        "Newton step gave no decrease after {backtracks} halvings at iteration {iteration}: relative residuals mechanical {residual_mech:.3e}, thermal {residual_therm:.3e}"
+    )]
+    NoDescent {
+        iteration: usize,
+        backtracks: usize,
+        residual_mech: f64,
+        residual_therm: f64,
+    },
+    #[error(transparent)]
+    Solve(#[from] SolveError),
+    #[error(transparent)]
+    Hb(#[from] HbError),
+}
+
+/// How a Newton solve went.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct NewtonStats {
+    pub iterations: usize,
+    /// Absolute 2-norms of the final residual (paper Eq. 36 in coefficient form).
+    pub residual: ResidualNorms,
+    /// Normalised residuals `ε_mech`, `ε_therm`.
+    pub relative: ResidualNorms,
+}
+
+/// Pseudo-arclength constraint `g = row·(A − anchor) + corner·(ω − anchor_omega) − ds = 0`.
+#[derive(Clone, Copy, Debug)]
+pub struct ArcConstraint<'c> {
+    pub anchor: &'c [f64],
+    pub anchor_omega: f64,
+    pub row: &'c [f64],
+    pub corner: f64,
+    pub ds: f64,
+}
+
+impl ArcConstraint<'_> {
+    fn value(&self, a: &[f64], omega: f64) -> f64 {
+        let dot: f64 = self
+            .row
+            .iter()
+            .zip(a.iter().zip(self.anchor))
+            .map(|(r, (x, x0))| r * (x - x0))
+            .sum();
+        dot + self.corner * (omega - self.anchor_omega) - self.ds
+    }
+}
+
+struct Measure {
+    rel: ResidualNorms,
+    abs: ResidualNorms,
+}
+
+fn measure(hb: &HarmonicBalance<'_>, r: &[f64], refs: ResidualNorms) -> Measure {
+    let abs = hb.norms(r);
+    Measure {
+        rel: ResidualNorms {
+            mech: abs.mech / refs.mech,
+            therm: abs.therm / refs.therm,
+        },
+        abs,
+    }
+}
+
+/// Reference norms of the convergence test at `omega` (see module docs).
+pub fn reference_norms(hb: &HarmonicBalance<'_>, omega: f64) -> ResidualNorms {
+    let n = hb.norms(&hb.load_coeffs(omega));
+    let or1 = |v: f64| if v > 0.0 && v.is_finite() { v } else { 1.0 };
+    ResidualNorms {
+        mech: or1(n.mech),
+        therm: or1(n.therm),
+    }
+}
+
+/// Newton at fixed `omega` from `a0`. Returns the converged coefficients.
+pub fn solve_fixed(
+    hb: &HarmonicBalance<'_>,
+    omega: f64,
+    a0: &[f64],
+    opts: &NewtonOptions,
+) -> Result<(Vec<f64>, NewtonStats), NewtonError> {
+    let (a, _, st) = solve(hb, a0, omega, None, opts)?;
+    Ok((a, st))
+}
+
+/// Newton on `(A, ω)` with the arclength constraint. Returns `(A, ω, stats)`.
+pub fn solve_arclength(
+    hb: &HarmonicBalance<'_>,
+    a0: &[f64],
+    omega0: f64,
+    arc: &ArcConstraint<'_>,
+    opts: &NewtonOptions,
+) -> Result<(Vec<f64>, f64, NewtonStats), NewtonError> {
+    solve(hb, a0, omega0, Some(arc), opts)
+}
+
+fn solve(
+    hb: &HarmonicBalance<'_>,
+    a0: &[f64],
+    omega0: f64,
+    arc: Option<&ArcConstraint<'_>>,
+    opts: &NewtonOptions,
+) -> Result<(Vec<f64>, f64, NewtonStats), NewtonError> {
+    let solver = LinearSolver {
+        condense: opts.condense,
+    };
+    let nu = hb.n_unknowns();
+    let mut a = a0.to_vec();
+    let mut omega = omega0;
+    let mut r = vec![0.0; nu];
+    let mut r_omega = vec![0.0; nu];
+    let mut refs = reference_norms(hb, omega);
+    let merit =
+        |m: &Measure| (m.rel.mech / opts.tol_mech).powi(2) + (m.rel.therm / opts.tol_therm).powi(2);
+    let converged = |m: &Measure| m.rel.mech <= opts.tol_mech && m.rel.therm <= opts.tol_therm;
+    let mut parts = hb.residual_jacobian(&a, omega, &mut r)?;
+    let mut meas = measure(hb, &r, refs);
+    let arc_ok = |a: &[f64], w: f64| {
+        arc.is_none_or(|c| c.value(a, w).abs() <= 1e-10 * c.ds.abs().max(1e-12))
+    };
+    for it in 0..=opts.max_iterations {
+        if converged(&meas) && arc_ok(&a, omega) {
+            return Ok((
+                a,
+                omega,
+                NewtonStats {
+                    iterations: it,
+                    residual: meas.abs,
+                    relative: meas.rel,
+                },
+            ));
+        }
+        if it == opts.max_iterations {
+            break;
+        }
+        let neg_r: Vec<f64> = r.iter().map(|v| -v).collect();
+        let (delta, d_omega) = match arc {
+            None => solver.solve(hb, &parts, None, &neg_r, 0.0)?,
+            Some(c) => {
+                hb.d_residual_d_omega(&a, omega, &mut r_omega)?;
+                let border = Border {
+                    column: &r_omega,
+                    row: c.row,
+                    corner: c.corner,
+                };
+                solver.solve(hb, &parts, Some(border), &neg_r, -c.value(&a, omega))?
+            }
+        };
+        let phi0 = merit(&meas);
+        let mut lambda = 1.0;
+        let mut accepted = None;
+        for _ in 0..=opts.max_backtracks {
+            let trial: Vec<f64> = a.iter().zip(&delta).map(|(x, d)| x + lambda * d).collect();
+            let w_trial = omega + lambda * d_omega;
+            let refs_trial = if arc.is_some() {
+                reference_norms(hb, w_trial)
+            } else {
+                refs
+            };
+            if hb.residual(&trial, w_trial, &mut r).is_ok() {
+                let m = measure(hb, &r, refs_trial);
+                if merit(&m).is_finite()
+                    && (merit(&m) < (1.0 - 1e-4 * lambda) * phi0 || converged(&meas))
+                {
+                    accepted = Some((trial, w_trial, m, refs_trial));
+                    break;
+                }
+            }
+            lambda *= 0.5;
+        }
+        let Some((trial, w_trial, m, refs_trial)) = accepted else {
+            return Err(NewtonError::NoDescent {
+                iteration: it + 1,
+                backtracks: opts.max_backtracks,
+                residual_mech: meas.rel.mech,
+                residual_therm: meas.rel.therm,
+            });
+        };
+        a = trial;
+        omega = w_trial;
+        refs = refs_trial;
+        meas = m;
+        if converged(&meas) && arc_ok(&a, omega) {
+            return Ok((
+                a,
+                omega,
+                NewtonStats {
+                    iterations: it + 1,
+                    residual: meas.abs,
+                    relative: meas.rel,
+                },
+            ));
+        }
+        parts = hb.residual_jacobian(&a, omega, &mut r)?;
+        meas = measure(hb, &r, refs);
+    }
+    Err(NewtonError::Diverged {
+        iterations: opts.max_iterations,
+        residual_mech: meas.rel.mech,
+        residual_therm: meas.rel.therm,
+    })
+}

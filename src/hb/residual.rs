@@ -1,0 +1,508 @@
+//! Harmonic-balance residual and its exact Jacobian (paper Eq. 25–28).
+//!
+//! Unknowns `A`: the coefficients of every DoF, mechanical DoFs `0..n_mech` first, then
+//! thermal DoFs, each with the basis layout `[a_0, a_1..a_H, b_1..b_H]`; DoF `d`'s block
+//! starts at `d·(1+2H)`. The residual is the Galerkin projection of the equations of
+//! motion onto the basis,
+//!
+//! ```text
+//!   R(A, ω) = Z(ω) A + P[f(x, ẋ, T, t)] − P[F(t)]
+//! ```
+//!
+//! where `P` is the AFT projection and `Z(ω)` the linear dynamic stiffness (Eq. 27), block
+//! diagonal in the harmonics: for harmonic `h` with `w = ν_h ω` and a mechanical DoF pair
+//! the block acting on `(a_h, b_h)` is `[[K − w² M, w C], [−w C, K − w² M]]`; thermal DoFs
+//! have `M = 0`, `C = C_T`, `K = K_T`; the constant term sees `K` (or `K_T`) alone.
+//! The Jacobian `∂R/∂A = Z + J_nl` has its nonlinear part `J_nl` only on the nonlinear
+//! DoFs; it is assembled from the AFT of the pointwise derivatives `∂f/∂x`, `∂f/∂ẋ`,
+//! `∂f/∂T`, `∂g/∂…` ([`Aft::add_product_block`]) and is exact for the discrete residual.
+//! `∂R/∂ω` is a central finite difference in `ω` (the system's matrices and forces may
+//! depend on `ω` in ways the engine does not know).
+
+use num_complex::Complex64;
+use rayon::prelude::*;
+use thiserror::Error;
+
+use super::aft::{Aft, AftError, Signal};
+use super::basis::Basis;
+use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
+
+/// Errors of the harmonic-balance layer.
+#[derive(Debug, Error)]
+pub enum HbError {
+    #[error(transparent)]
+    Aft(#[from] AftError),
+    #[error("{what} has length/size {got}, expected {expected}")]
+    Dimension {
+        what: &'static str,
+        expected: usize,
+        got: usize,
+    },
+    #[error("nonlinear {field} DoF index {index} is out of range (the system has {n})")]
+    NonlinearDofOutOfRange {
+        field: &'static str,
+        index: usize,
+        n: usize,
+    },
+    #[error("nonlinear {field} DoF indices are not sorted and unique: {indices:?}")]
+    NonlinearDofOrder {
+        field: &'static str,
+        indices: Vec<usize>,
+    },
+    #[error("non-finite {what} at ω = {omega} rad/s")]
+    NonFinite { what: &'static str, omega: f64 },
+}
+
+/// Reads one derivative entry of a pointwise evaluation.
+type Getter = fn(&NonlinearEval, usize) -> f64;
+
+/// The Jacobian `∂R/∂A` in structured form: the linear matrices (the harmonic blocks are
+/// formed from them on the fly) and the dense nonlinear part on the nonlinear DoFs.
+#[derive(Clone, Debug)]
+pub struct JacobianParts {
+    pub omega: f64,
+    pub linear: LinearPart,
+    /// `(P·nc) × (P·nc)` row-major, `P = n_nl_mech + n_nl_therm`; block `(k, l)` couples
+    /// nonlinear DoF `k` (mechanical ones first, then thermal) with nonlinear DoF `l`.
+    pub nonlinear: Vec<f64>,
+}
+
+/// 2-norms of the mechanical and thermal parts of a residual vector.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ResidualNorms {
+    pub mech: f64,
+    pub therm: f64,
+}
+
+/// The harmonic-balance equations of a [`System`] on a [`Basis`].
+pub struct HarmonicBalance<'a> {
+    system: &'a dyn System,
+    aft: Aft,
+    nl: NonlinearDofs,
+    n_mech: usize,
+    n_therm: usize,
+}
+
+impl std::fmt::Debug for HarmonicBalance<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("HarmonicBalance")
+            .field("n_mech", &self.n_mech)
+            .field("n_therm", &self.n_therm)
+            .field("nl", &self.nl)
+            .field("aft", &self.aft)
+            .finish()
+    }
+}
+
+/// One field's linear matrices: (first DoF, size, mass or none, velocity matrix, stiffness).
+pub(crate) struct Field<'m> {
+    pub offset: usize,
+    pub n: usize,
+    pub mass: Option<&'m DenseMatrix>,
+    pub damping: &'m DenseMatrix,
+    pub stiffness: &'m DenseMatrix,
+}
+
+pub(crate) fn fields(lin: &LinearPart, n_mech: usize, n_therm: usize) -> [Field<'_>; 2] {
+    [
+        Field {
+            offset: 0,
+            n: n_mech,
+            mass: Some(&lin.mass),
+            damping: &lin.damping,
+            stiffness: &lin.stiffness,
+        },
+        Field {
+            offset: n_mech,
+            n: n_therm,
+            mass: None,
+            damping: &lin.thermal_capacity,
+            stiffness: &lin.thermal_conductance,
+        },
+    ]
+}
+
+fn check_dofs(field: &'static str, idx: &[usize], n: usize) -> Result<(), HbError> {
+    if let Some(&bad) = idx.iter().find(|&&i| i >= n) {
+        return Err(HbError::NonlinearDofOutOfRange {
+            field,
+            index: bad,
+            n,
+        });
+    }
+    if idx.windows(2).any(|w| w[0] >= w[1]) {
+        return Err(HbError::NonlinearDofOrder {
+            field,
+            indices: idx.to_vec(),
+        });
+    }
+    Ok(())
+}
+
+impl<'a> HarmonicBalance<'a> {
+    /// Harmonic balance of `system` on `basis` with `n_samples` AFT samples per period
+    /// (`None`: [`Aft::default_samples`]).
+    pub fn new(
+        system: &'a dyn System,
+        basis: &Basis,
+        n_samples: Option<usize>,
+    ) -> Result<Self, HbError> {
+        let nl = system.nonlinear_dofs().clone();
+        let (n_mech, n_therm) = (system.n_mech(), system.n_therm());
+        check_dofs("mechanical", &nl.mech, n_mech)?;
+        check_dofs("thermal", &nl.therm, n_therm)?;
+        Ok(Self {
+            system,
+            aft: Aft::new(basis, n_samples)?,
+            nl,
+            n_mech,
+            n_therm,
+        })
+    }
+
+    pub fn system(&self) -> &'a dyn System {
+        self.system
+    }
+    pub fn basis(&self) -> &Basis {
+        self.aft.basis()
+    }
+    pub fn aft(&self) -> &Aft {
+        &self.aft
+    }
+    pub fn nonlinear_dofs(&self) -> &NonlinearDofs {
+        &self.nl
+    }
+    pub fn n_mech(&self) -> usize {
+        self.n_mech
+    }
+    pub fn n_therm(&self) -> usize {
+        self.n_therm
+    }
+    /// Coefficients per DoF `1 + 2H`.
+    pub fn n_coeffs(&self) -> usize {
+        self.aft.basis().n_coeffs()
+    }
+    /// Number of unknowns `(n_mech + n_therm)·(1 + 2H)`.
+    pub fn n_unknowns(&self) -> usize {
+        (self.n_mech + self.n_therm) * self.n_coeffs()
+    }
+    /// Number of mechanical unknowns (they come first).
+    pub fn n_mech_unknowns(&self) -> usize {
+        self.n_mech * self.n_coeffs()
+    }
+    /// Global DoF indices (thermal offset by `n_mech`) of the nonlinear DoFs, mechanical first.
+    pub fn nonlinear_global(&self) -> Vec<usize> {
+        self.nl
+            .mech
+            .iter()
+            .copied()
+            .chain(self.nl.therm.iter().map(|&j| self.n_mech + j))
+            .collect()
+    }
+
+    fn check_len(&self, what: &'static str, got: usize) -> Result<(), HbError> {
+        let expected = self.n_unknowns();
+        if got != expected {
+            return Err(HbError::Dimension {
+                what,
+                expected,
+                got,
+            });
+        }
+        Ok(())
+    }
+
+    /// 2-norms of the mechanical and thermal parts of `r`.
+    pub fn norms(&self, r: &[f64]) -> ResidualNorms {
+        let m = self.n_mech_unknowns();
+        let n2 = |s: &[f64]| (s.iter().map(|v| v * v).sum::<f64>() + 0.0).sqrt();
+        ResidualNorms {
+            mech: n2(&r[..m]),
+            therm: n2(&r[m..]),
+        }
+    }
+
+    /// Coefficients of the loads `F(t; ω)` (projected by AFT) and `F_T(ω)` (constant term).
+    pub fn load_coeffs(&self, omega: f64) -> Vec<f64> {
+        let nc = self.n_coeffs();
+        let n = self.aft.n_samples();
+        let mut out = vec![0.0; self.n_unknowns()];
+        let mut samples = vec![0.0; self.n_mech * n];
+        let mut f = vec![0.0; self.n_mech];
+        for j in 0..n {
+            self.system.forcing(omega, self.aft.time(omega, j), &mut f);
+            for (d, fd) in f.iter().enumerate() {
+                samples[d * n + j] = *fd;
+            }
+        }
+        let mut buf = Vec::new();
+        for d in 0..self.n_mech {
+            let s = &samples[d * n..(d + 1) * n];
+            if s.iter().any(|v| *v != 0.0) {
+                self.aft
+                    .project(s, &mut out[d * nc..(d + 1) * nc], &mut buf);
+            }
+        }
+        let mut ft = vec![0.0; self.n_therm];
+        self.system.thermal_load(omega, &mut ft);
+        for (j, v) in ft.iter().enumerate() {
+            out[(self.n_mech + j) * nc] = *v;
+        }
+        out
+    }
+
+    /// Adds `Z(ω) A` to `out`.
+    pub fn add_linear(&self, lin: &LinearPart, omega: f64, coeffs: &[f64], out: &mut [f64]) {
+        let nc = self.n_coeffs();
+        let basis = self.aft.basis();
+        let nh = basis.n_harmonics();
+        for fld in fields(lin, self.n_mech, self.n_therm) {
+            for i in 0..fld.n {
+                let ri = (fld.offset + i) * nc;
+                for j in 0..fld.n {
+                    let cj = (fld.offset + j) * nc;
+                    let k = fld.stiffness.get(i, j);
+                    let c = fld.damping.get(i, j);
+                    let m = fld.mass.map_or(0.0, |m| m.get(i, j));
+                    if k == 0.0 && c == 0.0 && m == 0.0 {
+                        continue;
+                    }
+                    out[ri] += k * coeffs[cj];
+                    for (h, r) in basis.harmonics().iter().enumerate() {
+                        let w = r.value() * omega;
+                        let a = k - w * w * m;
+                        let (xa, xb) = (coeffs[cj + 1 + h], coeffs[cj + 1 + nh + h]);
+                        out[ri + 1 + h] += a * xa + w * c * xb;
+                        out[ri + 1 + nh + h] += -w * c * xa + a * xb;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Time samples of the nonlinear DoFs: `x`, `v` (p series each) and `T` (q series),
+    /// each `N` long, concatenated.
+    fn nonlinear_samples(&self, coeffs: &[f64], omega: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let nc = self.n_coeffs();
+        let n = self.aft.n_samples();
+        let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
+        let mut xs = vec![0.0; p * n];
+        let mut vs = vec![0.0; p * n];
+        let mut ts = vec![0.0; q * n];
+        let mut buf = Vec::new();
+        let mut dc = vec![0.0; nc];
+        for (k, &d) in self.nl.mech.iter().enumerate() {
+            let c = &coeffs[d * nc..(d + 1) * nc];
+            self.aft
+                .synthesize(c, &mut xs[k * n..(k + 1) * n], &mut buf);
+            self.aft.derivative_coeffs(c, omega, &mut dc);
+            self.aft
+                .synthesize(&dc, &mut vs[k * n..(k + 1) * n], &mut buf);
+        }
+        for (k, &d) in self.nl.therm.iter().enumerate() {
+            let g = self.n_mech + d;
+            self.aft.synthesize(
+                &coeffs[g * nc..(g + 1) * nc],
+                &mut ts[k * n..(k + 1) * n],
+                &mut buf,
+            );
+        }
+        (xs, vs, ts)
+    }
+
+    /// Pointwise evaluations of the nonlinear terms at every sample.
+    fn evaluate(&self, coeffs: &[f64], omega: f64) -> Vec<NonlinearEval> {
+        let n = self.aft.n_samples();
+        let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
+        let (xs, vs, ts) = self.nonlinear_samples(coeffs, omega);
+        let eval_one = |j: usize| {
+            let x: Vec<f64> = (0..p).map(|k| xs[k * n + j]).collect();
+            let v: Vec<f64> = (0..p).map(|k| vs[k * n + j]).collect();
+            let t: Vec<f64> = (0..q).map(|k| ts[k * n + j]).collect();
+            let mut e = NonlinearEval::new(p, q);
+            self.system
+                .eval_nonlinear(omega, self.aft.time(omega, j), &x, &v, &t, &mut e);
+            e
+        };
+        if (p + q) * n >= 512 {
+            (0..n)
+                .into_par_iter()
+                .with_min_len(8)
+                .map(eval_one)
+                .collect()
+        } else {
+            (0..n).map(eval_one).collect()
+        }
+    }
+
+    /// Residual `R(A, ω)` into `out`.
+    pub fn residual(&self, coeffs: &[f64], omega: f64, out: &mut [f64]) -> Result<(), HbError> {
+        self.residual_inner(coeffs, omega, out, None).map(|_| ())
+    }
+
+    /// Residual into `out` and the Jacobian `∂R/∂A` in structured form.
+    pub fn residual_jacobian(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+        out: &mut [f64],
+    ) -> Result<JacobianParts, HbError> {
+        let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
+        let mut jac = vec![0.0; pn * pn];
+        let lin = self.residual_inner(coeffs, omega, out, Some(&mut jac))?;
+        Ok(JacobianParts {
+            omega,
+            linear: lin,
+            nonlinear: jac,
+        })
+    }
+
+    fn residual_inner(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+        out: &mut [f64],
+        jac: Option<&mut Vec<f64>>,
+    ) -> Result<LinearPart, HbError> {
+        self.check_len("coefficient vector", coeffs.len())?;
+        self.check_len("residual vector", out.len())?;
+        let nc = self.n_coeffs();
+        let n = self.aft.n_samples();
+        let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
+        let load = self.load_coeffs(omega);
+        for (o, l) in out.iter_mut().zip(&load) {
+            *o = -l;
+        }
+        let lin = self.system.linear(omega);
+        self.add_linear(&lin, omega, coeffs, out);
+        if p + q > 0 {
+            let evals = self.evaluate(coeffs, omega);
+            let mut buf = Vec::new();
+            let mut series = vec![0.0; n];
+            let mut proj = vec![0.0; nc];
+            let globals = self.nonlinear_global();
+            for (k, &g) in globals.iter().enumerate() {
+                for (j, e) in evals.iter().enumerate() {
+                    series[j] = if k < p { e.f[k] } else { e.g[k - p] };
+                }
+                self.aft.project(&series, &mut proj, &mut buf);
+                for (o, v) in out[g * nc..(g + 1) * nc].iter_mut().zip(&proj) {
+                    *o += v;
+                }
+            }
+            if let Some(jac) = jac {
+                self.nonlinear_jacobian(&evals, omega, jac);
+            }
+        }
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(HbError::NonFinite {
+                what: "residual",
+                omega,
+            });
+        }
+        Ok(lin)
+    }
+
+    fn nonlinear_jacobian(&self, evals: &[NonlinearEval], omega: f64, jac: &mut [f64]) {
+        let nc = self.n_coeffs();
+        let n = self.aft.n_samples();
+        let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
+        let pt = p + q;
+        let ld = pt * nc;
+        let aft = &self.aft;
+        // each row block (nonlinear DoF k) is independent
+        jac.par_chunks_mut(nc * ld)
+            .enumerate()
+            .for_each(|(k, rows)| {
+                let mut series = vec![0.0; n];
+                let mut buf: Vec<Complex64> = Vec::new();
+                for l in 0..pt {
+                    let mut terms: [(Option<Getter>, Signal, usize); 2] =
+                        [(None, Signal::Value, 0), (None, Signal::Rate, 0)];
+                    match (k < p, l < p) {
+                        (true, true) => {
+                            terms[0] = (Some(|e, i| e.df_dx[i]), Signal::Value, k * p + l);
+                            terms[1] = (Some(|e, i| e.df_dv[i]), Signal::Rate, k * p + l);
+                        }
+                        (true, false) => {
+                            terms[0] = (Some(|e, i| e.df_dt[i]), Signal::Value, k * q + (l - p));
+                        }
+                        (false, true) => {
+                            terms[0] = (Some(|e, i| e.dg_dx[i]), Signal::Value, (k - p) * p + l);
+                            terms[1] = (Some(|e, i| e.dg_dv[i]), Signal::Rate, (k - p) * p + l);
+                        }
+                        (false, false) => {
+                            terms[0] = (
+                                Some(|e, i| e.dg_dt[i]),
+                                Signal::Value,
+                                (k - p) * q + (l - p),
+                            );
+                        }
+                    }
+                    for (getter, signal, idx) in terms {
+                        let Some(getter) = getter else { continue };
+                        let mut any = false;
+                        for (s, e) in series.iter_mut().zip(evals) {
+                            *s = getter(e, idx);
+                            any |= *s != 0.0;
+                        }
+                        if !any {
+                            continue;
+                        }
+                        aft.spectrum(&series, &mut buf);
+                        aft.add_product_block(&buf, signal, omega, 1.0, &mut rows[l * nc..], ld);
+                    }
+                }
+            });
+    }
+
+    /// `∂R/∂ω` at `(A, ω)` by a central difference with step `1e-6·|ω|` (truncation error
+    /// `O(1e-12)` relative).
+    pub fn d_residual_d_omega(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+        out: &mut [f64],
+    ) -> Result<(), HbError> {
+        let h = 1e-6 * omega.abs().max(1e-6);
+        let mut rp = vec![0.0; out.len()];
+        self.residual(coeffs, omega + h, &mut rp)?;
+        self.residual(coeffs, omega - h, out)?;
+        for (o, p) in out.iter_mut().zip(&rp) {
+            *o = (p - *o) / (2.0 * h);
+        }
+        Ok(())
+    }
+
+    /// Dense `∂R/∂A` (all unknowns, row-major): used by the uncondensed solver and tests.
+    pub fn dense_jacobian(&self, parts: &JacobianParts) -> Vec<f64> {
+        let nu = self.n_unknowns();
+        let nc = self.n_coeffs();
+        let mut jac = vec![0.0; nu * nu];
+        let mut e = vec![0.0; nu];
+        let mut col = vec![0.0; nu];
+        // linear part column by column (Z is cheap to apply)
+        for c in 0..nu {
+            e.iter_mut().for_each(|v| *v = 0.0);
+            col.iter_mut().for_each(|v| *v = 0.0);
+            e[c] = 1.0;
+            self.add_linear(&parts.linear, parts.omega, &e, &mut col);
+            for r in 0..nu {
+                jac[r * nu + c] = col[r];
+            }
+        }
+        let g = self.nonlinear_global();
+        let ld = g.len() * nc;
+        for (k, &gk) in g.iter().enumerate() {
+            for (l, &gl) in g.iter().enumerate() {
+                for i in 0..nc {
+                    for j in 0..nc {
+                        jac[(gk * nc + i) * nu + gl * nc + j] +=
+                            parts.nonlinear[(k * nc + i) * ld + l * nc + j];
+                    }
+                }
+            }
+        }
+        jac
+    }
+}

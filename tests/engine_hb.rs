@@ -1,0 +1,145 @@
+//! Harmonic-balance residual, exact Jacobian and condensed solves, checked against finite
+//! differences and against the uncondensed dense solve.
+
+use tmrotor::hb::{Basis, Border, HarmonicBalance, LinearSolver, Ratio};
+use tmrotor::system::System;
+use tmrotor::systems::chain::Chain;
+use tmrotor::systems::duffing::Duffing;
+
+/// Deterministic pseudo-random numbers in [-1, 1) (LCG), so tests are reproducible.
+fn pseudo_random(n: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..n)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        })
+        .collect()
+}
+
+fn check_jacobian(system: &dyn System, basis: &Basis, omega: f64, scale: f64) {
+    let hb = HarmonicBalance::new(system, basis, None).expect("hb");
+    let nu = hb.n_unknowns();
+    let a: Vec<f64> = pseudo_random(nu, 7).iter().map(|v| v * scale).collect();
+    let mut r = vec![0.0; nu];
+    let parts = hb.residual_jacobian(&a, omega, &mut r).expect("jacobian");
+    let jac = hb.dense_jacobian(&parts);
+    let h = 1e-6;
+    let mut rp = vec![0.0; nu];
+    let mut rm = vec![0.0; nu];
+    let mut max_err: f64 = 0.0;
+    let mut max_entry: f64 = 0.0;
+    for c in 0..nu {
+        let mut ap = a.clone();
+        ap[c] += h;
+        let mut am = a.clone();
+        am[c] -= h;
+        hb.residual(&ap, omega, &mut rp).expect("residual");
+        hb.residual(&am, omega, &mut rm).expect("residual");
+        for i in 0..nu {
+            let fd = (rp[i] - rm[i]) / (2.0 * h);
+            max_err = max_err.max((fd - jac[i * nu + c]).abs());
+            max_entry = max_entry.max(fd.abs());
+        }
+    }
+    assert!(
+        max_err < 1e-7 * max_entry.max(1.0),
+        "max |J - FD| = {max_err:e} (max entry {max_entry:e})"
+    );
+}
+
+#[test]
+fn jacobian_matches_finite_differences_duffing() {
+    check_jacobian(
+        &Duffing::default(),
+        &Basis::integer(5).expect("basis"),
+        1.3,
+        1.0,
+    );
+}
+
+#[test]
+fn jacobian_matches_finite_differences_thermo_mechanical_chain_multifrequency_basis() {
+    // every derivative type (x, ẋ, T on f and g) is non-zero, basis with 1/2 and 6/5 multiples
+    let basis = Basis::paper(2, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    check_jacobian(&Chain::new(5, 3), &basis, 0.9, 0.5);
+}
+
+#[test]
+fn residual_of_linear_response_matches_closed_form() {
+    // without the cubic term the 1-harmonic solution of m ẍ + c ẋ + k x = F cos ωt is
+    // a = F (k − mω²)/D, b = F c ω / D, D = (k − mω²)² + (cω)²: the residual must vanish.
+    let sys = Duffing::new(1.0, 0.05, 1.0, 0.0, 0.18);
+    let basis = Basis::integer(3).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let w: f64 = 0.8;
+    let (kd, cw) = (1.0 - w * w, 0.05 * w);
+    let d = kd * kd + cw * cw;
+    let mut a = vec![0.0; 7];
+    a[1] = 0.18 * kd / d;
+    a[4] = 0.18 * cw / d;
+    let mut r = vec![0.0; 7];
+    hb.residual(&a, w, &mut r).expect("residual");
+    assert!(r.iter().all(|v| v.abs() < 1e-14), "{r:?}");
+}
+
+fn solve_both(system: &dyn System, basis: &Basis, omega: f64, bordered: bool) {
+    let hb = HarmonicBalance::new(system, basis, None).expect("hb");
+    let nu = hb.n_unknowns();
+    let a: Vec<f64> = pseudo_random(nu, 11).iter().map(|v| 0.3 * v).collect();
+    let mut r = vec![0.0; nu];
+    let parts = hb.residual_jacobian(&a, omega, &mut r).expect("jacobian");
+    let b = pseudo_random(nu, 3);
+    let col = pseudo_random(nu, 5);
+    let row = pseudo_random(nu, 9);
+    let border = bordered.then_some(Border {
+        column: &col,
+        row: &row,
+        corner: 0.7,
+    });
+    let (x1, mu1) = LinearSolver { condense: true }
+        .solve(&hb, &parts, border, &b, 0.4)
+        .expect("condensed");
+    let (x2, mu2) = LinearSolver { condense: false }
+        .solve(&hb, &parts, border, &b, 0.4)
+        .expect("full");
+    let scale = x2.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (u, v) in x1.iter().zip(&x2) {
+        assert!((u - v).abs() < 1e-10 * scale, "{u} vs {v}");
+    }
+    assert!((mu1 - mu2).abs() < 1e-10 * mu2.abs().max(1.0));
+    // and the full solution really solves the system: J x + c μ = b
+    let jac = hb.dense_jacobian(&parts);
+    for i in 0..nu {
+        let mut s: f64 = (0..nu).map(|j| jac[i * nu + j] * x1[j]).sum();
+        if bordered {
+            s += col[i] * mu1;
+        }
+        assert!((s - b[i]).abs() < 1e-9 * scale.max(1.0));
+    }
+}
+
+#[test]
+fn condensed_solve_equals_full_solve_mechanical_chain() {
+    solve_both(
+        &Chain::new(12, 0),
+        &Basis::integer(3).expect("basis"),
+        1.1,
+        false,
+    );
+    solve_both(
+        &Chain::new(12, 0),
+        &Basis::integer(3).expect("basis"),
+        1.1,
+        true,
+    );
+}
+
+#[test]
+fn condensed_solve_equals_full_solve_with_thermal_linear_dofs() {
+    let basis = Basis::paper(1, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    solve_both(&Chain::new(9, 6), &basis, 0.7, false);
+    solve_both(&Chain::new(9, 6), &basis, 0.7, true);
+}
