@@ -34,7 +34,18 @@
 //!   Default `max_step_norm = 1` (inside the stability segment with margin; fast modes are
 //!   damped a little too much rather than amplified); `intervals = 256`; `gauss_points = 3`
 //!   (exact for the mean of a quintic; the derivative terms are smooth on the reference
-//!   problems, and for contact forces no fixed rule is exact anyway).
+//!   problems, and for contact forces no fixed rule is exact anyway);
+//! * extrapolation: with the interval mean each factor is a time-symmetric propagator up
+//!   to the series truncation, so the error of the product expands in even powers of `Δ`
+//!   up to `O(Δ⁴)`. The default therefore forms, in the same pass, the product on `N_k`
+//!   intervals and the product on `N_k/2` pairs of intervals (pair mean = average of the
+//!   two means, no extra evaluations) and returns `(4 E_Δ − E_2Δ)/3` (Richardson). Cost
+//!   1.5× the plain product; error `O(Δ⁴)` instead of `O(Δ²)`. Measured on the Duffing
+//!   resonant branch (Ω = 1.2, amplitude 2.5, 256 intervals): plain product 3.9e-4 off
+//!   the shooting multipliers, extrapolated 5.8e-7 (`tests/stability_oscillators.rs`).
+//!   What remains is mostly the series truncation, `O(N_k (Δρ)⁵/5!)`, amplified in the
+//!   coarse product; lightly damped oscillators at `Δρ ≈ 0.03` sit at ~2e-7.
+//!   [`Sip::fixed`] gives the paper's plain product.
 //!
 //! Thermal multipliers: thermal time constants are long against the period, so
 //! `Δ·ρ_th ≪ 1` and the series is exact to round-off for them; they come out as
@@ -61,6 +72,9 @@ pub struct Sip {
     /// Upper bound on `Δ·ρ(B)`; `N_k` is raised to meet it. Default 1.0;
     /// `f64::INFINITY` uses exactly `intervals`.
     pub max_step_norm: f64,
+    /// Richardson extrapolation of two SIP products, on `N_k` and `N_k/2` intervals:
+    /// `(4 E_Δ − E_2Δ)/3`. Default true (see the module docs).
+    pub extrapolate: bool,
 }
 
 impl Default for Sip {
@@ -70,6 +84,7 @@ impl Default for Sip {
             series_order: 4,
             gauss_points: 3,
             max_step_norm: 1.0,
+            extrapolate: true,
         }
     }
 }
@@ -83,7 +98,8 @@ pub struct SipMonodromy {
     pub intervals: usize,
     /// Upper bound of `ρ(B)` used to choose the intervals (1/s).
     pub rho_bound: f64,
-    /// `Σ_k ln|det E_k|` when requested ([`Sip::monodromy_with_log_det`]): the log of the
+    /// `Σ_k ln|det E_k|` when requested ([`Sip::monodromy_with_log_det`], which computes the
+    /// plain product without extrapolation): the log of the
     /// product of all multipliers, accurate even when some multipliers underflow next to
     /// others of order 1.
     pub log_abs_det: Option<f64>,
@@ -180,13 +196,14 @@ impl OrbitSampler<'_> {
 }
 
 impl Sip {
-    /// SIP with `intervals` intervals exactly and series order `series_order` (other
-    /// settings default, no automatic refinement).
+    /// The plain product of paper Eq. 33 with exactly `intervals` intervals and series
+    /// order `series_order` (no automatic refinement, no extrapolation; 3 Gauss points).
     pub fn fixed(intervals: usize, series_order: usize) -> Self {
         Self {
             intervals,
             series_order,
             max_step_norm: f64::INFINITY,
+            extrapolate: false,
             ..Self::default()
         }
     }
@@ -275,15 +292,21 @@ impl Sip {
         } else {
             0.0
         };
-        let intervals = if needed.is_finite() && needed < 1e9 {
+        let mut intervals = if needed.is_finite() && needed < 1e9 {
             self.intervals.max(needed as usize)
         } else {
             return Err(StabilityError::NonFinite { omega });
         };
+        let extrapolate = self.extrapolate && !want_det;
+        if extrapolate {
+            intervals += intervals % 2;
+        }
         let delta = period / intervals as f64;
 
         let mut mean = ws.eval.clone();
+        let mut coarse_mean = ws.eval.clone();
         let mut prod = Mat::<f64>::identity(d, d);
+        let mut coarse = extrapolate.then(|| Mat::<f64>::identity(d, d));
         let mut w = Mat::<f64>::zeros(d, d);
         let mut bw = Mat::<f64>::zeros(d, d);
         let mut log_abs_det = want_det.then_some(0.0);
@@ -297,24 +320,43 @@ impl Sip {
                 sampler.eval(&space, t, &mut ws);
                 axpy_derivs(&mut mean, 0.5 * wi, &ws.eval);
             }
-            // Eq. 33 by Horner on the running product (or on I to form the factor).
+            // Eq. 33, one factor, by Horner on the running product (or on I to form it).
             let base = if want_det { &ident } else { &prod };
-            w.copy_from(base);
-            for i in (1..=self.series_order).rev() {
-                space.apply_linearization(&mean, w.as_ref(), bw.as_mut(), &mut ws);
-                let c = delta / i as f64;
-                for col in 0..d {
-                    let (wc, bc, pc) = (w.col_mut(col), bw.col(col), base.col(col));
-                    for (r, wv) in wc.iter_mut().enumerate() {
-                        *wv = pc[r] + c * bc[r];
-                    }
-                }
-            }
+            self.apply_factor(&space, &mean, delta, base, &mut w, &mut bw, &mut ws);
             if let Some(acc) = log_abs_det.as_mut() {
                 *acc += log_abs_det_of(w.as_ref());
                 prod = &w * &prod;
             } else {
                 std::mem::swap(&mut prod, &mut w);
+            }
+            // The coarse product over pairs of intervals, for extrapolation; the mean over
+            // a pair is the average of the two means.
+            if let Some(coarse) = coarse.as_mut() {
+                if k % 2 == 0 {
+                    coarse_mean.clear();
+                    axpy_derivs(&mut coarse_mean, 0.5, &mean);
+                } else {
+                    axpy_derivs(&mut coarse_mean, 0.5, &mean);
+                    self.apply_factor(
+                        &space,
+                        &coarse_mean,
+                        2.0 * delta,
+                        coarse,
+                        &mut w,
+                        &mut bw,
+                        &mut ws,
+                    );
+                    std::mem::swap(coarse, &mut w);
+                }
+            }
+        }
+        if let Some(coarse) = coarse.as_ref() {
+            // Richardson: E ≈ (4 E_Δ − E_2Δ) / 3 removes the Δ² error term.
+            for col in 0..d {
+                let (pc, cc) = (prod.col_mut(col), coarse.col(col));
+                for (r, pv) in pc.iter_mut().enumerate() {
+                    *pv = (4.0 * *pv - cc[r]) / 3.0;
+                }
             }
         }
         if !all_finite(prod.as_ref()) {
@@ -350,6 +392,34 @@ impl Sip {
         let mech = (inf_norm(mk) + kx).sqrt() + inf_norm(mc) + cv;
         let therm = inf_norm(ckt) + tt;
         mech.max(therm)
+    }
+}
+
+impl Sip {
+    /// `w = (I + Σ_{i=1}^{N_i} (Δ B)^i / i!) base` by Horner's scheme, `B` from `mean`.
+    #[allow(clippy::too_many_arguments)]
+    fn apply_factor(
+        &self,
+        space: &StateSpace<'_>,
+        mean: &NonlinearEval,
+        delta: f64,
+        base: &Mat<f64>,
+        w: &mut Mat<f64>,
+        bw: &mut Mat<f64>,
+        ws: &mut Workspace,
+    ) {
+        let d = base.nrows();
+        w.copy_from(base);
+        for i in (1..=self.series_order).rev() {
+            space.apply_linearization(mean, w.as_ref(), bw.as_mut(), ws);
+            let c = delta / i as f64;
+            for col in 0..d {
+                let (wc, bc, pc) = (w.col_mut(col), bw.col(col), base.col(col));
+                for (r, wv) in wc.iter_mut().enumerate() {
+                    *wv = pc[r] + c * bc[r];
+                }
+            }
+        }
     }
 }
 
