@@ -7,6 +7,15 @@
 //! stability change how they left the unit circle: through +1 (saddle-node / fold),
 //! through −1 (period doubling) or as a complex pair (Neimark–Sacker).
 
+pub mod sip;
+pub mod thermal;
+pub mod variational;
+
+pub use sip::{Sip, SipMonodromy};
+pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
+pub use variational::Variational;
+
+use faer::MatRef;
 use num_complex::Complex64;
 use thiserror::Error;
 
@@ -91,12 +100,34 @@ pub enum StabilityError {
     NonFinite { omega: f64 },
     #[error("eigenvalue solver failed for the {dim}×{dim} monodromy matrix: {reason}")]
     Eigen { dim: usize, reason: String },
+    #[error("cannot set up the linearised equations at ω = {omega} rad/s: {reason}")]
+    Setup { omega: f64, reason: String },
     #[error("invalid stability setting {field} = {value}: {reason}")]
     Setting {
         field: &'static str,
         value: String,
         reason: &'static str,
     },
+}
+
+/// True when every entry of `a` is finite.
+pub(crate) fn all_finite(a: MatRef<'_, f64>) -> bool {
+    (0..a.ncols()).all(|j| a.col(j).iter().all(|v| v.is_finite()))
+}
+
+/// Eigenvalues of a monodromy matrix (faer's real Schur-based solver), rejecting
+/// non-finite input. `omega` only labels errors.
+pub fn eigenvalues_checked(
+    monodromy: MatRef<'_, f64>,
+    omega: f64,
+) -> Result<Vec<Complex64>, StabilityError> {
+    if !all_finite(monodromy) {
+        return Err(StabilityError::NonFinite { omega });
+    }
+    monodromy.eigenvalues().map_err(|e| StabilityError::Eigen {
+        dim: monodromy.nrows(),
+        reason: format!("{e:?}"),
+    })
 }
 
 /// A way of computing the Floquet multipliers of a periodic solution. The continuation
