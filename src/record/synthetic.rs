@@ -375,3 +375,31 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
         bifurcations,
     }
 }
+
+/// Writes the synthetic run to an MCAP file (finished with status `completed` when
+/// `finish`; otherwise left as a killed process would leave it). Returns the number of
+/// points.
+pub fn write_mcap(
+    path: &std::path::Path,
+    options: &SyntheticOptions,
+    finish: bool,
+) -> Result<usize, super::RecordError> {
+    use super::sink::Sink;
+    let data = generate(options);
+    let mut sink = super::McapSink::create(path, super::McapOptions::default())?;
+    sink.begin_run(&data.run)?;
+    let mut bifs = data.bifurcations.iter().peekable();
+    for p in &data.points {
+        sink.write_point(p)?;
+        while let Some(b) = bifs.next_if(|b| b.after_point + 1 == p.index) {
+            sink.write_bifurcation(b)?;
+        }
+    }
+    if finish {
+        sink.finish(super::RunStatus::Completed)?;
+    } else {
+        // Leave the file as a killed process would: everything flushed, nothing closed.
+        std::mem::forget(sink);
+    }
+    Ok(data.points.len())
+}
