@@ -149,9 +149,9 @@ impl HertzBearing {
             out.fb += p;
             let dir = [c, s, 1.0];
             let ddelta = [c, s, -1.0];
-            for r in 0..3 {
-                for col in 0..3 {
-                    out.jac[r][col] += dp * dir[r] * ddelta[col];
+            for (row, d_r) in out.jac.iter_mut().zip(dir) {
+                for (entry, d_c) in row.iter_mut().zip(ddelta) {
+                    *entry += dp * d_r * d_c;
                 }
             }
         }
