@@ -108,12 +108,12 @@ fn force_derivatives_match_finite_differences() {
                     (fp.fb - fm.fb) / (2.0 * h),
                 ];
                 let scale = f0.jac.iter().flatten().fold(0.0_f64, |a, v| a.max(v.abs()));
-                for r in 0..3 {
+                for (r, fd_r) in fd.iter().enumerate() {
                     assert!(
-                        (fd[r] - f0.jac[r][c]).abs() < 1e-5 * scale,
+                        (fd_r - f0.jac[r][c]).abs() < 1e-5 * scale,
                         "{:?} r{r} c{c}: fd {} exact {}",
                         b.law,
-                        fd[r],
+                        fd_r,
                         f0.jac[r][c]
                     );
                 }
