@@ -85,7 +85,7 @@ fn built_in_spec_has_the_papers_node_numbers() {
 fn spec_errors_name_the_field_path() {
     let text = tmrotor::thermal::spec::DUAL_ROTOR_THERMAL_TOML;
     let bad = text.replacen("f_v = 2.0", "f_v = -2.0", 1);
-    let err = ThermalSpec::from_toml_str(&bad, "m.toml").unwrap_err();
+    let err = ThermalSpec::from_toml_str(&bad, "m.toml").expect_err("must be rejected");
     let msg = err.to_string();
     assert!(
         msg.contains("m.toml") && msg.contains("thermal.bearings[0].f_v"),
@@ -94,13 +94,13 @@ fn spec_errors_name_the_field_path() {
 
     let bad = text.replacen("flow_l_min = 2.0", "flow_l_min = 2.0\nflow_rate = 3.0", 1);
     let msg = ThermalSpec::from_toml_str(&bad, "m.toml")
-        .unwrap_err()
+        .expect_err("must be rejected")
         .to_string();
     assert!(msg.contains("m.toml") && msg.contains("flow_rate"), "{msg}");
 
     let bad = text.replacen("node = 41", "node = 40", 1);
     let msg = ThermalSpec::from_toml_str(&bad, "m.toml")
-        .unwrap_err()
+        .expect_err("must be rejected")
         .to_string();
     assert!(
         msg.contains("thermal.disks[3].node") && msg.contains("already used"),
