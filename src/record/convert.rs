@@ -711,3 +711,59 @@ pub fn scene_to_pb(
         entities,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::synthetic::{self, SyntheticOptions};
+
+    #[test]
+    fn enums_map_both_ways() {
+        for kind in [
+            None,
+            Some(BifurcationKind::SaddleNode),
+            Some(BifurcationKind::PeriodDoubling),
+            Some(BifurcationKind::NeimarkSacker),
+        ] {
+            assert_eq!(
+                bifurcation_from_pb(bifurcation_to_pb(kind) as i32),
+                Ok(kind)
+            );
+        }
+        for s in [None, Some(true), Some(false)] {
+            assert_eq!(stability_from_pb(stability_to_pb(s) as i32), Ok(s));
+        }
+        assert!(bifurcation_from_pb(17).is_err());
+    }
+
+    #[test]
+    fn run_info_checks_dof_indices() {
+        let mut run = synthetic::run_info(true);
+        let msg = run_info_to_pb(&run);
+        assert_eq!(
+            run_info_from_pb(&msg, run.model_text.clone()),
+            Ok(run.clone())
+        );
+        run.nodes[0].dof_y = 2;
+        let err = run_info_from_pb(&run_info_to_pb(&run), String::new()).expect_err("bad dof");
+        assert!(err.contains("nodes[0]"), "{err}");
+    }
+
+    #[test]
+    fn scene_places_each_orbit_at_its_axial_position() {
+        let data = synthetic::generate(&SyntheticOptions::default());
+        let p = &data.points[3];
+        let scene = scene_to_pb(&data.run, p, 7, &SceneOptions::default());
+        let line = &scene.entities[0].lines[0];
+        // closed strip: one more point than samples, first == last
+        assert_eq!(line.points.len(), p.orbits[0].x_m.len() + 1);
+        assert_eq!(line.points.first(), line.points.last());
+        assert!(
+            line.points
+                .iter()
+                .all(|q| q.x == data.run.nodes[0].axial_position_m)
+        );
+        assert_eq!(line.points[0].z, 1000.0 * p.orbits[0].x_m[0]);
+        assert_eq!(line.points[0].y, 1000.0 * p.orbits[0].y_m[0]);
+    }
+}

@@ -205,3 +205,27 @@ pub fn install_interrupt_flag() -> Result<Arc<AtomicBool>, RecordError> {
     .map_err(|e| RecordError::CtrlC(e.to_string()))?;
     Ok(INTERRUPT.get_or_init(|| flag).clone())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interrupt_flag_is_installed_once_and_shared() {
+        let a = install_interrupt_flag().expect("handler");
+        let b = install_interrupt_flag().expect("same handler");
+        assert!(Arc::ptr_eq(&a, &b));
+        assert!(!a.load(std::sync::atomic::Ordering::Relaxed));
+    }
+
+    #[test]
+    fn status_labels_round_trip() {
+        for s in [
+            RunStatus::Completed,
+            RunStatus::Interrupted,
+            RunStatus::Failed("Newton: 30 iterations".into()),
+        ] {
+            assert_eq!(RunStatus::from_label(&s.label()), s);
+        }
+    }
+}
