@@ -14,6 +14,26 @@
 //! | [`replay`] | the `replay` command line (info, branch, orbit, stability, plot) |
 //!
 //! Only this module uses `mcap` and `prost`.
+//!
+//! ```
+//! use tmrotor::record::synthetic::{self, SyntheticOptions};
+//! use tmrotor::record::{McapOptions, McapSink, RunStatus, Sink, read_recording};
+//!
+//! let data = synthetic::generate(&SyntheticOptions::default());
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("sweep.mcap");
+//! let mut sink = McapSink::create(&path, McapOptions::default())?;
+//! sink.begin_run(&data.run)?;
+//! for point in &data.points {
+//!     sink.write_point(point)?; // durable when this returns
+//! }
+//! sink.finish(RunStatus::Completed)?;
+//!
+//! let rec = read_recording(&path)?;
+//! assert!(rec.complete);
+//! assert_eq!(rec.points, data.points);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod convert;
 pub mod derive;

@@ -25,6 +25,27 @@ pub trait Sink {
     fn finish(&mut self, status: RunStatus) -> Result<(), RecordError>;
 }
 
+macro_rules! forward_sink {
+    ($($t:ty),*) => {$(
+        impl<S: Sink + ?Sized> Sink for $t {
+            fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+                (**self).begin_run(run)
+            }
+            fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError> {
+                (**self).write_point(point)
+            }
+            fn write_bifurcation(&mut self, b: &BifurcationRecord) -> Result<(), RecordError> {
+                (**self).write_bifurcation(b)
+            }
+            fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
+                (**self).finish(status)
+            }
+        }
+    )*};
+}
+
+forward_sink!(&mut S, Box<S>);
+
 /// The call-order and size checks shared by all sinks.
 #[derive(Clone, Debug, Default)]
 pub struct SinkChecks {
