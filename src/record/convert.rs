@@ -83,12 +83,10 @@ fn stability_from_pb(value: i32) -> Result<Option<bool>, String> {
     }
 }
 
-fn index_u32(i: usize, what: &str) -> u32 {
-    // DoF counts of real models are far below u32::MAX; saturate rather than wrap.
-    u32::try_from(i).unwrap_or_else(|_| {
-        debug_assert!(false, "{what} index {i} exceeds u32");
-        u32::MAX
-    })
+/// DoF counts and indices on the wire are `uint32`; real models are far below its range,
+/// so saturate rather than wrap.
+fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
 }
 
 /// The `/run_info` message (the model text travels as an attachment, not here).
@@ -109,16 +107,16 @@ pub fn run_info_to_pb(run: &RunInfo) -> pb::RunInfo {
         settings_toml: run.settings_toml.clone(),
         harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
         lambda: Some(ratio_to_pb(run.lambda)),
-        n_mech: index_u32(run.n_mech, "n_mech"),
-        n_therm: index_u32(run.n_therm, "n_therm"),
+        n_mech: index_u32(run.n_mech),
+        n_therm: index_u32(run.n_therm),
         nodes: run
             .nodes
             .iter()
             .map(|n| pb::DynamicNode {
                 id: n.id,
                 name: n.name.clone(),
-                dof_x: index_u32(n.dof_x, "dof_x"),
-                dof_y: index_u32(n.dof_y, "dof_y"),
+                dof_x: index_u32(n.dof_x),
+                dof_y: index_u32(n.dof_y),
                 axial_position_m: n.axial_position_m,
                 rotor: n.rotor.clone(),
             })
@@ -129,7 +127,7 @@ pub fn run_info_to_pb(run: &RunInfo) -> pb::RunInfo {
             .map(|n| pb::ThermalNode {
                 id: n.id,
                 name: n.name.clone(),
-                dof: index_u32(n.dof, "dof"),
+                dof: index_u32(n.dof),
             })
             .collect(),
         bearings: run
@@ -321,8 +319,8 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
         omega_rad_s,
         lambda: Some(ratio_to_pb(run.lambda)),
         harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
-        n_mech: index_u32(run.n_mech, "n_mech"),
-        n_therm: index_u32(run.n_therm, "n_therm"),
+        n_mech: index_u32(run.n_mech),
+        n_therm: index_u32(run.n_therm),
         mech: p.coeffs_mech.clone(),
         therm: p.coeffs_therm.clone(),
     };

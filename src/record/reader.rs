@@ -151,9 +151,8 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
             }
         };
         match record {
-            Record::Schema { header, data } => {
+            Record::Schema { header, .. } => {
                 schemas.insert(header.id, (header.name.clone(), header.encoding.clone()));
-                let _ = data;
             }
             Record::Channel(c) => {
                 let (schema, _) = schemas.get(&c.schema_id).cloned().unwrap_or_default();
