@@ -22,6 +22,14 @@ use super::types::{
 };
 use crate::hb::{Basis, BasisError};
 
+/// Orbit samples per period recommended for recordings: 128.
+///
+/// Why: the paper's basis at truncation order 3 with λ = 6/5 reaches 36·(ω/10); a discrete
+/// mean over `S` equally spaced samples integrates a product of two such harmonics exactly
+/// when `S > 2·36 = 72`, so Eq. 35 evaluated from the stored orbit agrees with the
+/// coefficients; 128 leaves margin and draws smooth orbits.
+pub const DEFAULT_ORBIT_SAMPLES: usize = 128;
+
 /// Errors re-deriving quantities.
 #[derive(Debug, Error)]
 pub enum DeriveError {
