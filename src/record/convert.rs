@@ -83,12 +83,10 @@ fn stability_from_pb(value: i32) -> Result<Option<bool>, String> {
     }
 }
 
-fn index_u32(i: usize, what: &str) -> u32 {
-    // DoF counts of real models are far below u32::MAX; saturate rather than wrap.
-    u32::try_from(i).unwrap_or_else(|_| {
-        debug_assert!(false, "{what} index {i} exceeds u32");
-        u32::MAX
-    })
+/// DoF counts and indices on the wire are `uint32`; real models are far below its range,
+/// so saturate rather than wrap.
+fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
 }
 
 /// The `/run_info` message (the model text travels as an attachment, not here).
@@ -109,16 +107,16 @@ pub fn run_info_to_pb(run: &RunInfo) -> pb::RunInfo {
         settings_toml: run.settings_toml.clone(),
         harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
         lambda: Some(ratio_to_pb(run.lambda)),
-        n_mech: index_u32(run.n_mech, "n_mech"),
-        n_therm: index_u32(run.n_therm, "n_therm"),
+        n_mech: index_u32(run.n_mech),
+        n_therm: index_u32(run.n_therm),
         nodes: run
             .nodes
             .iter()
             .map(|n| pb::DynamicNode {
                 id: n.id,
                 name: n.name.clone(),
-                dof_x: index_u32(n.dof_x, "dof_x"),
-                dof_y: index_u32(n.dof_y, "dof_y"),
+                dof_x: index_u32(n.dof_x),
+                dof_y: index_u32(n.dof_y),
                 axial_position_m: n.axial_position_m,
                 rotor: n.rotor.clone(),
             })
@@ -129,7 +127,7 @@ pub fn run_info_to_pb(run: &RunInfo) -> pb::RunInfo {
             .map(|n| pb::ThermalNode {
                 id: n.id,
                 name: n.name.clone(),
-                dof: index_u32(n.dof, "dof"),
+                dof: index_u32(n.dof),
             })
             .collect(),
         bearings: run
@@ -321,8 +319,8 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
         omega_rad_s,
         lambda: Some(ratio_to_pb(run.lambda)),
         harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
-        n_mech: index_u32(run.n_mech, "n_mech"),
-        n_therm: index_u32(run.n_therm, "n_therm"),
+        n_mech: index_u32(run.n_mech),
+        n_therm: index_u32(run.n_therm),
         mech: p.coeffs_mech.clone(),
         therm: p.coeffs_therm.clone(),
     };
@@ -709,5 +707,61 @@ pub fn scene_to_pb(
     fg::SceneUpdate {
         deletions: Vec::new(),
         entities,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::synthetic::{self, SyntheticOptions};
+
+    #[test]
+    fn enums_map_both_ways() {
+        for kind in [
+            None,
+            Some(BifurcationKind::SaddleNode),
+            Some(BifurcationKind::PeriodDoubling),
+            Some(BifurcationKind::NeimarkSacker),
+        ] {
+            assert_eq!(
+                bifurcation_from_pb(bifurcation_to_pb(kind) as i32),
+                Ok(kind)
+            );
+        }
+        for s in [None, Some(true), Some(false)] {
+            assert_eq!(stability_from_pb(stability_to_pb(s) as i32), Ok(s));
+        }
+        assert!(bifurcation_from_pb(17).is_err());
+    }
+
+    #[test]
+    fn run_info_checks_dof_indices() {
+        let mut run = synthetic::run_info(true);
+        let msg = run_info_to_pb(&run);
+        assert_eq!(
+            run_info_from_pb(&msg, run.model_text.clone()),
+            Ok(run.clone())
+        );
+        run.nodes[0].dof_y = 2;
+        let err = run_info_from_pb(&run_info_to_pb(&run), String::new()).expect_err("bad dof");
+        assert!(err.contains("nodes[0]"), "{err}");
+    }
+
+    #[test]
+    fn scene_places_each_orbit_at_its_axial_position() {
+        let data = synthetic::generate(&SyntheticOptions::default());
+        let p = &data.points[3];
+        let scene = scene_to_pb(&data.run, p, 7, &SceneOptions::default());
+        let line = &scene.entities[0].lines[0];
+        // closed strip: one more point than samples, first == last
+        assert_eq!(line.points.len(), p.orbits[0].x_m.len() + 1);
+        assert_eq!(line.points.first(), line.points.last());
+        assert!(
+            line.points
+                .iter()
+                .all(|q| q.x == data.run.nodes[0].axial_position_m)
+        );
+        assert_eq!(line.points[0].z, 1000.0 * p.orbits[0].x_m[0]);
+        assert_eq!(line.points[0].y, 1000.0 * p.orbits[0].y_m[0]);
     }
 }

@@ -22,6 +22,14 @@ use super::types::{
 };
 use crate::hb::{Basis, BasisError};
 
+/// Orbit samples per period recommended for recordings: 128.
+///
+/// Why: the paper's basis at truncation order 3 with λ = 6/5 reaches 36·(ω/10); a discrete
+/// mean over `S` equally spaced samples integrates a product of two such harmonics exactly
+/// when `S > 2·36 = 72`, so Eq. 35 evaluated from the stored orbit agrees with the
+/// coefficients; 128 leaves margin and draws smooth orbits.
+pub const DEFAULT_ORBIT_SAMPLES: usize = 128;
+
 /// Errors re-deriving quantities.
 #[derive(Debug, Error)]
 pub enum DeriveError {
@@ -185,6 +193,50 @@ pub fn temperature_stats(
         .collect()
 }
 
+/// A point with everything that follows from the coefficients filled in: RMS amplitudes
+/// (Eq. 35), orbits and temperature statistics at `samples` points per period, and the
+/// period. The caller sets what needs the solver or the model: `arc_length`, `stable`,
+/// `bifurcation`, residuals, iterations, multipliers, clearances, bearing loads, thermal
+/// forces (all zero or empty here).
+pub fn point_from_coefficients(
+    run: &RunInfo,
+    index: u64,
+    omega_rad_s: f64,
+    coeffs_mech: Vec<f64>,
+    coeffs_therm: Vec<f64>,
+    samples: usize,
+) -> Result<PointRecord, DeriveError> {
+    let basis = run.basis()?;
+    let want_therm = run.n_therm * basis.n_coeffs();
+    if coeffs_therm.len() != want_therm {
+        return Err(DeriveError::Size {
+            what: "coeffs_therm",
+            got: coeffs_therm.len(),
+            want: want_therm,
+        });
+    }
+    Ok(PointRecord {
+        index,
+        omega_rad_s,
+        arc_length: 0.0,
+        amplitude_rms_m: amplitude_rms(run, &coeffs_mech)?,
+        stable: None,
+        bifurcation: None,
+        residual_mech: 0.0,
+        residual_therm: 0.0,
+        newton_iterations: 0,
+        period_s: basis.period(omega_rad_s),
+        orbits: orbits(run, &coeffs_mech, omega_rad_s, samples)?,
+        temperatures: temperature_stats(run, &coeffs_therm, omega_rad_s, samples)?,
+        coeffs_mech,
+        coeffs_therm,
+        clearances: Vec::new(),
+        bearing_loads: Vec::new(),
+        thermal_forces: Vec::new(),
+        multipliers: Vec::new(),
+    })
+}
+
 /// Bearing quantities re-derived through the model at one point.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RederivedBearings {
@@ -258,4 +310,53 @@ pub fn multiplier_deviation(stored: &[Complex64], recomputed: &[Complex64]) -> O
         worst = worst.max(d);
     }
     Some(worst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::synthetic::{self, SyntheticOptions};
+
+    #[test]
+    fn multiplier_deviation_pairs_nearest_regardless_of_order() {
+        let a = [
+            Complex64::new(0.5, 0.5),
+            Complex64::new(0.5, -0.5),
+            Complex64::new(1.1, 0.0),
+        ];
+        let b = [
+            Complex64::new(1.1, 0.0),
+            Complex64::new(0.5, -0.5 + 1e-3),
+            Complex64::new(0.5, 0.5),
+        ];
+        let d = multiplier_deviation(&a, &b).expect("same count");
+        assert!((d - 1e-3).abs() < 1e-12);
+        assert_eq!(multiplier_deviation(&a, &b[..2]), None);
+        assert_eq!(multiplier_deviation(&[], &[]), None);
+    }
+
+    #[test]
+    fn point_from_coefficients_matches_the_closed_form_point() {
+        let data = synthetic::generate(&SyntheticOptions::default());
+        let p = &data.points[7];
+        let q = point_from_coefficients(
+            &data.run,
+            p.index,
+            p.omega_rad_s,
+            p.coeffs_mech.clone(),
+            p.coeffs_therm.clone(),
+            p.orbits[0].x_m.len(),
+        )
+        .expect("point");
+        assert!((q.period_s - p.period_s).abs() <= 1e-15 * p.period_s);
+        assert!(
+            (q.amplitude_rms_m[0] - p.amplitude_rms_m[0]).abs() <= 1e-12 * p.amplitude_rms_m[0]
+        );
+        for (a, b) in q.orbits[0].y_m.iter().zip(&p.orbits[0].y_m) {
+            assert!((a - b).abs() <= 1e-12 * p.amplitude_rms_m[0]);
+        }
+        assert_eq!(q.temperatures[0].mean_c, p.temperatures[0].mean_c);
+        let short = point_from_coefficients(&data.run, 0, 300.0, vec![0.0; 3], Vec::new(), 8);
+        assert!(matches!(short, Err(DeriveError::Size { .. })));
+    }
 }

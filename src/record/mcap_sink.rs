@@ -96,6 +96,8 @@ pub struct McapSink {
     writer: Option<Writer<BufWriter<File>>>,
     options: McapOptions,
     checks: SinkChecks,
+    /// The run, shared so that writing a point does not copy it.
+    run: Option<std::sync::Arc<RunInfo>>,
     channels: BTreeMap<&'static str, u16>,
     sequence: u32,
     since_flush: u32,
@@ -130,6 +132,7 @@ impl McapSink {
             writer: Some(writer),
             options,
             checks: SinkChecks::default(),
+            run: None,
             channels: BTreeMap::new(),
             sequence: 0,
             since_flush: 0,
@@ -254,6 +257,7 @@ impl McapSink {
 impl Sink for McapSink {
     fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
         self.checks.begin(run)?;
+        self.run = Some(std::sync::Arc::new(run.clone()));
         let model_name = if run.model_name.is_empty() {
             "model.toml".to_string()
         } else {
@@ -302,7 +306,11 @@ impl Sink for McapSink {
     }
 
     fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError> {
-        let run = self.checks.point(point)?.clone();
+        self.checks.point(point)?;
+        let run = self
+            .run
+            .clone()
+            .ok_or(RecordError::NotStarted("write_point"))?;
         let t = point_time_ns(point.index);
         let m = point_to_pb(&run, point);
         self.publish(schema::TOPIC_HARMONICS, t, &m.harmonics)?;

@@ -9,11 +9,31 @@
 //! | [`schema`] | topics, message types and their embedded descriptor sets |
 //! | [`convert`] | the only domain ↔ protobuf conversion |
 //! | [`reader`] | [`read_recording`]: back to domain types, tolerant of files cut short |
-//! | [`derive`] | time histories and Eq. 35 amplitudes from coefficients; re-derivation seams |
+//! | [`derive`](mod@derive) | time histories and Eq. 35 amplitudes from coefficients; re-derivation seams |
 //! | [`synthetic`] | a closed-form 2-DoF run for tests and examples |
 //! | [`replay`] | the `replay` command line (info, branch, orbit, stability, plot) |
 //!
 //! Only this module uses `mcap` and `prost`.
+//!
+//! ```
+//! use tmrotor::record::synthetic::{self, SyntheticOptions};
+//! use tmrotor::record::{McapOptions, McapSink, RunStatus, Sink, read_recording};
+//!
+//! let data = synthetic::generate(&SyntheticOptions::default());
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("sweep.mcap");
+//! let mut sink = McapSink::create(&path, McapOptions::default())?;
+//! sink.begin_run(&data.run)?;
+//! for point in &data.points {
+//!     sink.write_point(point)?; // durable when this returns
+//! }
+//! sink.finish(RunStatus::Completed)?;
+//!
+//! let rec = read_recording(&path)?;
+//! assert!(rec.complete);
+//! assert_eq!(rec.points, data.points);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
 
 pub mod convert;
 pub mod derive;

@@ -151,9 +151,8 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
             }
         };
         match record {
-            Record::Schema { header, data } => {
+            Record::Schema { header, .. } => {
                 schemas.insert(header.id, (header.name.clone(), header.encoding.clone()));
-                let _ = data;
             }
             Record::Channel(c) => {
                 let (schema, _) = schemas.get(&c.schema_id).cloned().unwrap_or_default();
@@ -239,13 +238,17 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
     if cut_short {
         notes.push("the file ends in the middle of a record (cut short)".into());
     }
+    let end_magic = bytes.len() >= 2 * mcap::MAGIC.len() && bytes.ends_with(mcap::MAGIC);
+    if !end_magic {
+        notes.push("the file does not end with the MCAP magic bytes".into());
+    }
     if !saw_data_end || !saw_footer {
         notes.push("the file has no summary/footer: it was not finished".into());
     }
     if status.is_none() {
         notes.push("no run status: the run did not finish writing".into());
     }
-    let complete = !cut_short && saw_data_end && saw_footer && status.is_some();
+    let complete = !cut_short && end_magic && saw_data_end && saw_footer && status.is_some();
 
     Ok(Recording {
         file: file.to_path_buf(),

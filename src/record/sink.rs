@@ -25,6 +25,27 @@ pub trait Sink {
     fn finish(&mut self, status: RunStatus) -> Result<(), RecordError>;
 }
 
+macro_rules! forward_sink {
+    ($($t:ty),*) => {$(
+        impl<S: Sink + ?Sized> Sink for $t {
+            fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+                (**self).begin_run(run)
+            }
+            fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError> {
+                (**self).write_point(point)
+            }
+            fn write_bifurcation(&mut self, b: &BifurcationRecord) -> Result<(), RecordError> {
+                (**self).write_bifurcation(b)
+            }
+            fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
+                (**self).finish(status)
+            }
+        }
+    )*};
+}
+
+forward_sink!(&mut S, Box<S>);
+
 /// The call-order and size checks shared by all sinks.
 #[derive(Clone, Debug, Default)]
 pub struct SinkChecks {
@@ -204,4 +225,28 @@ pub fn install_interrupt_flag() -> Result<Arc<AtomicBool>, RecordError> {
     })
     .map_err(|e| RecordError::CtrlC(e.to_string()))?;
     Ok(INTERRUPT.get_or_init(|| flag).clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interrupt_flag_is_installed_once_and_shared() {
+        let a = install_interrupt_flag().expect("handler");
+        let b = install_interrupt_flag().expect("same handler");
+        assert!(Arc::ptr_eq(&a, &b));
+        assert!(!a.load(std::sync::atomic::Ordering::Relaxed));
+    }
+
+    #[test]
+    fn status_labels_round_trip() {
+        for s in [
+            RunStatus::Completed,
+            RunStatus::Interrupted,
+            RunStatus::Failed("Newton: 30 iterations".into()),
+        ] {
+            assert_eq!(RunStatus::from_label(&s.label()), s);
+        }
+    }
 }

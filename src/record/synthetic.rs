@@ -308,9 +308,9 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
                 let mut ct = vec![0.0; nc];
                 ct[0] = t0;
                 ct[1 + hhalf] = dt;
-                let ub = 1.2e-5 * 0.01 * (t0 - 25.0);
+                let ub = 1.2e-5 * 0.02 * (t0 - 25.0);
                 let ui = 1.2e-5 * 0.03 * (t0 - 25.0);
-                let uo = 1.2e-5 * 0.05 * (t0 - 25.0);
+                let uo = 1.2e-5 * 0.01 * (t0 - 25.0);
                 let dv = -(ub + (ui - uo) / 2.0);
                 let radial: Vec<f64> = x
                     .iter()

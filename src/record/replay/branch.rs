@@ -24,8 +24,7 @@ pub fn run(rec: &Recording, csv: bool, out: &mut dyn Write) -> anyhow::Result<()
         ]
         .map(String::from),
     );
-    let sep = if csv { "," } else { "  " };
-    writeln!(out, "{}", header.join(sep))?;
+    let mut rows = Vec::with_capacity(rec.points.len());
     for p in &rec.points {
         let mut row = vec![
             p.index.to_string(),
@@ -45,7 +44,32 @@ pub fn run(rec: &Recording, csv: bool, out: &mut dyn Write) -> anyhow::Result<()
         row.push(format!("{:e}", p.residual_mech));
         row.push(format!("{:e}", p.residual_therm));
         row.push(p.newton_iterations.to_string());
-        writeln!(out, "{}", row.join(sep))?;
+        rows.push(row);
+    }
+    if csv {
+        writeln!(out, "{}", header.join(","))?;
+        for row in rows {
+            writeln!(out, "{}", row.join(","))?;
+        }
+        return Ok(());
+    }
+    let mut widths: Vec<usize> = header.iter().map(|h| h.chars().count()).collect();
+    for row in &rows {
+        for (w, cell) in widths.iter_mut().zip(row) {
+            *w = (*w).max(cell.chars().count());
+        }
+    }
+    let line = |cells: &[String]| -> String {
+        cells
+            .iter()
+            .zip(&widths)
+            .map(|(c, w)| format!("{c:>w$}"))
+            .collect::<Vec<_>>()
+            .join("  ")
+    };
+    writeln!(out, "{}", line(&header))?;
+    for row in &rows {
+        writeln!(out, "{}", line(row))?;
     }
     Ok(())
 }
