@@ -375,3 +375,27 @@ fn steady_temperatures_at_620_rad_s() {
         assert!(tmin >= 25.0 - 1e-9);
     }
 }
+
+#[test]
+fn clearance_variation_follows_the_network_temperatures() {
+    // Uniform heating by 10 K of every node: δv from the network equals Eqs. 1–2 by hand
+    // for the 1# bearing (seat = housing seat node 42).
+    let net = ThermalNetwork::new(&spec()).expect("network");
+    let nl = net.nonlinear_nodes().to_vec();
+    let t: Vec<f64> = nl.iter().map(|_| 35.0).collect();
+    let c = net.clearance_variation(0, &t);
+    let g = 12.03e-6;
+    let u_b = g * 19.05e-3 * 10.0;
+    let u_i = g * 150.95e-3 * 10.0;
+    let (d_o, d_h) = (189.05e-3, 227.782e-3);
+    let u_o = g * 1.3 * d_o / (3.0 * (d_o + d_h)) * 10.0 * (3.0 * d_o + 3.0 * d_h);
+    assert!((c.delta_v + u_b + 0.5 * (u_i - u_o)).abs() < 1e-15);
+    assert_eq!(net.expansion_nodes(0), [51, 49, 50, 41]);
+    assert!(
+        net.expansion_nodes(2)[3] == 36,
+        "3# outer ring sits in HP shaft node 37"
+    );
+    for p in net.expansion_nodes(3) {
+        assert!(net.nonlinear_index(p).is_some());
+    }
+}
