@@ -24,6 +24,23 @@
 //! latter because the clearance of Eq. 2 depends on it); its derivatives with respect to
 //! those temperatures and to each bearing's `F_b` and `n_b` are exact, so a coupled model
 //! can chain them with the bearing-force derivatives of [`crate::bearing`].
+//!
+//! ## Coupling (paper Eq. 21)
+//!
+//! For bearing `k` with relative ring displacement `d = (dx, dy)` and temperatures `T`:
+//!
+//! ```text
+//!   δv_k = δv_k(T_b, T_i, T_o, T_seat)                    (clearance_variation, Eqs. 1–2)
+//!   (Fx, Fy, F_b, n_b) = HertzBearing::force(d, δv_k, ω_c t)          (Eqs. 3–5)
+//!   ∂F/∂T   = ∂F/∂δv · ∂δv/∂T
+//!   ∂g/∂x   = ∂g/∂F_b · ∂F_b/∂d
+//!   ∂g/∂T  += ∂g/∂F_b · ∂F_b/∂δv · ∂δv/∂T     (on top of ThermalEval::dg_dt)
+//! ```
+//!
+//! `n_b` is an integer that jumps when an element enters contact, so `g` jumps with it at
+//! fixed load; the paper calls `n_b` "the average number of loaded rolling elements". A
+//! coupled model that wants `g` continuous in the state can pass the period-mean `n_b` (or
+//! a fixed count) instead of the instantaneous one; `∂g/∂n_b` is provided for either use.
 
 use super::ThermalError;
 use super::contact::{ContactGeometry, Raceway, parallel_conductance};
