@@ -399,3 +399,30 @@ fn clearance_variation_follows_the_network_temperatures() {
         assert!(net.nonlinear_index(p).is_some());
     }
 }
+
+#[test]
+fn conductance_matrix_is_symmetric_and_conserves_heat() {
+    // K_T (Eq. C.2) is symmetric; each row sums to the node's conductance to the fixed
+    // temperatures (ambient or lubricant cooling), so K_T·1 = F_T/T when T_∞ = T_L∞ = T.
+    let s = spec().with_study(5.0, 30.0, 30.0);
+    let net = ThermalNetwork::new(&s).expect("network");
+    for omega in [0.0, 400.0, 700.0] {
+        let k = net.conductance(omega);
+        let f = net.load(omega);
+        for i in 0..66 {
+            let row: f64 = (0..66).map(|j| k.get(i, j)).sum();
+            assert!(
+                (row * 30.0 - f[i]).abs() < 1e-9 * (1.0 + f[i].abs()),
+                "row {i}"
+            );
+            for j in 0..66 {
+                assert!((k.get(i, j) - k.get(j, i)).abs() < 1e-12 * (1.0 + k.get(i, i).abs()));
+            }
+        }
+    }
+    // Speed-dependent convection: faster rotation cools better (Table 1 correlation rises
+    // with Re below 9600 and is flat above).
+    let k0 = net.conductance(0.0);
+    let k1 = net.conductance(700.0);
+    assert!(k1.get(0, 0) >= k0.get(0, 0));
+}
