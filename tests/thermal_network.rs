@@ -409,12 +409,9 @@ fn conductance_matrix_is_symmetric_and_conserves_heat() {
     for omega in [0.0, 400.0, 700.0] {
         let k = net.conductance(omega);
         let f = net.load(omega);
-        for i in 0..66 {
+        for (i, fi) in f.iter().enumerate() {
             let row: f64 = (0..66).map(|j| k.get(i, j)).sum();
-            assert!(
-                (row * 30.0 - f[i]).abs() < 1e-9 * (1.0 + f[i].abs()),
-                "row {i}"
-            );
+            assert!((row * 30.0 - fi).abs() < 1e-9 * (1.0 + fi.abs()), "row {i}");
             for j in 0..66 {
                 assert!((k.get(i, j) - k.get(j, i)).abs() < 1e-12 * (1.0 + k.get(i, i).abs()));
             }
