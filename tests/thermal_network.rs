@@ -375,3 +375,51 @@ fn steady_temperatures_at_620_rad_s() {
         assert!(tmin >= 25.0 - 1e-9);
     }
 }
+
+#[test]
+fn clearance_variation_follows_the_network_temperatures() {
+    // Uniform heating by 10 K of every node: δv from the network equals Eqs. 1–2 by hand
+    // for the 1# bearing (seat = housing seat node 42).
+    let net = ThermalNetwork::new(&spec()).expect("network");
+    let nl = net.nonlinear_nodes().to_vec();
+    let t: Vec<f64> = nl.iter().map(|_| 35.0).collect();
+    let c = net.clearance_variation(0, &t);
+    let g = 12.03e-6;
+    let u_b = g * 19.05e-3 * 10.0;
+    let u_i = g * 150.95e-3 * 10.0;
+    let (d_o, d_h) = (189.05e-3, 227.782e-3);
+    let u_o = g * 1.3 * d_o / (3.0 * (d_o + d_h)) * 10.0 * (3.0 * d_o + 3.0 * d_h);
+    assert!((c.delta_v + u_b + 0.5 * (u_i - u_o)).abs() < 1e-15);
+    assert_eq!(net.expansion_nodes(0), [51, 49, 50, 41]);
+    assert!(
+        net.expansion_nodes(2)[3] == 36,
+        "3# outer ring sits in HP shaft node 37"
+    );
+    for p in net.expansion_nodes(3) {
+        assert!(net.nonlinear_index(p).is_some());
+    }
+}
+
+#[test]
+fn conductance_matrix_is_symmetric_and_conserves_heat() {
+    // K_T (Eq. C.2) is symmetric; each row sums to the node's conductance to the fixed
+    // temperatures (ambient or lubricant cooling), so K_T·1 = F_T/T when T_∞ = T_L∞ = T.
+    let s = spec().with_study(5.0, 30.0, 30.0);
+    let net = ThermalNetwork::new(&s).expect("network");
+    for omega in [0.0, 400.0, 700.0] {
+        let k = net.conductance(omega);
+        let f = net.load(omega);
+        for (i, fi) in f.iter().enumerate() {
+            let row: f64 = (0..66).map(|j| k.get(i, j)).sum();
+            assert!((row * 30.0 - fi).abs() < 1e-9 * (1.0 + fi.abs()), "row {i}");
+            for j in 0..66 {
+                assert!((k.get(i, j) - k.get(j, i)).abs() < 1e-12 * (1.0 + k.get(i, i).abs()));
+            }
+        }
+    }
+    // Speed-dependent convection: faster rotation cools better (Table 1 correlation rises
+    // with Re below 9600 and is flat above).
+    let k0 = net.conductance(0.0);
+    let k1 = net.conductance(700.0);
+    assert!(k1.get(0, 0) >= k0.get(0, 0));
+}

@@ -253,3 +253,78 @@ fn convection_correlations_continuity_and_derivatives() {
         );
     }
 }
+
+/// Complete elliptic integrals `(K(m), E(m))` by the AGM with the Legendre sum for `E`
+/// (Abramowitz & Stegun 17.6.3–17.6.4), written here independently of the library.
+fn k_and_e(m: f64) -> (f64, f64) {
+    let (mut a, mut b) = (1.0_f64, (1.0 - m).sqrt());
+    let (mut s, mut p) = (0.5 * m, 0.5);
+    for _ in 0..30 {
+        let c = 0.5 * (a - b);
+        let (an, bn) = (0.5 * (a + b), (a * b).sqrt());
+        a = an;
+        b = bn;
+        p *= 2.0;
+        s += p * c * c;
+    }
+    let k = PI / (2.0 * a);
+    (k, k * (1.0 - s))
+}
+
+#[test]
+fn hamrock_brewe_axes_agree_with_exact_hertz_ellipse() {
+    // E(0.5) = 1.350643881047675 (A&S Table 17.1) validates the helper.
+    assert!((k_and_e(0.5).1 - 1.350_643_881_047_675).abs() < 1e-13);
+    // Exact Hertz: the ellipticity k = a/b solves (Johnson, Contact Mechanics, Eq. 4.39)
+    //   R_y/R_x = (k² E(e) − K(e))/(K(e) − E(e)),  e² = 1 − 1/k²,
+    // and a = (6 k² E W R/(π E'))^(1/3), b = (6 E W R/(π k E'))^(1/3).
+    for g in [ball_inner(), {
+        let mut o = ball_inner();
+        o.raceway = Raceway::Outer;
+        o.raceway_diameter_m = 189.05e-3;
+        o
+    }] {
+        let d = g.element_diameter_m;
+        let inv_rx = match g.raceway {
+            Raceway::Inner => 2.0 / d + 2.0 / g.raceway_diameter_m,
+            Raceway::Outer => 2.0 / d - 2.0 / g.raceway_diameter_m,
+        };
+        let inv_ry = 2.0 / d - 1.0 / (g.conformity * d);
+        let alpha = inv_rx / inv_ry;
+        let ratio = |k: f64| {
+            let (kk, ee) = k_and_e(1.0 - 1.0 / (k * k));
+            (k * k * ee - kk) / (kk - ee)
+        };
+        let (mut lo, mut hi) = (1.0 + 1e-9, 100.0);
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if ratio(mid) < alpha {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let k = 0.5 * (lo + hi);
+        let e = k_and_e(1.0 - 1.0 / (k * k)).1;
+        let r = 1.0 / (inv_rx + inv_ry);
+        let w = 300.0;
+        let a = (6.0 * k * k * e * w * r / (PI * g.modulus_pa)).cbrt();
+        let b = (6.0 * e * w * r / (PI * k * g.modulus_pa)).cbrt();
+        let ax = g.ball_axes(w);
+        println!(
+            "alpha {alpha:.2}: a {:.4e} exact {a:.4e}, b {:.4e} exact {b:.4e}",
+            ax.a, ax.b
+        );
+        // Hamrock & Brewe quote a few per cent for their ellipticity and integral fits.
+        assert!(
+            rel(ax.a, a) < 0.03,
+            "alpha {alpha}: a {} vs exact {a}",
+            ax.a
+        );
+        assert!(
+            rel(ax.b, b) < 0.03,
+            "alpha {alpha}: b {} vs exact {b}",
+            ax.b
+        );
+    }
+}

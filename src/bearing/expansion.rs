@@ -14,7 +14,7 @@
 //! `d_e` is the rolling-element diameter, `d_i`, `d_o` the inner and outer raceway
 //! diameters, and `d_h`, `T_h` the diameter and temperature of the part the outer ring is
 //! fitted into: the bearing housing (`d_h = 2 r_h`) or, for the inter-shaft bearing 3#, the
-//! high-pressure shaft element (`d_HP = 2 r_HP`). Eq. 2 follows the paper's reference [49]
+//! high-pressure shaft element (`d_HP = 2 r_HP`). Eq. 2 follows the paper's ref. 49
 //! for an outer ring constrained by its seat. All four results are linear in the
 //! temperatures, so the derivatives returned are exact constants.
 

@@ -2,7 +2,7 @@
 //!
 //! **Ball (Eq. 15).** Each ball–ring contact is an ellipse with semi-major axis `a` and
 //! semi-minor axis `b`; the constriction resistance of an isothermal ellipse on a half
-//! space (Yovanovich; the paper's ref. [52]) is `Ψ/(4 k a)` per body with
+//! space (Yovanovich; the paper's ref. 52) is `Ψ/(4 k a)` per body with
 //! `Ψ = (2/π) K(e)`, `e² = 1 − (b/a)²`, `K` the complete elliptic integral of the first kind:
 //!
 //! ```text

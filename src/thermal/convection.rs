@@ -10,12 +10,12 @@
 //!
 //! | surfaces | correlation | length `L_c`, velocity |
 //! |---|---|---|
-//! | lubricant–balls ([50], Harris) | `Nu = 0.33 Re^0.5 Pr^0.4` | ball diameter, cage pitch speed `ω_c D_m/2` |
-//! | lubricant–rollers ([53], cross-flow cylinder) | `Nu = (0.35 + 0.34 Re^0.5 + 0.15 Re^0.58) Pr^0.3` | roller diameter, `ω_c D_m/2` |
-//! | lubricant–rings ([54], rotating annulus) | `Nu = 2` (`Ta < 41`), `0.167 Ta^0.69 Pr^0.4` (`41 ≤ Ta < 100`), `0.401 Ta^0.5 Pr^0.4` (`Ta ≥ 100`) | hydraulic diameter `2δ` |
-//! | shafts/disks–ambient air ([55]) | `Nu = 0.00308 Re + 4.432` (`Re < 7300`), `Re^0.37` (`7300 ≤ Re < 9600`), `30.5 Re^−0.0042` (`Re ≥ 9600`) | diameter, surface speed `ω D/2` |
-//! | lubricant–housing ([50], laminar plate) | `h = 0.332 k_f Pr^(1/3) (u_s/(ν x))^(1/2)` | `x` = housing diameter, `u_s` below |
-//! | housing–ambient ([18]) | `h = 15 W/(m²·K)` | – |
+//! | lubricant–balls (ref. 50, Harris) | `Nu = 0.33 Re^0.5 Pr^0.4` | ball diameter, cage pitch speed `ω_c D_m/2` |
+//! | lubricant–rollers (ref. 53, cross-flow cylinder) | `Nu = (0.35 + 0.34 Re^0.5 + 0.15 Re^0.58) Pr^0.3` | roller diameter, `ω_c D_m/2` |
+//! | lubricant–rings (ref. 54, rotating annulus) | `Nu = 2` (`Ta < 41`), `0.167 Ta^0.69 Pr^0.4` (`41 ≤ Ta < 100`), `0.401 Ta^0.5 Pr^0.4` (`Ta ≥ 100`) | hydraulic diameter `2δ` |
+//! | shafts/disks–ambient air (ref. 55) | `Nu = 0.00308 Re + 4.432` (`Re < 7300`), `Re^0.37` (`7300 ≤ Re < 9600`), `30.5 Re^−0.0042` (`Re ≥ 9600`) | diameter, surface speed `ω D/2` |
+//! | lubricant–housing (ref. 50, laminar plate) | `h = 0.332 k_f Pr^(1/3) (u_s/(ν x))^(1/2)` | `x` = housing diameter, `u_s` below |
+//! | housing–ambient (ref. 18) | `h = 15 W/(m²·K)` | – |
 //!
 //! * Rings: `Ta = (|ω_i − ω_o| r_i δ/ν) √(δ/r_i)` with `r_i` the inner raceway radius and
 //!   `δ` the radial raceway gap (the annulus the lubricant fills); the `Ta < 41` branch is

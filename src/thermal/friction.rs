@@ -1,6 +1,6 @@
 //! Bearing friction heat (paper Eqs. 9–13) and lubricant viscosity (Eq. 12).
 //!
-//! Palmgren's friction torque (Harris, *Rolling Bearing Analysis*, the paper's ref. [50]):
+//! Palmgren's friction torque (Harris, *Rolling Bearing Analysis*, the paper's ref. 50):
 //!
 //! ```text
 //!   M   = M_l + M_v                                                     (9)
@@ -16,7 +16,7 @@
 //! meet almost continuously (`2000^(2/3) = 158.7` against the constant 160), as in the
 //! original correlation; the low branch has zero viscosity derivative.
 //!
-//! Viscosity–temperature law (Eq. 12, the paper's ref. [51]): `ν = ν0 exp(−β (T_L − T_L0))`
+//! Viscosity–temperature law (Eq. 12, the paper's ref. 51): `ν = ν0 exp(−β (T_L − T_L0))`
 //! with `β = 0.02339 1/K` (Table A.6). The paper does not give `ν0`; the default is
 //! `ν0 = 39 mm²/s` at `T_L0 = 25 °C`, i.e. an aviation turbine oil of about 27.6 mm²/s at
 //! 40 °C with the paper's `β` (e.g. MIL-PRF-23699 class oils: ≈ 25–28 mm²/s at 40 °C).

@@ -24,12 +24,29 @@
 //! latter because the clearance of Eq. 2 depends on it); its derivatives with respect to
 //! those temperatures and to each bearing's `F_b` and `n_b` are exact, so a coupled model
 //! can chain them with the bearing-force derivatives of [`crate::bearing`].
+//!
+//! ## Coupling (paper Eq. 21)
+//!
+//! For bearing `k` with relative ring displacement `d = (dx, dy)` and temperatures `T`:
+//!
+//! ```text
+//!   δv_k = δv_k(T_b, T_i, T_o, T_seat)                    (clearance_variation, Eqs. 1–2)
+//!   (Fx, Fy, F_b, n_b) = HertzBearing::force(d, δv_k, ω_c t)          (Eqs. 3–5)
+//!   ∂F/∂T   = ∂F/∂δv · ∂δv/∂T
+//!   ∂g/∂x   = ∂g/∂F_b · ∂F_b/∂d
+//!   ∂g/∂T  += ∂g/∂F_b · ∂F_b/∂δv · ∂δv/∂T     (on top of ThermalEval::dg_dt)
+//! ```
+//!
+//! `n_b` is an integer that jumps when an element enters contact, so `g` jumps with it at
+//! fixed load; the paper calls `n_b` "the average number of loaded rolling elements". A
+//! coupled model that wants `g` continuous in the state can pass the period-mean `n_b` (or
+//! a fixed count) instead of the instantaneous one; `∂g/∂n_b` is provided for either use.
 
 use super::ThermalError;
 use super::contact::{ContactGeometry, Raceway, parallel_conductance};
 use super::convection::{
-    Fluid, ball_lubricant, cylinder_conduction, flat_conduction, housing_lubricant, ring_lubricant,
-    roller_lubricant, shaft_ambient,
+    Coefficient, Fluid, ball_lubricant, cylinder_conduction, flat_conduction, housing_lubricant,
+    ring_lubricant, roller_lubricant, shaft_ambient,
 };
 use super::friction::{Palmgren, Viscosity, lubricant_conductance_w_k};
 use super::spec::ThermalSpec;
@@ -543,6 +560,29 @@ impl ThermalNetwork {
         [b.b, b.i, b.o, b.seat]
     }
 
+    /// Position of 0-based node `node` in [`Self::nonlinear_nodes`], if it is one.
+    pub fn nonlinear_index(&self, node: usize) -> Option<usize> {
+        self.nl_nodes.binary_search(&node).ok()
+    }
+
+    /// Expansions and clearance variation `δv` of bearing `k` (Eqs. 1–2) from the
+    /// temperatures of the nonlinear nodes, with `∂δv/∂T` at the positions
+    /// [`Self::expansion_nodes`] mapped through [`Self::nonlinear_index`].
+    pub fn clearance_variation(
+        &self,
+        k: usize,
+        temps_nl: &[f64],
+    ) -> crate::bearing::ClearanceVariation {
+        let [pb, pi, po, ps] = self.expansion_nodes(k);
+        let at = |p: usize| {
+            self.nonlinear_index(p)
+                .map_or(self.ambient_temp_c, |j| temps_nl[j])
+        };
+        self.bearings[k]
+            .expansion
+            .evaluate(at(pb), at(pi), at(po), at(ps), self.ambient_temp_c)
+    }
+
     /// What the outer ring of bearing `k` sits in (housing or shaft).
     pub fn seat_kind(&self, k: usize) -> OuterSeat {
         self.bearings[k].seat_kind
@@ -711,21 +751,19 @@ impl ThermalNetwork {
         let c_ring = ring_lubricant(&self.fluid, rel, 0.5 * b.inner_raceway_m, gap, nu);
         let u_s = w_c.abs() * b.pitch_m / 6.0;
         let c_house = housing_lubricant(&self.fluid, u_s, b.housing_diameter_m.max(1e-9), nu);
-        let mut lub = vec![
-            (b.lb, c_elem, b.area_elements_m2),
-            (b.li, c_ring, b.area_inner_m2),
-            (b.lo, c_ring, b.area_outer_m2),
-        ];
-        for &f in &b.lflanks {
-            lub.push((f, c_house, b.area_flank_m2));
-        }
-        for (x, c, area) in lub {
+        let lub_link = |out: &mut ThermalEval, x: usize, c: Coefficient, area: f64| {
             let g = c.h * area;
             link(out, x, b.ll, g);
             let dg_dtl = c.dh_dnu * dnu_dt * area;
             let dt = t[x] - tl;
             out.dg_dt[x * q + b.ll] += dg_dtl * dt;
             out.dg_dt[b.ll * q + b.ll] -= dg_dtl * dt;
+        };
+        lub_link(out, b.lb, c_elem, b.area_elements_m2);
+        lub_link(out, b.li, c_ring, b.area_inner_m2);
+        lub_link(out, b.lo, c_ring, b.area_outer_m2);
+        for &f in &b.lflanks {
+            lub_link(out, f, c_house, b.area_flank_m2);
         }
 
         // Friction heat at the rolling elements (Eqs. 9–13), −Q_g on the left-hand side.

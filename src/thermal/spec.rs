@@ -236,6 +236,16 @@ impl ThermalSpec {
         Self::from_toml_str(DUAL_ROTOR_THERMAL_TOML, "models/dual_rotor_thermal.toml")
     }
 
+    /// The same spec with the study parameters replaced: lubricant flow rate per bearing
+    /// `q_l` (L/min), lubricant cooling temperature `T_L∞` and ambient temperature `T_∞`
+    /// (°C).
+    pub fn with_study(mut self, flow_l_min: f64, cooling_temp_c: f64, ambient_temp_c: f64) -> Self {
+        self.flow_l_min = flow_l_min;
+        self.cooling_temp_c = cooling_temp_c;
+        self.ambient_temp_c = ambient_temp_c;
+        self
+    }
+
     /// Checks ranges and the node layout; errors name `thermal.<path>`.
     pub fn validate(&self, file: &str) -> Result<(), ThermalError> {
         let p = |s: &str| format!("thermal.{s}");
