@@ -2,7 +2,7 @@
 //! equations of motion and a Floquet method that integrates the variational equations
 //! over one period (RK4, monodromy matrix, eigenvalues by nalgebra's Schur form).
 //! Mechanical systems only (`n_therm = 0`).
-#![allow(dead_code)]
+#![allow(dead_code, clippy::needless_range_loop)]
 
 use nalgebra::DMatrix;
 use tmrotor::stability::{FloquetResult, StabilityError, StabilityMethod};
