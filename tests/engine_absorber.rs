@@ -117,8 +117,7 @@ fn neimark_sacker_points_are_located_and_quasi_periodic_past_them() {
     let before = branch
         .points
         .iter()
-        .filter(|p| p.arclength < s1 && p.stable() == Some(true))
-        .next_back()
+        .rfind(|p| p.arclength < s1 && p.stable() == Some(true))
         .expect("stable point before");
     let after = inside[0];
     let amp = after.solution.max_abs(0);
