@@ -4,7 +4,7 @@
 //! `cargo run --release --example jeffcott > jeffcott.csv`
 
 use tmrotor::continuation::{Continuation, ContinuationOptions, csv::branch_csv};
-use tmrotor::hb::{Basis, HarmonicBalance};
+use tmrotor::hb::HarmonicBalance;
 use tmrotor::systems::jeffcott::Jeffcott;
 
 fn main() -> anyhow::Result<()> {
