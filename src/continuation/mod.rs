@@ -15,7 +15,7 @@
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
 //!   after a failed corrector or a turn of the tangent by more than 60°;
 //! * the start point is Newton at `ω_start` from zero coefficients (its first iterate is the
-//!   linear response); its tangent is oriented towards `ω_end`;
+//!   linear response) or from [`ContinuationOptions::initial_guess`]; its tangent is oriented towards `ω_end`;
 //! * stops when ω leaves `[min(ω_start, ω_end), max(…)]` (the last point is re-solved on the
 //!   bound), after `max_points`, or when the step falls below `ds_min`.
 //!
@@ -69,6 +69,10 @@ pub struct ContinuationOptions {
     pub bifurcation_tol_arclength: f64,
     /// Maximum bisection steps per located bifurcation (default 60).
     pub max_bisections: usize,
+    /// Start guess for Newton at `omega_start` (all coefficients); default `None`: zero
+    /// coefficients, whose first Newton iterate is the linear response. Systems without
+    /// linear support (a rotor inside a bearing clearance) need a static guess.
+    pub initial_guess: Option<Vec<f64>>,
 }
 
 impl ContinuationOptions {
@@ -88,6 +92,7 @@ impl ContinuationOptions {
             scale_omega: None,
             bifurcation_tol_arclength: 1e-6,
             max_bisections: 60,
+            initial_guess: None,
         }
     }
 }
@@ -341,8 +346,19 @@ impl<'a> Continuation<'a> {
 
     fn start(&mut self) -> Result<StepOutcome, ContinuationError> {
         let omega = self.opts.omega_start;
-        let zero = vec![0.0; self.hb.n_unknowns()];
-        let (a, stats) = newton::solve_fixed(&self.hb, omega, &zero, &self.opts.newton)
+        let nu = self.hb.n_unknowns();
+        let guess = match &self.opts.initial_guess {
+            Some(g) if g.len() == nu => g.clone(),
+            Some(g) => {
+                return Err(ContinuationError::Hb(HbError::Dimension {
+                    what: "initial guess",
+                    expected: nu,
+                    got: g.len(),
+                }));
+            }
+            None => vec![0.0; nu],
+        };
+        let (a, stats) = newton::solve_fixed(&self.hb, omega, &guess, &self.opts.newton)
             .map_err(|source| ContinuationError::Start { omega, source })?;
         let nm = self.hb.n_mech_unknowns();
         let maxabs = |s: &[f64]| s.iter().fold(0.0f64, |m, v| m.max(v.abs()));

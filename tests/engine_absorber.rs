@@ -1,0 +1,132 @@
+//! Nonlinear tuned vibration absorber (Ω ∈ [0.8, 1.4]): Neimark–Sacker points detected,
+//! located and classified from Floquet multipliers of the variational equations; time
+//! integration just past the first one does not settle on a periodic orbit (the
+//! stroboscopic samples spread on a closed curve), while just before it they collapse to
+//! a point.
+
+mod engine_support;
+
+use engine_support::{VariationalFloquet, rk4};
+use tmrotor::continuation::{Branch, Continuation, ContinuationOptions};
+use tmrotor::hb::{Basis, HarmonicBalance};
+use tmrotor::stability::BifurcationKind;
+use tmrotor::system::PeriodicOrbit;
+use tmrotor::systems::absorber::Absorber;
+
+fn trace() -> Branch {
+    let sys = Absorber::default();
+    let basis = Basis::integer(7).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let opts = ContinuationOptions::new(0.8, 1.4);
+    let floquet = VariationalFloquet { steps: 400 };
+    let mut cont = Continuation::new(hb, opts, Some(&floquet)).expect("continuation");
+    cont.run(|_| {}).expect("run")
+}
+
+/// Spread (max − min) of the stroboscopic samples `x₁(kP)` over `n_record` periods after
+/// `n_transient` periods, from the orbit's state at t = 0 scaled by `1 + perturbation`.
+fn stroboscopic_spread(
+    orbit: &dyn PeriodicOrbit,
+    perturbation: f64,
+    n_transient: usize,
+    n_record: usize,
+) -> f64 {
+    let sys = Absorber::default();
+    let (mut x, mut v) = ([0.0; 2], [0.0; 2]);
+    orbit.state_at(0.0, &mut x, &mut v, &mut []);
+    let y0: Vec<f64> = x
+        .iter()
+        .chain(&v)
+        .map(|s| s * (1.0 + perturbation))
+        .collect();
+    let steps = 256;
+    let dt = orbit.period() / steps as f64;
+    let y = rk4(
+        &sys,
+        orbit.omega(),
+        0.0,
+        &y0,
+        dt,
+        n_transient * steps,
+        |_, _| {},
+    );
+    let mut k = 0usize;
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    rk4(
+        &sys,
+        orbit.omega(),
+        0.0,
+        &y,
+        dt,
+        n_record * steps,
+        |_, y| {
+            k += 1;
+            if k % steps == 0 {
+                lo = lo.min(y[0]);
+                hi = hi.max(y[0]);
+            }
+        },
+    );
+    hi - lo
+}
+
+#[test]
+fn neimark_sacker_points_are_located_and_quasi_periodic_past_them() {
+    let branch = trace();
+    let ns: Vec<_> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker))
+        .collect();
+    let sn = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
+        .count();
+    assert_eq!(ns.len(), 2, "Neimark–Sacker points: {}", ns.len());
+    assert_eq!(sn, 2);
+    // at a located NS point a complex pair sits on the unit circle
+    for b in &ns {
+        let f = b.stability.as_ref().expect("multipliers");
+        let pair = f
+            .multipliers
+            .iter()
+            .min_by(|a, c| (a.norm() - 1.0).abs().total_cmp(&(c.norm() - 1.0).abs()))
+            .expect("multiplier");
+        assert!(
+            (pair.norm() - 1.0).abs() < 1e-3,
+            "closest |μ| = {}",
+            pair.norm()
+        );
+        assert!(pair.im.abs() > 0.05 * pair.norm(), "μ = {pair}");
+    }
+    // between the NS points the branch is unstable with exactly two multipliers outside
+    let (s1, s2) = (ns[0].arclength, ns[1].arclength);
+    let inside: Vec<_> = branch
+        .points
+        .iter()
+        .filter(|p| p.arclength > s1 && p.arclength < s2)
+        .collect();
+    assert!(inside.len() >= 3);
+    for p in &inside {
+        let f = p.stability.as_ref().expect("multipliers");
+        assert_eq!(f.unstable_count(), 2, "ω = {}", p.solution.omega);
+    }
+    // time integration: just before NS₁ periodic, just past it not periodic
+    let w_ns = ns[0].solution.omega;
+    let before = branch
+        .points
+        .iter()
+        .rfind(|p| p.arclength < s1 && p.stable() == Some(true))
+        .expect("stable point before");
+    let after = inside[0];
+    let amp = after.solution.max_abs(0);
+    let spread_before = stroboscopic_spread(&before.solution, 0.0, 400, 100);
+    let spread_after = stroboscopic_spread(&after.solution, 1e-3, 600, 300);
+    eprintln!(
+        "NS at ω = {w_ns}; before ω = {}: spread {spread_before:e}; after ω = {}: spread {spread_after:e} (amplitude {amp})",
+        before.solution.omega, after.solution.omega
+    );
+    assert!(spread_before < 1e-4 * amp);
+    assert!(spread_after > 1e-2 * amp);
+}

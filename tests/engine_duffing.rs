@@ -1,0 +1,217 @@
+//! Duffing reference problem `ẍ + 0.05ẋ + x + 0.1x³ = 0.18 cos Ωt`, Ω ∈ [0.5, 1.6]:
+//! folds against the single-harmonic frequency-response equation, stability against
+//! Floquet multipliers of the variational equations, amplitudes against RK4 time
+//! integration.
+
+mod engine_support;
+
+use engine_support::{VariationalFloquet, steady_max_abs};
+use tmrotor::continuation::{Branch, Continuation, ContinuationOptions, csv::branch_csv};
+use tmrotor::hb::{Basis, HarmonicBalance};
+use tmrotor::stability::{BifurcationKind, StabilityMethod};
+use tmrotor::system::PeriodicOrbit;
+use tmrotor::systems::duffing::Duffing;
+
+fn trace(order: u32, ds_max: f64, stability: Option<&dyn StabilityMethod>) -> Branch {
+    let sys = Duffing::default();
+    let basis = Basis::integer(order).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.5, 1.6);
+    opts.ds_max = ds_max;
+    opts.ds_initial = ds_max.min(0.02);
+    opts.max_points = 100_000;
+    let mut cont = Continuation::new(hb, opts, stability).expect("continuation");
+    cont.run(|_| {}).expect("run")
+}
+
+/// ω at the folds of a branch: the vertex of the parabola ω(s) through each local extremum
+/// and its two neighbours.
+fn fold_frequencies(branch: &Branch) -> Vec<f64> {
+    let p = &branch.points;
+    let mut out = Vec::new();
+    for i in 1..p.len() - 1 {
+        let (w0, w1, w2) = (
+            p[i - 1].solution.omega,
+            p[i].solution.omega,
+            p[i + 1].solution.omega,
+        );
+        if (w1 - w0) * (w2 - w1) < 0.0 {
+            let (s0, s1, s2) = (p[i - 1].arclength, p[i].arclength, p[i + 1].arclength);
+            // Lagrange parabola, vertex
+            let d01 = (w1 - w0) / (s1 - s0);
+            let d12 = (w2 - w1) / (s2 - s1);
+            let c2 = (d12 - d01) / (s2 - s0);
+            let c1 = d01 - c2 * (s0 + s1);
+            let sv = -c1 / (2.0 * c2);
+            out.push(w0 + d01 * (sv - s0) + c2 * (sv - s0) * (sv - s1));
+        }
+    }
+    out
+}
+
+/// Fold frequencies of the single-harmonic frequency-response equation
+/// `a²[(1 − Ω² + ¾k₃a²)² + (cΩ)²] = F²`: interior extrema of `Ω(a)` on both roots.
+fn analytic_folds() -> Vec<f64> {
+    let (c, k3, f) = (0.05_f64, 0.1_f64, 0.18_f64);
+    let omega_of = |a: f64, sign: f64| -> Option<f64> {
+        let kap = 1.0 + 0.75 * k3 * a * a;
+        let b = 2.0 * kap - c * c;
+        let cc = kap * kap - f * f / (a * a);
+        let disc = b * b - 4.0 * cc;
+        if disc < 0.0 {
+            return None;
+        }
+        let u = 0.5 * (b + sign * disc.sqrt());
+        (u > 0.0).then(|| u.sqrt())
+    };
+    let mut folds = Vec::new();
+    for sign in [-1.0, 1.0] {
+        let n = 200_000;
+        let grid: Vec<(f64, Option<f64>)> = (1..n)
+            .map(|i| {
+                let a = 0.01 + 5.0 * i as f64 / n as f64;
+                (a, omega_of(a, sign))
+            })
+            .collect();
+        for w in grid.windows(3) {
+            if let (Some(o0), Some(o1), Some(o2)) = (w[0].1, w[1].1, w[2].1)
+                && (o1 - o0) * (o2 - o1) < 0.0
+            {
+                // golden-section refinement of the extremum in [a0, a2]
+                let is_max = o1 > o0;
+                let (mut lo, mut hi) = (w[0].0, w[2].0);
+                let g = 0.5 * (5f64.sqrt() - 1.0);
+                let val =
+                    |a: f64| omega_of(a, sign).unwrap_or(o1) * if is_max { 1.0 } else { -1.0 };
+                for _ in 0..100 {
+                    let (m1, m2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+                    if val(m1) > val(m2) {
+                        hi = m2;
+                    } else {
+                        lo = m1;
+                    }
+                }
+                folds.push(omega_of(0.5 * (lo + hi), sign).unwrap_or(o1));
+            }
+        }
+    }
+    folds.sort_by(f64::total_cmp);
+    folds
+}
+
+#[test]
+fn branch_passes_both_folds_and_one_harmonic_folds_match_theory() {
+    let analytic = analytic_folds();
+    assert_eq!(analytic.len(), 2, "analytic folds {analytic:?}");
+    // single-harmonic HB is exactly the single-harmonic theory: agreement to fit accuracy
+    let b1 = trace(1, 0.01, None);
+    assert!(
+        matches!(b1.finish, tmrotor::continuation::FinishReason::Bound { omega } if omega == 1.6)
+    );
+    let mut f1 = fold_frequencies(&b1);
+    f1.sort_by(f64::total_cmp);
+    assert_eq!(f1.len(), 2, "ω must reverse exactly twice: {f1:?}");
+    for (h, a) in f1.iter().zip(&analytic) {
+        assert!((h - a).abs() < 1e-6 * a, "HB-1 fold {h} vs theory {a}");
+    }
+    // converged HB: folds within the error of single-harmonic theory (the third harmonic is
+    // a few per cent of the fundamental at the peak)
+    let b11 = trace(11, 0.02, None);
+    let mut f11 = fold_frequencies(&b11);
+    f11.sort_by(f64::total_cmp);
+    assert_eq!(f11.len(), 2, "{f11:?}");
+    for (h, a) in f11.iter().zip(&analytic) {
+        assert!(
+            (h - a).abs() < 0.02 * a,
+            "HB-11 fold {h} vs 1-harmonic theory {a}"
+        );
+    }
+    eprintln!("analytic {analytic:?}, HB-1 {f1:?}, HB-11 {f11:?}");
+}
+
+#[test]
+fn stability_changes_exactly_at_the_folds_and_stable_amplitudes_match_time_integration() {
+    let floquet = VariationalFloquet { steps: 400 };
+    let branch = trace(11, 0.1, Some(&floquet));
+    let folds = {
+        let fine = trace(11, 0.01, None);
+        let mut f = fold_frequencies(&fine);
+        f.sort_by(f64::total_cmp);
+        f
+    };
+    assert_eq!(folds.len(), 2);
+    // two saddle-node points, located on the folds
+    let mut sn: Vec<f64> = branch
+        .bifurcations
+        .iter()
+        .map(|b| {
+            assert_eq!(b.bifurcation, Some(BifurcationKind::SaddleNode));
+            b.solution.omega
+        })
+        .collect();
+    sn.sort_by(f64::total_cmp);
+    assert_eq!(sn.len(), 2, "{sn:?}");
+    for (s, f) in sn.iter().zip(&folds) {
+        assert!((s - f).abs() < 1e-5 * f, "saddle-node at {s}, fold at {f}");
+    }
+    // the middle branch (between the two saddle-nodes in arclength) is unstable, the rest stable
+    let (s_lo, s_hi) = {
+        let mut s: Vec<f64> = branch.bifurcations.iter().map(|b| b.arclength).collect();
+        s.sort_by(f64::total_cmp);
+        (s[0], s[1])
+    };
+    let mut n_unstable = 0;
+    for p in &branch.points {
+        let stable = p.stable().expect("stability computed");
+        let inside = p.arclength > s_lo && p.arclength < s_hi;
+        assert_eq!(stable, !inside, "point at ω = {}", p.solution.omega);
+        n_unstable += usize::from(inside);
+    }
+    assert!(n_unstable >= 3);
+    // CSV carries the labels and flags
+    let csv = branch_csv(&branch, 0);
+    assert_eq!(csv.matches("saddle-node").count(), 2);
+    assert!(csv.contains(",false,"));
+
+    // stable amplitudes vs RK4 from a 1 % perturbed start, 400 time units of transient
+    // (decay rate c/2 = 0.025: the perturbation falls below 1e-6 of the amplitude)
+    let sys = Duffing::default();
+    let mut checked = 0;
+    // (target ω, on the part before the first saddle-node in arclength?)
+    for (target, before) in [(0.8, true), (1.2, true), (1.2, false), (1.5, false)] {
+        let Some(p) = branch
+            .points
+            .iter()
+            .filter(|p| p.stable() == Some(true))
+            .filter(|p| {
+                if before {
+                    p.arclength < s_lo
+                } else {
+                    p.arclength > s_hi
+                }
+            })
+            .min_by(|a, b| {
+                (a.solution.omega - target)
+                    .abs()
+                    .total_cmp(&(b.solution.omega - target).abs())
+            })
+        else {
+            continue;
+        };
+        let w = p.solution.omega;
+        let period = p.solution.period();
+        let (mut x, mut v) = ([0.0], [0.0]);
+        p.solution.state_at(0.0, &mut x, &mut v, &mut []);
+        let y0 = [1.01 * x[0], 0.99 * v[0]];
+        let n_tr = (400.0 / period).ceil() as usize;
+        let (amp_ti, _) = steady_max_abs(&sys, w, period, &y0, n_tr, 512, 0);
+        let amp_hb = p.solution.max_abs(0);
+        eprintln!("ω = {w}: HB {amp_hb} vs time integration {amp_ti}");
+        assert!(
+            (amp_hb - amp_ti).abs() < 1e-4 * amp_ti,
+            "ω = {w}: HB {amp_hb} vs time integration {amp_ti}"
+        );
+        checked += 1;
+    }
+    assert_eq!(checked, 4);
+}
