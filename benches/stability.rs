@@ -121,18 +121,18 @@ fn floquet(c: &mut Criterion) {
     let sip = Sip::default();
     let mono = sip.monodromy(&sys, &orbit).expect("SIP");
     println!(
-        "SIP: {} intervals (ρ bound {:.1} 1/s), series order {}, extrapolated",
+        "SIP: {} intervals (ρ bound {:.1} 1/s), series order {}",
         mono.intervals, mono.rho_bound, sip.series_order
     );
-    group.bench_function("sip_default_extrapolated", |b| {
+    group.bench_function("sip_default_eq33", |b| {
         b.iter(|| sip.multipliers(&sys, &orbit).expect("SIP"))
     });
-    let plain = Sip {
-        extrapolate: false,
+    let extrapolated = Sip {
+        extrapolate: true,
         ..Sip::default()
     };
-    group.bench_function("sip_plain_eq33", |b| {
-        b.iter(|| plain.multipliers(&sys, &orbit).expect("SIP"))
+    group.bench_function("sip_extrapolated", |b| {
+        b.iter(|| extrapolated.multipliers(&sys, &orbit).expect("SIP"))
     });
     let var = Variational {
         rtol: 1e-6,

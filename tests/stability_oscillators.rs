@@ -172,7 +172,7 @@ fn three_ways_from_orbit_start(
     let orbit = steady_state(system, omega, y_orbit, period, 0)
         .expect("samples")
         .orbit();
-    let sip = Sip::default()
+    let sip = accurate_sip()
         .multipliers(system, &orbit)
         .expect("SIP")
         .multipliers;
@@ -206,7 +206,7 @@ fn duffing_multipliers_agree_on_both_stable_branches() {
         let (det_sip, det_var) = ((sip[0] * sip[1]).re, (var[0] * var[1]).re);
         assert!((det_var - exact).abs() < 1e-9, "det {det_var} vs {exact}");
         assert!((det_sip - exact).abs() < 1e-6, "det {det_sip} vs {exact}");
-        // SIP at its defaults (256 intervals, extrapolated) against
+        // SIP (512 intervals, extrapolated) against
         // the variational monodromy (rtol 1e-10) and shooting along the integrated
         // trajectory (both ~1e-10).
         assert!(d_sv < 1e-6 && d_vs < 1e-8, "Ω = {omega}");
@@ -264,7 +264,7 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
         "real multiplier above +1"
     );
     // Against the stable upper branch at the same Ω, the crossing classifies as a fold.
-    let upper = Sip::default()
+    let upper = accurate_sip()
         .multipliers(
             &sys,
             &steady_state(&sys, omega, &[2.526, 0.0], period, 300)
@@ -272,7 +272,7 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
                 .orbit(),
         )
         .expect("SIP");
-    let middle = Sip::default()
+    let middle = accurate_sip()
         .multipliers(
             &sys,
             &steady_state(&sys, omega, &shot.y, period, 0)
@@ -290,9 +290,9 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
 #[test]
 fn absorber_multipliers_agree() {
     let sys = Absorber::new();
-    // SIP at its defaults; the plain product at 256 intervals would leave an O(Δ²)
+    // Extrapolated SIP; the plain product at 256 intervals would leave an O(Δ²)
     // error of 3.8e-6 here (see sip_converges_to_the_variational_multipliers).
-    let sip_fine = Sip::default();
+    let sip_fine = accurate_sip();
     for omega in [0.8, 1.3] {
         let [_, var, shoot] = three_ways(&sys, omega, &[0.0; 4], 400);
         let period = 2.0 * std::f64::consts::PI / omega;
@@ -426,6 +426,7 @@ fn absorber_neimark_sacker_is_detected_and_the_response_past_it_is_not_periodic(
         let orbit = steady_state(&sys, omega, y, period, 0)
             .expect("samples")
             .orbit();
+        // The plain product at its defaults, as the continuation uses it.
         Sip::default().multipliers(&sys, &orbit).expect("SIP")
     };
     let (before, after) = (sip_at(w_before, &y_before), sip_at(w_after, &y_after));
@@ -488,4 +489,15 @@ fn absorber_neimark_sacker_is_detected_and_the_response_past_it_is_not_periodic(
         "does not return to the unstable periodic orbit"
     );
     assert!(rmax < 10.0, "bounded");
+}
+
+/// SIP for the small reference oscillators: 512 intervals with Richardson extrapolation
+/// (safe here: one or two modes with `ω·P` of a few radians, so the series truncation is
+/// negligible; see `tmrotor::stability::sip`). Error O(Δ⁴) instead of O(Δ²).
+fn accurate_sip() -> Sip {
+    Sip {
+        intervals: 512,
+        extrapolate: true,
+        ..Sip::default()
+    }
 }
