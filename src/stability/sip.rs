@@ -2,7 +2,7 @@
 //!
 //! The period `P` of the orbit is split into `N_k` equal intervals of length `Δ`. On each,
 //! the state matrix `B(t)` of the linearised equations (Eq. 30; see
-//! [`StateSpace`](crate::integrate::StateSpace) for its blocks, including the thermal block
+//! [`StateSpace`] for its blocks, including the thermal block
 //! and all mechanical–thermal coupling blocks) is replaced by its interval mean (Eq. 32),
 //! computed with `gauss_points`-point Gauss–Legendre quadrature, and the monodromy matrix is
 //! the ordered product of truncated exponential series (Eq. 33):
@@ -309,16 +309,11 @@ impl Sip {
         }
         let delta = period / intervals as f64;
 
-        let mut mean = ws.eval.clone();
-        let mut coarse_mean = ws.eval.clone();
-        let mut prod = Mat::<f64>::identity(d, d);
-        let mut coarse = extrapolate.then(|| Mat::<f64>::identity(d, d));
-        let mut w = Mat::<f64>::zeros(d, d);
-        let mut bw = Mat::<f64>::zeros(d, d);
-        let mut log_abs_det = want_det.then_some(0.0);
-        let ident = Mat::<f64>::identity(d, d);
+        // Eq. 32: interval means of the time-varying part by Gauss–Legendre (sequential:
+        // the orbit need not be shareable between threads; this is the cheap part).
+        let mut means = Vec::with_capacity(intervals);
         for k in 0..intervals {
-            // Eq. 32: interval mean of the time-varying part by Gauss–Legendre.
+            let mut mean = ws.eval.clone();
             mean.clear();
             let t_start = k as f64 * delta;
             for (&xi, &wi) in nodes.iter().zip(weights) {
@@ -326,45 +321,53 @@ impl Sip {
                 sampler.eval(&space, t, &mut ws);
                 axpy_derivs(&mut mean, 0.5 * wi, &ws.eval);
             }
-            // Eq. 33, one factor, by Horner on the running product (or on I to form it).
-            let base = if want_det { &ident } else { &prod };
-            self.apply_factor(&space, &mean, delta, base, &mut w, &mut bw, &mut ws);
-            if let Some(acc) = log_abs_det.as_mut() {
-                *acc += log_abs_det_of(w.as_ref());
+            means.push(mean);
+        }
+
+        let mut log_abs_det = None;
+        let prod = if want_det {
+            // Form every factor of Eq. 33 explicitly to accumulate its determinant.
+            let ident = Mat::<f64>::identity(d, d);
+            let (mut w, mut bw) = (Mat::<f64>::zeros(d, d), Mat::<f64>::zeros(d, d));
+            let mut prod = Mat::<f64>::identity(d, d);
+            let mut acc = 0.0;
+            for mean in &means {
+                self.apply_factor(&space, mean, delta, &ident, &mut w, &mut bw, &mut ws);
+                acc += log_abs_det_of(w.as_ref());
                 prod = &w * &prod;
+            }
+            log_abs_det = Some(acc);
+            prod
+        } else {
+            // Eq. 33 on the running product. Its columns evolve independently
+            // (P ← E_k P acts column by column), so blocks of columns run in parallel.
+            let blocks = if d >= PARALLEL_MIN_DIM {
+                rayon::current_num_threads().clamp(1, d / (PARALLEL_MIN_DIM / 2))
             } else {
-                std::mem::swap(&mut prod, &mut w);
+                1
+            };
+            let width = d.div_ceil(blocks);
+            let ranges: Vec<(usize, usize)> = (0..d)
+                .step_by(width)
+                .map(|c0| (c0, (c0 + width).min(d)))
+                .collect();
+            let run_block = |&(c0, c1): &(usize, usize)| {
+                self.product_block(&space, &means, delta, extrapolate, c0, c1)
+            };
+            let parts: Vec<Mat<f64>> = if ranges.len() > 1 {
+                use rayon::prelude::*;
+                ranges.par_iter().map(run_block).collect()
+            } else {
+                ranges.iter().map(run_block).collect()
+            };
+            let mut prod = Mat::<f64>::zeros(d, d);
+            for (&(c0, c1), part) in ranges.iter().zip(&parts) {
+                prod.as_mut()
+                    .subcols_mut(c0, c1 - c0)
+                    .copy_from(part.as_ref());
             }
-            // The coarse product over pairs of intervals, for extrapolation; the mean over
-            // a pair is the average of the two means.
-            if let Some(coarse) = coarse.as_mut() {
-                if k % 2 == 0 {
-                    coarse_mean.clear();
-                    axpy_derivs(&mut coarse_mean, 0.5, &mean);
-                } else {
-                    axpy_derivs(&mut coarse_mean, 0.5, &mean);
-                    self.apply_factor(
-                        &space,
-                        &coarse_mean,
-                        2.0 * delta,
-                        coarse,
-                        &mut w,
-                        &mut bw,
-                        &mut ws,
-                    );
-                    std::mem::swap(coarse, &mut w);
-                }
-            }
-        }
-        if let Some(coarse) = coarse.as_ref() {
-            // Richardson: E ≈ (4 E_Δ − E_2Δ) / 3 removes the Δ² error term.
-            for col in 0..d {
-                let (pc, cc) = (prod.col_mut(col), coarse.col(col));
-                for (r, pv) in pc.iter_mut().enumerate() {
-                    *pv = (4.0 * *pv - cc[r]) / 3.0;
-                }
-            }
-        }
+            prod
+        };
         if !all_finite(prod.as_ref()) {
             return Err(StabilityError::NonFinite { omega });
         }
@@ -401,7 +404,56 @@ impl Sip {
     }
 }
 
+/// State dimension from which SIP splits the product into column blocks run in parallel.
+const PARALLEL_MIN_DIM: usize = 64;
+
 impl Sip {
+    /// Columns `c0..c1` of the SIP product (Eq. 33), with the optional extrapolation.
+    fn product_block(
+        &self,
+        space: &StateSpace<'_>,
+        means: &[NonlinearEval],
+        delta: f64,
+        extrapolate: bool,
+        c0: usize,
+        c1: usize,
+    ) -> Mat<f64> {
+        let d = space.dim();
+        let c = c1 - c0;
+        let start = Mat::<f64>::from_fn(d, c, |i, j| if i == c0 + j { 1.0 } else { 0.0 });
+        let mut ws = space.workspace();
+        let mut prod = start.clone();
+        let mut coarse = extrapolate.then(|| start.clone());
+        let (mut w, mut bw) = (Mat::<f64>::zeros(d, c), Mat::<f64>::zeros(d, c));
+        let mut coarse_mean = means.first().cloned();
+        for (k, mean) in means.iter().enumerate() {
+            self.apply_factor(space, mean, delta, &prod, &mut w, &mut bw, &mut ws);
+            std::mem::swap(&mut prod, &mut w);
+            // The coarse product over pairs of intervals, for extrapolation; the mean over
+            // a pair is the average of the two means.
+            if let (Some(coarse), Some(cm)) = (coarse.as_mut(), coarse_mean.as_mut()) {
+                if k % 2 == 0 {
+                    cm.clear();
+                    axpy_derivs(cm, 0.5, mean);
+                } else {
+                    axpy_derivs(cm, 0.5, mean);
+                    self.apply_factor(space, cm, 2.0 * delta, coarse, &mut w, &mut bw, &mut ws);
+                    std::mem::swap(coarse, &mut w);
+                }
+            }
+        }
+        if let Some(coarse) = coarse.as_ref() {
+            // Richardson: E ≈ (4 E_Δ − E_2Δ) / 3 removes the Δ² error term.
+            for col in 0..c {
+                let (pc, cc) = (prod.col_mut(col), coarse.col(col));
+                for (r, pv) in pc.iter_mut().enumerate() {
+                    *pv = (4.0 * *pv - cc[r]) / 3.0;
+                }
+            }
+        }
+        prod
+    }
+
     /// `w = (I + Σ_{i=1}^{N_i} (Δ B)^i / i!) base` by Horner's scheme, `B` from `mean`.
     #[allow(clippy::too_many_arguments)]
     fn apply_factor(
@@ -414,12 +466,11 @@ impl Sip {
         bw: &mut Mat<f64>,
         ws: &mut Workspace,
     ) {
-        let d = base.nrows();
         w.copy_from(base);
         for i in (1..=self.series_order).rev() {
             space.apply_linearization(mean, w.as_ref(), bw.as_mut(), ws);
             let c = delta / i as f64;
-            for col in 0..d {
+            for col in 0..base.ncols() {
                 let (wc, bc, pc) = (w.col_mut(col), bw.col(col), base.col(col));
                 for (r, wv) in wc.iter_mut().enumerate() {
                     *wv = pc[r] + c * bc[r];
