@@ -4,7 +4,8 @@
 
 use num_complex::Complex64;
 use tmrotor::integrate::{
-    ShootingOptions, SteadyStateOptions, shoot_periodic, steady_state, steady_state_with,
+    Dopri5Options, ShootingOptions, SteadyStateOptions, poincare_samples, shoot_periodic,
+    steady_state, steady_state_with,
 };
 use tmrotor::stability::{BifurcationKind, Sip, StabilityMethod, Variational, classify_crossing};
 use tmrotor::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
@@ -171,7 +172,7 @@ fn three_ways_from_orbit_start(
     let orbit = steady_state(system, omega, y_orbit, period, 0)
         .expect("samples")
         .orbit();
-    let sip = Sip::default()
+    let sip = accurate_sip()
         .multipliers(system, &orbit)
         .expect("SIP")
         .multipliers;
@@ -205,7 +206,7 @@ fn duffing_multipliers_agree_on_both_stable_branches() {
         let (det_sip, det_var) = ((sip[0] * sip[1]).re, (var[0] * var[1]).re);
         assert!((det_var - exact).abs() < 1e-9, "det {det_var} vs {exact}");
         assert!((det_sip - exact).abs() < 1e-6, "det {det_sip} vs {exact}");
-        // SIP at its defaults (256 intervals, extrapolated) against
+        // SIP (512 intervals, extrapolated) against
         // the variational monodromy (rtol 1e-10) and shooting along the integrated
         // trajectory (both ~1e-10).
         assert!(d_sv < 1e-6 && d_vs < 1e-8, "Ω = {omega}");
@@ -263,7 +264,7 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
         "real multiplier above +1"
     );
     // Against the stable upper branch at the same Ω, the crossing classifies as a fold.
-    let upper = Sip::default()
+    let upper = accurate_sip()
         .multipliers(
             &sys,
             &steady_state(&sys, omega, &[2.526, 0.0], period, 300)
@@ -271,7 +272,7 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
                 .orbit(),
         )
         .expect("SIP");
-    let middle = Sip::default()
+    let middle = accurate_sip()
         .multipliers(
             &sys,
             &steady_state(&sys, omega, &shot.y, period, 0)
@@ -289,9 +290,9 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
 #[test]
 fn absorber_multipliers_agree() {
     let sys = Absorber::new();
-    // SIP at its defaults; the plain product at 256 intervals would leave an O(Δ²)
+    // Extrapolated SIP; the plain product at 256 intervals would leave an O(Δ²)
     // error of 3.8e-6 here (see sip_converges_to_the_variational_multipliers).
-    let sip_fine = Sip::default();
+    let sip_fine = accurate_sip();
     for omega in [0.8, 1.3] {
         let [_, var, shoot] = three_ways(&sys, omega, &[0.0; 4], 400);
         let period = 2.0 * std::f64::consts::PI / omega;
@@ -386,5 +387,117 @@ fn sip_converges_to_the_variational_multipliers() {
     for w in errs.windows(2) {
         let ratio = w[0] / w[1];
         assert!(ratio > 3.6 && ratio < 4.4, "ratio {ratio} in {errs:?}");
+    }
+}
+
+/// Natural-parameter continuation of the absorber's resonant branch from Ω = 0.8 upward
+/// by shooting; returns the orbit start at `target` (the branch has no fold below 1.2).
+fn absorber_branch_start(target: f64) -> Vec<f64> {
+    let sys = Absorber::new();
+    let mut omega = 0.8;
+    let period = 2.0 * std::f64::consts::PI / omega;
+    let mut y = steady_state(&sys, omega, &[0.0; 4], period, 2000)
+        .expect("settles")
+        .samples[0]
+        .clone();
+    loop {
+        let period = 2.0 * std::f64::consts::PI / omega;
+        y = shoot_periodic(&sys, omega, &y, period, &ShootingOptions::default())
+            .expect("shooting follows the branch")
+            .y;
+        if omega >= target - 1e-12 {
+            return y;
+        }
+        omega = (omega + 0.01).min(target);
+    }
+}
+
+#[test]
+fn absorber_neimark_sacker_is_detected_and_the_response_past_it_is_not_periodic() {
+    let sys = Absorber::new();
+    // A shooting sweep of the resonant branch (0.8 → 1.2) shows the leading multipliers
+    // as a complex pair whose modulus passes 1 between Ω = 1.11 (0.994) and 1.12 (1.013)
+    // at μ ≈ 0.85 ± 0.53i, and returns inside between 1.19 and 1.20.
+    let (w_before, w_after) = (1.11, 1.12);
+    let y_before = absorber_branch_start(w_before);
+    let y_after = absorber_branch_start(w_after);
+    let sip_at = |omega: f64, y: &[f64]| {
+        let period = 2.0 * std::f64::consts::PI / omega;
+        let orbit = steady_state(&sys, omega, y, period, 0)
+            .expect("samples")
+            .orbit();
+        // The plain product at its defaults, as the continuation uses it.
+        Sip::default().multipliers(&sys, &orbit).expect("SIP")
+    };
+    let (before, after) = (sip_at(w_before, &y_before), sip_at(w_after, &y_after));
+    println!(
+        "NS: before {:?}\n after {:?}",
+        before.multipliers, after.multipliers
+    );
+    assert!(before.stable && !after.stable);
+    assert_eq!(
+        classify_crossing(&before, &after),
+        Some(BifurcationKind::NeimarkSacker)
+    );
+
+    // Time integration just past the crossing, from the (now unstable) periodic orbit
+    // slightly perturbed: after 3000 periods the stroboscopic samples neither settle to a
+    // point (period 1) nor cycle with any period up to 8, do not return to the periodic
+    // orbit, and stay bounded (measured: samples 0.21..0.99 away from the orbit start).
+    let omega = 1.13;
+    let y_orbit = absorber_branch_start(omega);
+    let period = 2.0 * std::f64::consts::PI / omega;
+    let start: Vec<f64> = y_orbit.iter().map(|v| v + 1e-3).collect();
+    let samples = poincare_samples(
+        &sys,
+        omega,
+        &start,
+        period,
+        3000,
+        400,
+        &Dopri5Options::default(),
+    )
+    .expect("integrates");
+    let dist = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(p, q)| (p - q) * (p - q))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let min_lag = |lag: usize| {
+        samples
+            .windows(lag + 1)
+            .map(|w| dist(&w[0], &w[lag]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let radius: Vec<f64> = samples.iter().map(|s| dist(s, &y_orbit)).collect();
+    let (rmin, rmax) = (
+        radius.iter().copied().fold(f64::INFINITY, f64::min),
+        radius.iter().copied().fold(0.0, f64::max),
+    );
+    let lags: Vec<f64> = (1..=8).map(min_lag).collect();
+    println!(
+        "Ω = {omega}: min |P(k+j)−P(k)|, j = 1..8: {lags:.3?}, distance to the periodic orbit {rmin:.3e}..{rmax:.3e}"
+    );
+    assert!(
+        lags.iter().all(|&d| d > 1e-4),
+        "not periodic with period ≤ 8P"
+    );
+    assert!(
+        rmin > 1e-3,
+        "does not return to the unstable periodic orbit"
+    );
+    assert!(rmax < 10.0, "bounded");
+}
+
+/// SIP for the small reference oscillators: 512 intervals with Richardson extrapolation
+/// (safe here: one or two modes with `ω·P` of a few radians, so the series truncation is
+/// negligible; see `tmrotor::stability::sip`). Error O(Δ⁴) instead of O(Δ²).
+fn accurate_sip() -> Sip {
+    Sip {
+        intervals: 512,
+        extrapolate: true,
+        ..Sip::default()
     }
 }

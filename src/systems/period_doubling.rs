@@ -15,6 +15,12 @@
 //! with the time integrator that the stroboscopic samples are constant below it and
 //! alternate above it.
 //!
+//! Located here (`tests/stability_period_doubling.rs`, shooting + variational multipliers,
+//! bisection to 1e-6): `γ* = 0.26558`, multipliers there ≈ −0.21 and −1 (their product is
+//! `exp(−0.3·2π/1.2)` = 0.2079 by Liouville's formula); the time integrator shows constant
+//! stroboscopic samples at `γ* − 0.005` and samples alternating between two points 0.22
+//! apart at `γ* + 0.005`.
+//!
 //! The continuation parameter `ω` of [`System`] is the forcing frequency; `γ` and `δ` are
 //! fields.
 
