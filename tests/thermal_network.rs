@@ -83,7 +83,8 @@ fn built_in_spec_has_the_papers_node_numbers() {
 
 #[test]
 fn spec_errors_name_the_field_path() {
-    let text = tmrotor::thermal::spec::DUAL_ROTOR_THERMAL_TOML;
+    let doc: toml::Table = toml::from_str(tmrotor::model::BUILTIN_TOML).expect("built-in parses");
+    let text = toml::to_string(doc.get("thermal").expect("thermal section")).expect("serializes");
     let bad = text.replacen("f_v = 2.0", "f_v = -2.0", 1);
     let err = ThermalSpec::from_toml_str(&bad, "m.toml").expect_err("must be rejected");
     let msg = err.to_string();
@@ -108,7 +109,7 @@ fn spec_errors_name_the_field_path() {
     );
 
     // From a parsed table (the `[thermal]` section of a model file).
-    let table: toml::Table = toml::from_str(text).expect("toml");
+    let table: toml::Table = toml::from_str(&text).expect("toml");
     let s = ThermalSpec::from_table(&table, "model.toml").expect("parses from a table");
     assert_eq!(s.bearings.len(), 4);
     assert!(matches!(

@@ -601,3 +601,107 @@ impl System for CoupledRotor {
         }
     }
 }
+
+impl CoupledRotor {
+    /// Start guess for Newton at the first ω of a sweep, in the engine's unknown layout
+    /// (mechanical DoF blocks of `1 + 2H` coefficients, then thermal blocks): mechanical
+    /// constant terms from the static gravity equilibrium of the rotor on its nonlinear
+    /// bearings ([`Self::static_equilibrium`]), thermal constant terms at ambient
+    /// temperature.
+    pub fn initial_guess(&self, n_coeffs: usize) -> Vec<f64> {
+        let n = self.assembly.n_dof;
+        let x = self.static_equilibrium();
+        let n_therm = self.n_therm();
+        let mut out = vec![0.0; (n + n_therm) * n_coeffs];
+        for (i, v) in x.iter().enumerate() {
+            out[i * n_coeffs] = *v;
+        }
+        for p in 0..n_therm {
+            out[(n + p) * n_coeffs] = self.ambient_temp_c;
+        }
+        out
+    }
+
+    /// Static gravity equilibrium `K x + f_bearings(x) = F_gravity` with the Hertzian
+    /// bearings at ambient temperature (clearance `δ0`).
+    ///
+    /// A bearing whose clearance is not yet closed carries no load, so the plain Newton
+    /// iteration from `x = 0` meets a singular stiffness (a rotor resting on a single
+    /// bearing). The solve is therefore a homotopy: a linear spring `k_reg` in parallel with
+    /// every bearing is lowered from 1e9 N/m to zero in decades, each stage started from
+    /// the previous one. Returns zeros (a valid, if poor, start) when it fails to converge.
+    pub fn static_equilibrium(&self) -> Vec<f64> {
+        use faer::linalg::solvers::Solve;
+        let n = self.assembly.n_dof;
+        let p = self.nl.mech.len();
+        let q = self.nl.therm.len();
+        let temps = vec![self.ambient_temp_c; q];
+        let zeros = vec![0.0; p];
+        let mut eval = NonlinearEval::new(p, q);
+        let mut x = vec![0.0; n];
+        let gravity = &self.assembly.gravity;
+        let k = &self.assembly.stiffness;
+        let regs = [1e9, 1e8, 1e7, 1e6, 1e5, 1e4, 1e3, 0.0];
+        for &k_reg in &regs {
+            for _ in 0..60 {
+                let xn: Vec<f64> = self.nl.mech.iter().map(|&d| x[d]).collect();
+                self.eval_nonlinear(0.0, 0.0, &xn, &zeros, &temps, &mut eval);
+                // residual r = F − K x − f − k_reg·(bearing springs) x
+                let mut r = gravity.clone();
+                let mut jac = faer::Mat::from_fn(n, n, |i, j| k.get(i, j));
+                for (i, ri) in r.iter_mut().enumerate() {
+                    for j in 0..n {
+                        *ri -= k.get(i, j) * x[j];
+                    }
+                }
+                for (a, &da) in self.nl.mech.iter().enumerate() {
+                    r[da] -= eval.f[a];
+                    for (b, &db) in self.nl.mech.iter().enumerate() {
+                        jac[(da, db)] += eval.df_dx[a * p + b];
+                    }
+                }
+                for b in &self.bearings {
+                    let pairs = [(b.inner, 1.0), (b.outer.unwrap_or(usize::MAX), -1.0)];
+                    for off in 0..2 {
+                        for &(ra, sa) in &pairs {
+                            if ra == usize::MAX {
+                                continue;
+                            }
+                            let da = self.nl.mech[ra + off];
+                            for &(rb, sb) in &pairs {
+                                if rb == usize::MAX {
+                                    continue;
+                                }
+                                let db = self.nl.mech[rb + off];
+                                jac[(da, db)] += sa * sb * k_reg;
+                                r[da] -= sa * sb * k_reg * x[db];
+                            }
+                        }
+                    }
+                }
+                let rhs = faer::Mat::from_fn(n, 1, |i, _| r[i]);
+                let dx = jac.partial_piv_lu().solve(&rhs);
+                let mut step_norm: f64 = 0.0;
+                let mut x_norm: f64 = 1e-9;
+                for (i, xi) in x.iter_mut().enumerate() {
+                    // limit each step to 10 µm so contacts are entered gradually
+                    let d = dx[(i, 0)].clamp(-1e-5, 1e-5);
+                    *xi += d;
+                    step_norm = step_norm.max(d.abs());
+                    x_norm = x_norm.max(xi.abs());
+                }
+                if !step_norm.is_finite() {
+                    return vec![0.0; n];
+                }
+                if step_norm <= 1e-12 * x_norm.max(1e-6) {
+                    break;
+                }
+            }
+        }
+        if x.iter().all(|v| v.is_finite()) {
+            x
+        } else {
+            vec![0.0; n]
+        }
+    }
+}

@@ -27,8 +27,8 @@
 //! is exact, and reported per bearing as `Q_d`. Temperatures are in °C (only differences
 //! and the viscosity law's `T − T_L0` enter).
 //!
-//! The built-in network for the paper's dual rotor is `models/dual_rotor_thermal.toml`
-//! ([`spec::DUAL_ROTOR_THERMAL_TOML`]).
+//! The built-in network for the paper's dual rotor is the `[thermal]` section of `models/dual_rotor.toml`
+//! ([`ThermalSpec::dual_rotor`]).
 
 //! ## Steady temperatures of the built-in network (ω = 620 rad/s)
 //!

@@ -7,14 +7,13 @@
 //! split into segment nodes, disks, bearing housings and bearings; [`super::network`]
 //! derives masses, heat capacities and resistances from it. Every node number `1..=n_nodes`
 //! must be used exactly once. The paper's dual rotor is the built-in
-//! [`DUAL_ROTOR_THERMAL_TOML`], which documents its layout table and sources.
+//! the `[thermal]` section of `models/dual_rotor.toml` ([`ThermalSpec::dual_rotor`]), which documents its layout table and sources.
 
 use super::ThermalError;
 use crate::bearing::ContactLaw;
 use serde::Deserialize;
 
 /// The built-in `[thermal]` table of the paper's dual rotor (contents of the table).
-pub const DUAL_ROTOR_THERMAL_TOML: &str = include_str!("../../models/dual_rotor_thermal.toml");
 
 /// Viscosity law (Eq. 12).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -232,8 +231,21 @@ impl ThermalSpec {
     }
 
     /// The built-in dual-rotor network.
+    /// The `[thermal]` section of the built-in model file (`models/dual_rotor.toml`).
     pub fn dual_rotor() -> Result<Self, ThermalError> {
-        Self::from_toml_str(DUAL_ROTOR_THERMAL_TOML, "models/dual_rotor_thermal.toml")
+        let file = crate::model::BUILTIN_NAME;
+        let doc: toml::Table =
+            toml::from_str(crate::model::BUILTIN_TOML).map_err(|e| ThermalError::Parse {
+                file: file.to_string(),
+                message: e.to_string().trim_end().to_string(),
+            })?;
+        match doc.get("thermal") {
+            Some(toml::Value::Table(t)) => Self::from_table(t, file),
+            _ => Err(ThermalError::Parse {
+                file: file.to_string(),
+                message: "no [thermal] table".to_string(),
+            }),
+        }
     }
 
     /// The same spec with the study parameters replaced: lubricant flow rate per bearing
