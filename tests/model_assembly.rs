@@ -1,6 +1,8 @@
 //! Properties of the assembled built-in dual rotor, against sums computed here from the
 //! model data, and of the bearing linearisation.
 
+#![allow(clippy::needless_range_loop)] // index loops read like the matrix algebra
+
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
@@ -97,8 +99,8 @@ fn total_mass_and_polar_inertia_equal_sum_of_parts() {
             .density_kg_m3
     };
     // Sums over parts, per rotor.
-    let mut mass = vec![0.0; 2];
-    let mut polar = vec![0.0; 2];
+    let mut mass = [0.0; 2];
+    let mut polar = [0.0; 2];
     let rotor_of = |node: u32| usize::from(node >= 12);
     for s in &spec.shafts {
         let (d, di, l) = (s.outer_diameter_m, s.inner_diameter_m, s.length_m);

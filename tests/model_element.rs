@@ -1,5 +1,7 @@
 //! Appendix B element matrices against closed forms written out independently here.
 
+#![allow(clippy::needless_range_loop)] // index loops read like the matrix algebra
+
 use tmrotor::model::element::{ShaftSection, cowper_kappa, element_matrices};
 
 fn section() -> ShaftSection {
