@@ -33,8 +33,10 @@
 //!
 //! Campbell diagram: modes at a grid of speeds, sorted as above (mode `i` is the
 //! `i`-th lowest at every speed), and critical speeds where a mode's frequency crosses an
-//! excitation line `ω_exc = s_r ω` of each rotor (1× LP, 1× HP), located by linear
-//! interpolation between grid points.
+//! excitation line `ω_exc = s_r ω` of each rotor (1× LP, 1× HP): bracketed by a sign
+//! change between grid points, then located by regula falsi (Illinois) on fresh modal
+//! solves, so the result does not depend on the grid spacing once the crossing is
+//! bracketed. The whirl reported is that of the mode at the crossing.
 
 use faer::Mat;
 use num_complex::Complex;
@@ -238,7 +240,7 @@ pub struct CriticalSpeed {
     pub speed_ratio: f64,
     /// Mode number, 1-based, in order of frequency.
     pub mode: usize,
-    /// Whirl of the mode at the grid point nearest the crossing.
+    /// Whirl of the mode at the crossing.
     pub whirl: Whirl,
     /// Reference speed ω at the crossing (rad/s).
     pub speed_rad_s: f64,
@@ -251,6 +253,58 @@ pub struct CriticalSpeed {
 pub struct Campbell {
     pub points: Vec<CampbellPoint>,
     pub critical_speeds: Vec<CriticalSpeed>,
+}
+
+/// Locates the root of `g(ω) = f_i(ω) − s ω` in a bracket by the Illinois variant of
+/// regula falsi (each evaluation is a modal solve), to 1e-10 relative in ω or 40
+/// evaluations; returns the speed and the mode's whirl there.
+fn refine_crossing(
+    asm: &Assembly,
+    i: usize,
+    s: f64,
+    (mut a, mut ga): (f64, f64),
+    (mut b, mut gb): (f64, f64),
+    count: usize,
+) -> Result<(f64, Whirl), LinearError> {
+    let eval = |w: f64| -> Result<Option<(f64, Whirl)>, LinearError> {
+        let m = modes(asm, w, count)?;
+        Ok(m.get(i).map(|m| (m.frequency_rad_s - s * w, m.whirl)))
+    };
+    if ga == 0.0 {
+        let whirl = eval(a)?.map_or(Whirl::Planar, |x| x.1);
+        return Ok((a, whirl));
+    }
+    let mut side = 0i8;
+    let mut best = (0.5 * (a + b), Whirl::Planar);
+    for _ in 0..40 {
+        let w = (a * gb - b * ga) / (gb - ga);
+        let Some((g, whirl)) = eval(w)? else {
+            break;
+        };
+        best = (w, whirl);
+        if g == 0.0 || (b - a).abs() <= 1e-10 * w.abs().max(1.0) {
+            break;
+        }
+        if (g > 0.0) == (gb > 0.0) {
+            b = w;
+            gb = g;
+            if side == -1 {
+                ga *= 0.5;
+            }
+            side = -1;
+        } else {
+            a = w;
+            ga = g;
+            if side == 1 {
+                gb *= 0.5;
+            }
+            side = 1;
+        }
+        if g.abs() <= 1e-12 * (s * w).abs().max(1.0) {
+            break;
+        }
+    }
+    Ok(best)
 }
 
 /// `count` evenly spaced speeds from `start` to `end` inclusive.
@@ -303,13 +357,14 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
                 let g0 = p0.modes[i].frequency_rad_s - s * p0.speed_rad_s;
                 let g1 = p1.modes[i].frequency_rad_s - s * p1.speed_rad_s;
                 if g0 == 0.0 || (g0 > 0.0) != (g1 > 0.0) {
-                    let t = if g0 == g1 { 0.0 } else { g0 / (g0 - g1) };
-                    let w = p0.speed_rad_s + t * (p1.speed_rad_s - p0.speed_rad_s);
-                    let whirl = if t <= 0.5 {
-                        p0.modes[i].whirl
-                    } else {
-                        p1.modes[i].whirl
-                    };
+                    let (w, whirl) = refine_crossing(
+                        asm,
+                        i,
+                        *s,
+                        (p0.speed_rad_s, g0),
+                        (p1.speed_rad_s, g1),
+                        count,
+                    )?;
                     critical_speeds.push(CriticalSpeed {
                         rotor_id: rotor_id.clone(),
                         speed_ratio: *s,
