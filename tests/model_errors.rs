@@ -208,6 +208,15 @@ fn missing_key_unknown_material_and_syntax() {
 }
 
 #[test]
+fn missing_top_level_key() {
+    check(
+        &edited("name = \"dual_rotor\"\n", ""),
+        "(top level)",
+        |k| matches!(k, InvalidKind::MissingKey(s) if s.contains("name")),
+    );
+}
+
+#[test]
 fn bearing_geometry_and_roller_data() {
     check(
         &edited(

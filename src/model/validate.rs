@@ -205,7 +205,7 @@ fn path_at(text: &str, offset: usize) -> (usize, String) {
         }
         if offset < end || end == text.len() {
             let is_header = t.starts_with('[');
-            let key = if is_header {
+            let key = if is_header || t.starts_with('#') {
                 None
             } else {
                 line.split_once('=').map(|(k, _)| k.trim().to_string())
