@@ -227,6 +227,11 @@ fn bearing_geometry_and_roller_data() {
         |k| matches!(k, InvalidKind::DiameterOrder { .. }),
     );
     check(
+        &edited("element_count = 22", "element_count = 2"),
+        "bearings[0].element_count",
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
+    );
+    check(
         &edited("roller_length_m = 16e-3\n", ""),
         "bearings[2].roller_length_m",
         |k| matches!(k, InvalidKind::MissingKey(_)),

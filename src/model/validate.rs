@@ -567,12 +567,12 @@ impl<'a> Validator<'a> {
                     ));
                 }
             }
-            if b.element_count < 3 {
+            if !(3..=1000).contains(&b.element_count) {
                 return Err(self.err(
                     p("element_count"),
                     InvalidKind::OutOfRange {
                         value: f64::from(b.element_count),
-                        reason: "a radial bearing needs at least 3 rolling elements".into(),
+                        reason: "a radial bearing has 3 to 1000 rolling elements".into(),
                     },
                 ));
             }
