@@ -95,3 +95,50 @@ fn each_rotor_spins_at_its_own_ratio() {
         }
     }
 }
+
+/// A disk on an anisotropic, damped support: √(k_xx/m) and √(k_yy/m), each with
+/// ζ = c/(2√(k m)); the rotor's speed ratio defaults to 1.
+#[test]
+fn anisotropic_damped_support() {
+    let text = r#"
+name = "aniso"
+[gravity]
+enabled = false
+[[rotors]]
+id = "r"
+nodes = [1]
+[[disks]]
+id = "d"
+node = 1
+mass_kg = 4.0
+polar_inertia_kg_m2 = 0.02
+diametral_inertia_kg_m2 = 0.01
+[[supports]]
+id = "s"
+node = 1
+stiffness_xx_n_m = 4.0e4
+stiffness_yy_n_m = 9.0e4
+damping_xx_n_s_m = 20.0
+damping_yy_n_s_m = 6.0
+rotational_stiffness_n_m_rad = 1000.0
+"#;
+    let model = Model::from_str(text, "aniso").expect("valid");
+    assert_eq!(model.speed_ratio(0).value(), 1.0);
+    let asm = Assembly::new(&model).expect("assembles");
+    let modes = linear::modes(&asm, 0.0, 2).expect("modes");
+    for (m, (k, c)) in modes.iter().zip([(4.0e4_f64, 20.0), (9.0e4, 6.0)]) {
+        let wn = (k / 4.0).sqrt();
+        let zeta = c / (2.0 * (k * 4.0).sqrt());
+        assert!(
+            (m.undamped_rad_s - wn).abs() < 1e-9 * wn,
+            "{} vs {wn}",
+            m.undamped_rad_s
+        );
+        assert!(
+            (m.damping_ratio - zeta).abs() < 1e-9,
+            "{} vs {zeta}",
+            m.damping_ratio
+        );
+        assert_eq!(m.whirl, linear::Whirl::Planar);
+    }
+}

@@ -509,6 +509,16 @@ impl<'a> Validator<'a> {
             }
             self.non_negative(p("stiffness_n_m"), s.stiffness_n_m)?;
             self.non_negative(p("damping_n_s_m"), s.damping_n_s_m)?;
+            for (f, v) in [
+                ("stiffness_xx_n_m", s.stiffness_xx_n_m),
+                ("stiffness_yy_n_m", s.stiffness_yy_n_m),
+                ("damping_xx_n_s_m", s.damping_xx_n_s_m),
+                ("damping_yy_n_s_m", s.damping_yy_n_s_m),
+            ] {
+                if let Some(v) = v {
+                    self.non_negative(p(f), v)?;
+                }
+            }
             self.non_negative(
                 p("rotational_stiffness_n_m_rad"),
                 s.rotational_stiffness_n_m_rad,
