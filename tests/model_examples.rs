@@ -92,3 +92,59 @@ fn uniform_shaft_example_matches_timoshenko_within_1_percent() {
         assert!(rel(modes[2 * (n - 1)].frequency_rad_s, eb) < 0.06);
     }
 }
+
+/// Overhung disk on a massless cantilever: roots of
+/// (k11 − mν²)(k22 − J_d ν² + J_p Ω ν) − k12² = 0, found here by scanning and bisection;
+/// positive roots are forward whirl, negative roots backward.
+#[test]
+fn overhung_disk_coupled_gyroscopic_modes_match_analytic() {
+    let asm = load("overhung_disk.toml");
+    let (len, d) = (0.5_f64, 0.03_f64);
+    let a = PI / 4.0 * d * d;
+    let i = PI / 64.0 * d.powi(4);
+    let kga = 6.0 * (1.0 + NU) / (7.0 + 6.0 * NU) * E / (2.0 * (1.0 + NU)) * a;
+    let (f11, f12, f22) = (
+        len.powi(3) / (3.0 * E * i) + len / kga,
+        len * len / (2.0 * E * i),
+        len / (E * i),
+    );
+    let det = f11 * f22 - f12 * f12;
+    let (k11, k12, k22) = (f22 / det, -f12 / det, f11 / det);
+    let (m, jd, jp) = (5.0_f64, 0.05_f64, 0.1_f64);
+    for speed in [0.0_f64, 500.0, 1500.0] {
+        let p = |v: f64| (k11 - m * v * v) * (k22 - jd * v * v + jp * speed * v) - k12 * k12;
+        let mut roots = Vec::new();
+        let (lo, hi, n) = (-20_000.0, 20_000.0, 400_000);
+        let h = (hi - lo) / n as f64;
+        for k in 0..n {
+            let (mut x0, mut x1) = (lo + k as f64 * h, lo + (k + 1) as f64 * h);
+            if p(x0) * p(x1) < 0.0 {
+                for _ in 0..100 {
+                    let mid = 0.5 * (x0 + x1);
+                    if p(x0) * p(mid) <= 0.0 {
+                        x1 = mid;
+                    } else {
+                        x0 = mid;
+                    }
+                }
+                roots.push(0.5 * (x0 + x1));
+            }
+        }
+        assert_eq!(roots.len(), 4, "Ω = {speed}: {roots:?}");
+        let modes = linear::modes(&asm, speed, 4).expect("modes");
+        for r in &roots {
+            let got = modes
+                .iter()
+                .find(|md| rel(md.frequency_rad_s, r.abs()) < 1e-3)
+                .unwrap_or_else(|| panic!("Ω = {speed}: root {r} not found"));
+            if speed > 0.0 {
+                let want = if *r > 0.0 {
+                    Whirl::Forward
+                } else {
+                    Whirl::Backward
+                };
+                assert_eq!(got.whirl, want, "Ω = {speed}, root {r}");
+            }
+        }
+    }
+}
