@@ -7,9 +7,15 @@
 //!   M q̈ + (C + Σ_r s_r ω G_r) q̇ + (K + K_b) q = 0,
 //! ```
 //!
-//! are written in state space `ż = A z`, `z = [q, q̇]`,
-//! `A = [[0, I], [−M⁻¹(K+K_b), −M⁻¹(C+ΣG)]]`, and `A`'s eigenvalues `λ = −ζ ω_n ± i ω_d`
-//! are computed with faer's dense nonsymmetric eigensolver. Each complex pair gives one
+//! are brought to a well-scaled state-space form: with the Cholesky factor `M = L Lᵀ`
+//! and `y = Lᵀ q`, `ÿ + D̃ ẏ + K̃ y = 0` with `K̃ = L⁻¹(K+K_b)L⁻ᵀ` (symmetric) and
+//! `D̃ = L⁻¹(C+ΣG)L⁻ᵀ`; the state `z = [y, S⁻¹ẏ]` with `S = diag(√K̃_ii)` gives
+//! `A = [[0, S], [−S⁻¹K̃, −S⁻¹D̃S]]`, in which every DoF's 2×2 block is nearly normal
+//! (`[[0, s_i], [−s_i, 0]]` for a diagonally dominant DoF). Rotor models mix light nodes
+//! with stiff supports; the plain `[[0, I], [−M⁻¹K, −M⁻¹C]]` spans many decades and
+//! loses the low modes to the largest entries. The
+//! eigenvalues `λ = −ζ ω_n ± i ω_d` of `A` are computed with faer's dense nonsymmetric
+//! eigensolver; mode shapes are `q = L⁻ᵀ y`. Each complex pair gives one
 //! mode: damped natural frequency `ω_d = Im λ`, undamped `ω_n = |λ|`, damping ratio
 //! `ζ = −Re λ / |λ|`, and the mode shape (the displacement half of the eigenvector,
 //! scaled so that its largest entry is 1). Real eigenvalues (overdamped motion) are not
@@ -27,11 +33,12 @@
 //!
 //! Campbell diagram: modes at a grid of speeds, sorted as above (mode `i` is the
 //! `i`-th lowest at every speed), and critical speeds where a mode's frequency crosses an
-//! excitation line `ω_exc = s_r ω` of each rotor (1× LP, 1× HP), located by linear
-//! interpolation between grid points.
+//! excitation line `ω_exc = s_r ω` of each rotor (1× LP, 1× HP): bracketed by a sign
+//! change between grid points, then located by regula falsi (Illinois) on fresh modal
+//! solves, so the result does not depend on the grid spacing once the crossing is
+//! bracketed. The whirl reported is that of the mode at the crossing.
 
 use faer::Mat;
-use faer::linalg::solvers::Solve;
 use num_complex::Complex;
 use thiserror::Error;
 
@@ -136,19 +143,36 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
     let llt = m
         .llt(faer::Side::Lower)
         .map_err(|_| LinearError::SingularMass)?;
-    let minv_k = llt.solve(to_faer(&lp.stiffness));
-    let minv_d = llt.solve(to_faer(&lp.damping));
+    let l = llt.L();
+    // X ↦ L⁻¹ X L⁻ᵀ, computed as (L⁻¹ (L⁻¹ X)ᵀ)ᵀ.
+    let congruence = |x: Mat<f64>| -> Mat<f64> {
+        let mut y = x;
+        l.solve_lower_triangular_in_place(&mut y);
+        let mut z = y.transpose().to_owned();
+        l.solve_lower_triangular_in_place(&mut z);
+        z.transpose().to_owned()
+    };
+    let k_t = congruence(to_faer(&lp.stiffness));
+    let d_t = congruence(to_faer(&lp.damping));
+    // Per-DoF velocity scaling s_i = √K̃_ii (1 where a DoF has no stiffness).
+    let scale: Vec<f64> = (0..n)
+        .map(|i| {
+            let v = k_t[(i, i)].abs().sqrt();
+            if v > 0.0 && v.is_finite() { v } else { 1.0 }
+        })
+        .collect();
     let a = Mat::from_fn(2 * n, 2 * n, |i, j| {
         if i < n {
-            if j == i + n { 1.0 } else { 0.0 }
+            if j == i + n { scale[i] } else { 0.0 }
         } else if j < n {
-            -minv_k[(i - n, j)]
+            -0.5 * (k_t[(i - n, j)] + k_t[(j, i - n)]) / scale[i - n]
         } else {
-            -minv_d[(i - n, j - n)]
+            -d_t[(i - n, j - n)] * scale[j - n] / scale[i - n]
         }
     });
-    let mut a = a;
-    let scale = balance(&mut a);
+    if !a.col_iter().all(|c| c.iter().all(|v| v.is_finite())) {
+        return Err(LinearError::Eigen("non-finite state matrix".into()));
+    }
     let eig = a
         .eigen()
         .map_err(|e| LinearError::Eigen(format!("{e:?}")))?;
@@ -160,7 +184,14 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
         if lam.im.is_nan() || lam.im <= 0.0 {
             continue;
         }
-        let mut shape: Vec<Complex<f64>> = (0..n).map(|i| u[(i, k)] * scale[i]).collect();
+        // q = L⁻ᵀ y, real and imaginary parts separately.
+        let mut re = Mat::from_fn(n, 1, |i, _| u[(i, k)].re);
+        let mut im = Mat::from_fn(n, 1, |i, _| u[(i, k)].im);
+        l.transpose().solve_upper_triangular_in_place(&mut re);
+        l.transpose().solve_upper_triangular_in_place(&mut im);
+        let mut shape: Vec<Complex<f64>> = (0..n)
+            .map(|i| Complex::new(re[(i, 0)], im[(i, 0)]))
+            .collect();
         let pivot = shape
             .iter()
             .copied()
@@ -182,61 +213,6 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
     out.sort_by(|a, b| a.undamped_rad_s.total_cmp(&b.undamped_rad_s));
     out.truncate(count);
     Ok(out)
-}
-
-/// Diagonal balancing (Parlett & Reinsch, Numer. Math. 13 (1969) 293–304, as in LAPACK
-/// `dgebal` without permutation): replaces `a` by `D⁻¹ a D` with `D` a diagonal of powers
-/// of two chosen so that each row and column have similar norms, and returns `D`. The
-/// eigenvalues are unchanged; an eigenvector `v` of the balanced matrix gives `D v`.
-/// Rotor state matrices mix translations and rotations, and stiff supports with light
-/// nodes, so their entries span many decades; without balancing the low modes lose
-/// accuracy to the largest entries.
-pub fn balance(a: &mut Mat<f64>) -> Vec<f64> {
-    let n = a.nrows();
-    let mut d = vec![1.0; n];
-    let radix = 2.0_f64;
-    for _sweep in 0..100 {
-        let mut done = true;
-        for i in 0..n {
-            let (mut c, mut r) = (0.0, 0.0);
-            for j in 0..n {
-                if j != i {
-                    c += a[(j, i)].abs();
-                    r += a[(i, j)].abs();
-                }
-            }
-            if c == 0.0 || r == 0.0 {
-                continue;
-            }
-            let total = c + r;
-            let mut f = 1.0;
-            let (mut cc, mut rr) = (c, r);
-            while cc < rr / radix {
-                cc *= radix;
-                rr /= radix;
-                f *= radix;
-            }
-            while cc >= rr * radix {
-                cc /= radix;
-                rr *= radix;
-                f /= radix;
-            }
-            if (cc + rr) < 0.95 * total {
-                done = false;
-                d[i] *= f;
-                for j in 0..n {
-                    a[(i, j)] /= f;
-                }
-                for j in 0..n {
-                    a[(j, i)] *= f;
-                }
-            }
-        }
-        if done {
-            break;
-        }
-    }
-    d
 }
 
 /// Frequencies of one speed of a Campbell diagram.
@@ -264,7 +240,7 @@ pub struct CriticalSpeed {
     pub speed_ratio: f64,
     /// Mode number, 1-based, in order of frequency.
     pub mode: usize,
-    /// Whirl of the mode at the grid point nearest the crossing.
+    /// Whirl of the mode at the crossing.
     pub whirl: Whirl,
     /// Reference speed ω at the crossing (rad/s).
     pub speed_rad_s: f64,
@@ -277,6 +253,58 @@ pub struct CriticalSpeed {
 pub struct Campbell {
     pub points: Vec<CampbellPoint>,
     pub critical_speeds: Vec<CriticalSpeed>,
+}
+
+/// Locates the root of `g(ω) = f_i(ω) − s ω` in a bracket by the Illinois variant of
+/// regula falsi (each evaluation is a modal solve), to 1e-10 relative in ω or 40
+/// evaluations; returns the speed and the mode's whirl there.
+fn refine_crossing(
+    asm: &Assembly,
+    i: usize,
+    s: f64,
+    (mut a, mut ga): (f64, f64),
+    (mut b, mut gb): (f64, f64),
+    count: usize,
+) -> Result<(f64, Whirl), LinearError> {
+    let eval = |w: f64| -> Result<Option<(f64, Whirl)>, LinearError> {
+        let m = modes(asm, w, count)?;
+        Ok(m.get(i).map(|m| (m.frequency_rad_s - s * w, m.whirl)))
+    };
+    if ga == 0.0 {
+        let whirl = eval(a)?.map_or(Whirl::Planar, |x| x.1);
+        return Ok((a, whirl));
+    }
+    let mut side = 0i8;
+    let mut best = (0.5 * (a + b), Whirl::Planar);
+    for _ in 0..40 {
+        let w = (a * gb - b * ga) / (gb - ga);
+        let Some((g, whirl)) = eval(w)? else {
+            break;
+        };
+        best = (w, whirl);
+        if g == 0.0 || (b - a).abs() <= 1e-10 * w.abs().max(1.0) {
+            break;
+        }
+        if (g > 0.0) == (gb > 0.0) {
+            b = w;
+            gb = g;
+            if side == -1 {
+                ga *= 0.5;
+            }
+            side = -1;
+        } else {
+            a = w;
+            ga = g;
+            if side == 1 {
+                gb *= 0.5;
+            }
+            side = 1;
+        }
+        if g.abs() <= 1e-12 * (s * w).abs().max(1.0) {
+            break;
+        }
+    }
+    Ok(best)
 }
 
 /// `count` evenly spaced speeds from `start` to `end` inclusive.
@@ -329,13 +357,14 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
                 let g0 = p0.modes[i].frequency_rad_s - s * p0.speed_rad_s;
                 let g1 = p1.modes[i].frequency_rad_s - s * p1.speed_rad_s;
                 if g0 == 0.0 || (g0 > 0.0) != (g1 > 0.0) {
-                    let t = if g0 == g1 { 0.0 } else { g0 / (g0 - g1) };
-                    let w = p0.speed_rad_s + t * (p1.speed_rad_s - p0.speed_rad_s);
-                    let whirl = if t <= 0.5 {
-                        p0.modes[i].whirl
-                    } else {
-                        p1.modes[i].whirl
-                    };
+                    let (w, whirl) = refine_crossing(
+                        asm,
+                        i,
+                        *s,
+                        (p0.speed_rad_s, g0),
+                        (p1.speed_rad_s, g1),
+                        count,
+                    )?;
                     critical_speeds.push(CriticalSpeed {
                         rotor_id: rotor_id.clone(),
                         speed_ratio: *s,

@@ -254,19 +254,10 @@ impl Assembly {
         for s in &spec.supports {
             let a = node(s.node)?;
             let b = s.to_node.map(node).transpose()?;
-            for dir in [Dir::X, Dir::Y] {
-                add_spring(
-                    &mut stiffness,
-                    dof(a, dir),
-                    b.map(|b| dof(b, dir)),
-                    s.stiffness_n_m,
-                );
-                add_spring(
-                    &mut dashpots,
-                    dof(a, dir),
-                    b.map(|b| dof(b, dir)),
-                    s.damping_n_s_m,
-                );
+            let (k, c) = (s.stiffness_xy(), s.damping_xy());
+            for (i, dir) in [Dir::X, Dir::Y].into_iter().enumerate() {
+                add_spring(&mut stiffness, dof(a, dir), b.map(|b| dof(b, dir)), k[i]);
+                add_spring(&mut dashpots, dof(a, dir), b.map(|b| dof(b, dir)), c[i]);
             }
             for dir in [Dir::ThetaX, Dir::ThetaY] {
                 add_spring(

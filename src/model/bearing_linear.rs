@@ -61,8 +61,9 @@ impl HertzLaw {
         (f * scale, df * scale)
     }
 
-    /// Ring displacement `r` (m) at which the averaged force equals `load_n` (N), by
-    /// bracketing and bisection (the law is monotone for `r > δ0`).
+    /// Ring displacement `r` (m) at which the averaged force equals `load_n` (N): the law
+    /// is monotone for `r > δ0`, so a bracket is grown and then shrunk by Newton steps,
+    /// falling back to bisection whenever a step leaves the bracket.
     pub fn displacement_for_load(&self, load_n: f64) -> f64 {
         if load_n <= 0.0 {
             return self.clearance_m;
@@ -75,18 +76,30 @@ impl HertzLaw {
             hi *= 2.0;
             guard += 1;
         }
+        let mut r = 0.5 * (lo + hi);
         for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if self.force_and_slope(mid).0 < load_n {
-                lo = mid;
+            let (f, df) = self.force_and_slope(r);
+            if f < load_n {
+                lo = r;
             } else {
-                hi = mid;
+                hi = r;
             }
-            if hi - lo <= 1e-15 * hi {
-                break;
+            let newton = if df > 0.0 {
+                r - (f - load_n) / df
+            } else {
+                f64::NAN
+            };
+            let next = if newton > lo && newton < hi {
+                newton
+            } else {
+                0.5 * (lo + hi)
+            };
+            if (next - r).abs() <= 1e-14 * r || hi - lo <= 1e-15 * hi {
+                return next;
             }
+            r = next;
         }
-        0.5 * (lo + hi)
+        r
     }
 
     /// Secant stiffness `F(r)/r` at load `load_n`.

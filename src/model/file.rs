@@ -113,12 +113,17 @@ pub enum SpeedRatioSpec {
     Number(f64),
 }
 
+fn unit_ratio() -> SpeedRatioSpec {
+    SpeedRatioSpec::Number(1.0)
+}
+
 /// `[[rotors]]`.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RotorSpec {
     pub id: String,
-    /// Rotor speed divided by the reference speed ω.
+    /// Rotor speed divided by the reference speed ω (default 1).
+    #[serde(default = "unit_ratio")]
     pub speed_ratio: SpeedRatioSpec,
     /// Node ids that belong to this rotor (each node belongs to exactly one rotor).
     pub nodes: Vec<u32>,
@@ -157,7 +162,7 @@ pub struct DiskSpec {
     pub phase_deg: f64,
 }
 
-/// `[[supports]]`: isotropic linear spring and dashpot on x and y.
+/// `[[supports]]`: linear spring and dashpot on x and y (isotropic, or per direction).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SupportSpec {
@@ -165,9 +170,20 @@ pub struct SupportSpec {
     pub node: u32,
     /// Second node; absent means the support goes to ground.
     pub to_node: Option<u32>,
+    /// Stiffness on x and y (N/m); default 0.
+    #[serde(default)]
     pub stiffness_n_m: f64,
+    /// Damping on x and y (N·s/m); default 0.
     #[serde(default)]
     pub damping_n_s_m: f64,
+    /// Stiffness on x only (N/m), overriding `stiffness_n_m`.
+    pub stiffness_xx_n_m: Option<f64>,
+    /// Stiffness on y only (N/m), overriding `stiffness_n_m`.
+    pub stiffness_yy_n_m: Option<f64>,
+    /// Damping on x only (N·s/m), overriding `damping_n_s_m`.
+    pub damping_xx_n_s_m: Option<f64>,
+    /// Damping on y only (N·s/m), overriding `damping_n_s_m`.
+    pub damping_yy_n_s_m: Option<f64>,
     /// Rotational stiffness on θx and θy (N·m/rad); default 0.
     #[serde(default)]
     pub rotational_stiffness_n_m_rad: f64,
@@ -247,4 +263,22 @@ pub struct BearingSpec {
     /// Radial load (N) at which the Hertz law is linearised when `linear_stiffness_n_m` is
     /// absent. If both are absent, the load of the static gravity equilibrium is used.
     pub linearization_load_n: Option<f64>,
+}
+
+impl SupportSpec {
+    /// Stiffness on (x, y) after the per-direction overrides.
+    pub fn stiffness_xy(&self) -> [f64; 2] {
+        [
+            self.stiffness_xx_n_m.unwrap_or(self.stiffness_n_m),
+            self.stiffness_yy_n_m.unwrap_or(self.stiffness_n_m),
+        ]
+    }
+
+    /// Damping on (x, y) after the per-direction overrides.
+    pub fn damping_xy(&self) -> [f64; 2] {
+        [
+            self.damping_xx_n_s_m.unwrap_or(self.damping_n_s_m),
+            self.damping_yy_n_s_m.unwrap_or(self.damping_n_s_m),
+        ]
+    }
 }

@@ -205,7 +205,7 @@ fn path_at(text: &str, offset: usize) -> (usize, String) {
         }
         if offset < end || end == text.len() {
             let is_header = t.starts_with('[');
-            let key = if is_header {
+            let key = if is_header || t.starts_with('#') {
                 None
             } else {
                 line.split_once('=').map(|(k, _)| k.trim().to_string())
@@ -509,6 +509,16 @@ impl<'a> Validator<'a> {
             }
             self.non_negative(p("stiffness_n_m"), s.stiffness_n_m)?;
             self.non_negative(p("damping_n_s_m"), s.damping_n_s_m)?;
+            for (f, v) in [
+                ("stiffness_xx_n_m", s.stiffness_xx_n_m),
+                ("stiffness_yy_n_m", s.stiffness_yy_n_m),
+                ("damping_xx_n_s_m", s.damping_xx_n_s_m),
+                ("damping_yy_n_s_m", s.damping_yy_n_s_m),
+            ] {
+                if let Some(v) = v {
+                    self.non_negative(p(f), v)?;
+                }
+            }
             self.non_negative(
                 p("rotational_stiffness_n_m_rad"),
                 s.rotational_stiffness_n_m_rad,
@@ -567,12 +577,12 @@ impl<'a> Validator<'a> {
                     ));
                 }
             }
-            if b.element_count < 3 {
+            if !(3..=1000).contains(&b.element_count) {
                 return Err(self.err(
                     p("element_count"),
                     InvalidKind::OutOfRange {
                         value: f64::from(b.element_count),
-                        reason: "a radial bearing needs at least 3 rolling elements".into(),
+                        reason: "a radial bearing has 3 to 1000 rolling elements".into(),
                     },
                 ));
             }

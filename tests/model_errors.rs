@@ -1,0 +1,288 @@
+//! Broken model files are rejected with the file, the field path and the reason.
+
+use tmrotor::model::{BUILTIN_TOML, InvalidKind, Model, ModelError};
+
+const FILE: &str = "broken.toml";
+
+/// The built-in file with one edit; the edit must apply.
+fn edited(from: &str, to: &str) -> String {
+    assert!(
+        BUILTIN_TOML.contains(from),
+        "fixture edit {from:?} not found"
+    );
+    BUILTIN_TOML.replacen(from, to, 1)
+}
+
+fn reject(text: &str) -> ModelError {
+    match Model::from_str(text, FILE) {
+        Ok(_) => panic!("model was accepted"),
+        Err(e) => e,
+    }
+}
+
+fn check(text: &str, path: &str, kind: impl Fn(&InvalidKind) -> bool) -> ModelError {
+    let e = reject(text);
+    assert_eq!(e.path(), Some(path), "{e}");
+    assert!(kind(e.kind().expect("an invalid-file error")), "{e}");
+    let msg = e.to_string();
+    assert!(msg.starts_with(FILE), "{msg}");
+    assert!(msg.contains(path), "{msg}");
+    e
+}
+
+#[test]
+fn builtin_is_valid_and_keeps_no_thermal_table() {
+    let m = Model::from_str(BUILTIN_TOML, FILE).expect("valid");
+    assert!(m.thermal().is_none());
+}
+
+#[test]
+fn unknown_node_on_a_disk() {
+    check(
+        &edited(
+            "node = 3\nmass_kg = 101.4624",
+            "node = 99\nmass_kg = 101.4624",
+        ),
+        "disks[0].node",
+        |k| *k == InvalidKind::UnknownNode(99),
+    );
+}
+
+#[test]
+fn unknown_node_on_a_shaft_element() {
+    check(
+        &edited("nodes = [8, 9]", "nodes = [8, 90]"),
+        "shafts[7].nodes[1]",
+        |k| *k == InvalidKind::UnknownNode(90),
+    );
+}
+
+#[test]
+fn inner_diameter_not_below_outer() {
+    check(
+        &edited(
+            "nodes = [2, 3]\ninner_diameter_m = 112e-3",
+            "nodes = [2, 3]\ninner_diameter_m = 120e-3",
+        ),
+        "shafts[1].inner_diameter_m",
+        |k| matches!(k, InvalidKind::DiameterOrder { .. }),
+    );
+}
+
+#[test]
+fn zero_length_and_negative_mass() {
+    check(
+        &edited(
+            "outer_diameter_m = 140e-3\nlength_m = 12e-3",
+            "outer_diameter_m = 140e-3\nlength_m = 0.0",
+        ),
+        "shafts[0].length_m",
+        |k| *k == InvalidKind::NotPositive(0.0),
+    );
+    check(
+        &edited("mass_kg = 73.115", "mass_kg = -73.115"),
+        "disks[1].mass_kg",
+        |k| *k == InvalidKind::NotPositive(-73.115),
+    );
+}
+
+#[test]
+fn bearing_on_missing_node() {
+    check(
+        &edited("inner_node = 12", "inner_node = 40"),
+        "bearings[1].inner_node",
+        |k| *k == InvalidKind::UnknownNode(40),
+    );
+    check(
+        &edited("outer_node = 18", "outer_node = 19"),
+        "bearings[2].outer_node",
+        |k| *k == InvalidKind::UnknownNode(19),
+    );
+}
+
+#[test]
+fn duplicate_ids() {
+    check(
+        &edited("id = \"LPT\"", "id = \"LPC\""),
+        "disks[1].id",
+        |k| matches!(k, InvalidKind::DuplicateId(s) if s.contains("LPC")),
+    );
+    check(
+        &edited("nodes = [12, 13,", "nodes = [11, 12, 13,"),
+        "rotors[1].nodes[0]",
+        |k| matches!(k, InvalidKind::DuplicateId(s) if s.contains("11")),
+    );
+    check(
+        &edited("id = \"2#\"", "id = \"1#\""),
+        "bearings[1].id",
+        |k| matches!(k, InvalidKind::DuplicateId(_)),
+    );
+}
+
+#[test]
+fn unknown_key_with_line() {
+    let text = edited("id = \"HPT\"\n", "id = \"HPT\"\ncolour = \"red\"\n");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("colour"))
+        .expect("inserted")
+        + 1;
+    let e = check(
+        &text,
+        "disks[3].colour",
+        |k| matches!(k, InvalidKind::UnknownKey(s) if s.contains("colour")),
+    );
+    match e {
+        ModelError::Invalid { line: l, .. } => assert_eq!(l, Some(line)),
+        other => panic!("{other}"),
+    }
+    // Unknown top-level table.
+    check(
+        &format!("{BUILTIN_TOML}\n[solver]\nx = 1\n"),
+        "solver",
+        |k| matches!(k, InvalidKind::UnknownKey(s) if s.contains("solver")),
+    );
+}
+
+#[test]
+fn wrong_types_and_units() {
+    check(
+        &edited("mass_kg = 94.2194", "mass_kg = \"94.2194 kg\""),
+        "disks[2].mass_kg",
+        |k| matches!(k, InvalidKind::WrongType(_)),
+    );
+    check(
+        &edited("element_count = 22", "element_count = 22.5"),
+        "bearings[0].element_count",
+        |k| matches!(k, InvalidKind::WrongType(_)),
+    );
+    check(
+        &edited(
+            "kind = \"ball\"\ninner_node = 1\n",
+            "kind = \"needle\"\ninner_node = 1\n",
+        ),
+        "bearings[0].kind",
+        |k| matches!(k, InvalidKind::WrongType(_)),
+    );
+    check(
+        &edited("nodes = [1, 2]\n", "nodes = [1, 2, 3]\n"),
+        "shafts[0].nodes",
+        |k| matches!(k, InvalidKind::WrongType(_)),
+    );
+}
+
+#[test]
+fn irrational_speed_ratio() {
+    for bad in ["1.2345678", "\"sqrt(2)\"", "3.14159265", "\"7/0\"", "-1.2"] {
+        check(
+            &edited("speed_ratio = \"6/5\"", &format!("speed_ratio = {bad}")),
+            "rotors[1].speed_ratio",
+            |k| matches!(k, InvalidKind::IrrationalRatio(_)),
+        );
+    }
+    for good in ["1.2", "\"1.2\"", "\"12/10\"", "1.25"] {
+        let m = Model::from_str(
+            &edited("speed_ratio = \"6/5\"", &format!("speed_ratio = {good}")),
+            FILE,
+        )
+        .expect("clean rational");
+        let r = m.speed_ratio(1);
+        assert!((r.value() - if good == "1.25" { 1.25 } else { 1.2 }).abs() < 1e-15);
+    }
+}
+
+#[test]
+fn missing_key_unknown_material_and_syntax() {
+    check(
+        &edited("hertz_stiffness = 1.45e9\n", ""),
+        "bearings[0]",
+        |k| matches!(k, InvalidKind::MissingKey(s) if s.contains("hertz_stiffness")),
+    );
+    check(
+        &edited("material = \"bearing\"", "material = \"brass\""),
+        "bearings[0].material",
+        |k| *k == InvalidKind::UnknownMaterial("brass".into()),
+    );
+    let e = reject(&edited("[[disks]]\nid = \"LPC\"", "[[disks]\nid = \"LPC\""));
+    assert!(matches!(e.kind(), Some(InvalidKind::Syntax(_))), "{e}");
+}
+
+#[test]
+fn missing_top_level_key() {
+    check(
+        &edited("name = \"dual_rotor\"\n", ""),
+        "(top level)",
+        |k| matches!(k, InvalidKind::MissingKey(s) if s.contains("name")),
+    );
+}
+
+#[test]
+fn bearing_geometry_and_roller_data() {
+    check(
+        &edited(
+            "inner_race_diameter_m = 150.95e-3",
+            "inner_race_diameter_m = 190e-3",
+        ),
+        "bearings[0].inner_race_diameter_m",
+        |k| matches!(k, InvalidKind::DiameterOrder { .. }),
+    );
+    check(
+        &edited("element_count = 22", "element_count = 2"),
+        "bearings[0].element_count",
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
+    );
+    check(
+        &edited("roller_length_m = 16e-3\n", ""),
+        "bearings[2].roller_length_m",
+        |k| matches!(k, InvalidKind::MissingKey(_)),
+    );
+    check(
+        &edited("initial_clearance_m = 5e-6", "initial_clearance_m = -5e-6"),
+        "bearings[2].initial_clearance_m",
+        |k| matches!(k, InvalidKind::Negative(_)),
+    );
+}
+
+#[test]
+fn damping_and_gravity_choices() {
+    check(
+        &edited(
+            "damping_ratio = 0.02\n",
+            "damping_ratio = 0.02\na0_1_s = 1.0\n",
+        ),
+        "damping",
+        |k| matches!(k, InvalidKind::Conflict(_)),
+    );
+    // Gravity off: the bearings need an explicit linearisation.
+    check(
+        &edited("[gravity]\nenabled = true", "[gravity]\nenabled = false"),
+        "bearings[0]",
+        |k| matches!(k, InvalidKind::Conflict(_)),
+    );
+}
+
+#[test]
+fn file_errors_name_the_file() {
+    let e = Model::from_file("/nonexistent/rotor.toml").expect_err("no such file");
+    assert!(matches!(e, ModelError::Io { .. }));
+    assert!(e.to_string().contains("/nonexistent/rotor.toml"));
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("bad.toml");
+    std::fs::write(&path, edited("inner_node = 12", "inner_node = 40")).expect("write");
+    let e = Model::from_file(&path).expect_err("bad file");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("bad.toml") && msg.contains("bearings[1].inner_node") && msg.contains("40")
+    );
+}
+
+#[test]
+fn thermal_table_is_kept_opaque() {
+    let text = format!(
+        "{BUILTIN_TOML}\n[thermal]\nnodes = 66\n[[thermal.resistances]]\nfrom = 1\nto = 2\nanything = \"goes\"\n"
+    );
+    let m = Model::from_str(&text, FILE).expect("valid");
+    let t = m.thermal().expect("kept");
+    assert_eq!(t.get("nodes").and_then(|v| v.as_integer()), Some(66));
+    assert!(t.get("resistances").is_some());
+}
