@@ -1,5 +1,6 @@
 //! Frequency response of the primary mass with a nonlinear tuned vibration absorber
-//! Ω from 0.8 to 1.4 (`tmrotor::systems::absorber`), as CSV on stdout (see `tmrotor::continuation::csv` for the columns).
+//! (`tmrotor::systems::absorber`), Ω from 0.8 to 1.4, as CSV on stdout (see
+//! `tmrotor::continuation::csv` for the columns; amplitude = max |x₁| of the primary mass).
 //!
 //! `cargo run --release --example absorber > absorber.csv`
 

@@ -1,5 +1,6 @@
 //! Frequency response of the Duffing oscillator `ẍ + 0.05ẋ + x + 0.1x³ = 0.18 cos Ωt`,
-//! Ω from 0.5 to 1.6, as CSV on stdout (see `tmrotor::continuation::csv` for the columns).
+//! Ω from 0.5 to 1.6, as CSV on stdout (see `tmrotor::continuation::csv` for the columns;
+//! amplitude = max |x| over one period).
 //!
 //! `cargo run --release --example duffing > duffing.csv`
 
