@@ -137,8 +137,8 @@ impl System for Chain {
                 out.df_dt[a * q + a % q] = self.cubic * x[a].powi(3) * self.thermal_softening;
             }
         }
-        for b in 0..q {
-            let (tc, i) = (temp[b], b % p);
+        for (b, &tc) in temp.iter().enumerate() {
+            let i = b % p;
             out.g[b] = self.heat_quadratic * tc * tc
                 - self.heat_friction * v[i] * v[i]
                 - self.heat_coupling * x[i] * x[i] * tc;
