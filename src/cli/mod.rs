@@ -1,6 +1,10 @@
 //! The `tmrotor` command line: one file per subcommand, each with `run(args)`.
 //! `src/main.rs` only parses and maps errors to exit codes.
 
+pub mod campbell;
+pub mod model;
+pub mod modes;
+
 use clap::{Parser, Subcommand};
 
 /// Nonlinear thermo-mechanical rotor dynamics: harmonic balance, continuation, Floquet
@@ -17,11 +21,21 @@ pub enum Command {
     /// Run one continuation sweep (default: the built-in dual rotor, q_l = 2 L/min, 25 °C,
     /// ω ∈ [300, 700] rad/s, order 3) and write an MCAP recording.
     Sweep,
+    /// Check a model file, or print the built-in one.
+    #[command(subcommand)]
+    Model(model::ModelCommand),
+    /// Damped natural frequencies, damping ratios and whirl directions at one speed.
+    Modes(modes::ModesArgs),
+    /// Campbell diagram and critical speeds (1× LP, 1× HP) over a speed range.
+    Campbell(campbell::CampbellArgs),
 }
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         None | Some(Command::Sweep) => anyhow::bail!("sweep: not available yet"),
+        Some(Command::Model(cmd)) => model::run(&cmd, &mut std::io::stdout().lock()),
+        Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),
     }
 }

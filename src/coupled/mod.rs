@@ -1,1 +1,603 @@
-//! See the crate docs for where this layer sits in the pipeline.
+//! The coupled thermo-mechanical rotor (paper Eq. 21): the FE rotor of [`crate::model`],
+//! the Hertzian bearings of [`crate::bearing`] and the thermal network of
+//! [`crate::thermal`], joined into one [`System`] for the engine.
+//!
+//! Coupling both ways:
+//!
+//! * mechanical ← thermal: each bearing's effective clearance `δe = δ0 + δv(T)` (Eqs. 1–3)
+//!   follows the temperatures of its rolling elements, inner ring, outer ring and seat
+//!   (housing, or the HP shaft for an inter-shaft bearing);
+//! * thermal ← mechanical: the instantaneous radial load `F_b(t)` (Eq. 5) drives the load
+//!   friction heat (Eq. 10) and the Hertz contact resistances (Eqs. 15–17); lubricant
+//!   temperature drives viscosity (Eq. 12), viscous friction heat and the lubricant
+//!   convection resistances.
+//!
+//! Every term is evaluated pointwise in time with its exact partial derivatives; the
+//! cross derivatives are chained here: `∂f/∂T = ∂F/∂δv · ∂δv/∂T` and
+//! `∂g/∂x = ∂g/∂F_b · ∂F_b/∂x`. The number of loaded elements is piecewise constant in the
+//! displacements, so its derivative is zero wherever it is defined.
+//!
+//! Sign convention (see [`crate::system`]): the bearing restoring force `F` of Eq. 4 acts
+//! on the left-hand side at the inner-ring node (`+F`) and, for a bearing whose outer ring
+//! sits on another rotor node, with opposite sign there (`−F`).
+//!
+//! Without a `[thermal]` section (or with [`CouplingOptions::thermal`] off) the system is
+//! purely mechanical with the initial clearances; with
+//! [`CouplingOptions::frozen_clearance`] the thermal network is solved but the clearance is
+//! kept at `δ0` (one-way coupling), which must reproduce the mechanical-only vibration.
+
+use std::sync::Mutex;
+
+use thiserror::Error;
+
+use crate::bearing::{ContactLaw, ExpansionGeometry, HertzBearing};
+use crate::model::{Assembly, BearingKind, Dir, Model, ModelError};
+use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
+use crate::thermal::{
+    BearingLoad, BearingThermalOutputs, ThermalEval, ThermalNetwork, ThermalSpec,
+};
+
+/// Errors building a coupled model.
+#[derive(Debug, Error)]
+pub enum CoupledError {
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Thermal(#[from] crate::thermal::ThermalError),
+    #[error("{file}: {field}: {reason}")]
+    Mismatch {
+        file: String,
+        field: String,
+        reason: String,
+    },
+    #[error("study setting {field} = {value}: {reason}")]
+    Study {
+        field: &'static str,
+        value: f64,
+        reason: &'static str,
+    },
+}
+
+/// Study parameters that override the model file's thermal defaults.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StudyOverrides {
+    /// Lubricant flow rate per bearing `q_l` (L/min).
+    pub flow_l_min: Option<f64>,
+    /// Lubricant cooling temperature `T_L∞` (°C).
+    pub cooling_temp_c: Option<f64>,
+    /// Ambient temperature `T_∞` (°C).
+    pub ambient_temp_c: Option<f64>,
+}
+
+/// Which couplings are active.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CouplingOptions {
+    /// Include the thermal network (default: on when the model has a `[thermal]` section).
+    pub thermal: bool,
+    /// Keep the clearance at `δ0` although temperatures are solved (one-way coupling).
+    pub frozen_clearance: bool,
+}
+
+impl Default for CouplingOptions {
+    fn default() -> Self {
+        Self {
+            thermal: true,
+            frozen_clearance: false,
+        }
+    }
+}
+
+/// One bearing of the coupled model.
+#[derive(Clone, Debug)]
+struct CoupledBearing {
+    id: String,
+    hertz: HertzBearing,
+    /// Position of the inner-ring node's x in the nonlinear mechanical DoFs (y is +1).
+    inner: usize,
+    /// Same for the outer-ring node, `None` for ground.
+    outer: Option<usize>,
+    /// Ring speeds per unit LP speed.
+    inner_ratio: f64,
+    outer_ratio: f64,
+    /// Index in the thermal network's bearing list and the positions of the expansion
+    /// temperatures (elements, inner ring, outer ring, seat) among the nonlinear thermal
+    /// DoFs.
+    thermal: Option<(usize, [usize; 4])>,
+    expansion: Option<ExpansionGeometry>,
+}
+
+/// Instantaneous bearing quantities at one time (for recordings and replay).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BearingState {
+    /// Force of Eq. 4 on the inner ring's shaft, left-hand-side sign (N).
+    pub fx_n: f64,
+    pub fy_n: f64,
+    /// Radial load `F_b` (Eq. 5, N).
+    pub fb_n: f64,
+    /// Loaded elements.
+    pub n_loaded: usize,
+    /// Expansions `u_b`, `u_i`, `u_o` and clearance variation `δv` (m).
+    pub u_b_m: f64,
+    pub u_i_m: f64,
+    pub u_o_m: f64,
+    pub delta_v_m: f64,
+}
+
+/// The coupled rotor–bearing–thermal system. See the module docs.
+pub struct CoupledRotor {
+    assembly: Assembly,
+    network: Option<ThermalNetwork>,
+    bearings: Vec<CoupledBearing>,
+    nl: NonlinearDofs,
+    ambient_temp_c: f64,
+    frozen_clearance: bool,
+    scratch: Mutex<Vec<(Vec<f64>, Vec<BearingLoad>, ThermalEval)>>,
+}
+
+impl std::fmt::Debug for CoupledRotor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CoupledRotor")
+            .field("n_mech", &self.assembly.n_dof)
+            .field("n_therm", &self.n_therm())
+            .field("bearings", &self.bearing_ids())
+            .finish()
+    }
+}
+
+impl CoupledRotor {
+    /// Builds the coupled system from a validated model, study overrides and coupling
+    /// options.
+    pub fn new(
+        model: &Model,
+        study: &StudyOverrides,
+        options: CouplingOptions,
+    ) -> Result<Self, CoupledError> {
+        let assembly = Assembly::new(model)?;
+        let network = match (options.thermal, model.thermal()) {
+            (true, Some(table)) => {
+                let mut spec = ThermalSpec::from_table(table, &model.source)?;
+                apply_overrides(&mut spec, study)?;
+                Some(ThermalNetwork::new(&spec)?)
+            }
+            _ => None,
+        };
+        let ambient_temp_c = network.as_ref().map_or(25.0, |n| n.ambient_temp_c());
+
+        // Nonlinear mechanical DoFs: x, y of every bearing node.
+        let mut nodes: Vec<u32> = Vec::new();
+        for b in &model.spec.bearings {
+            nodes.push(b.inner_node);
+            if let Some(o) = b.outer_node {
+                nodes.push(o);
+            }
+        }
+        nodes.sort_unstable();
+        nodes.dedup();
+        let mut mech = Vec::new();
+        for &id in &nodes {
+            let dx = assembly.dof(id, Dir::X).ok_or_else(|| {
+                mismatch(model, "bearings", format!("node {id} is not in the model"))
+            })?;
+            let dy = assembly.dof(id, Dir::Y).ok_or_else(|| {
+                mismatch(model, "bearings", format!("node {id} is not in the model"))
+            })?;
+            mech.push(dx);
+            mech.push(dy);
+        }
+        let pos = |id: u32| -> Option<usize> { nodes.iter().position(|&n| n == id).map(|p| 2 * p) };
+        let therm: Vec<usize> = network
+            .as_ref()
+            .map(|n| n.nonlinear_nodes().to_vec())
+            .unwrap_or_default();
+
+        let ratio_of = |id: u32| -> f64 {
+            model
+                .node_index(id)
+                .map_or(0.0, |i| model.speed_ratio(model.rotor_of(i)).value())
+        };
+
+        let mut bearings = Vec::new();
+        for (k, b) in model.spec.bearings.iter().enumerate() {
+            let field = format!("bearings[{k}] ({})", b.id);
+            let law = match b.kind {
+                BearingKind::Ball => ContactLaw::Ball,
+                BearingKind::Roller => ContactLaw::Roller,
+            };
+            let hertz = HertzBearing {
+                law,
+                n_elements: b.element_count as usize,
+                stiffness: b.hertz_stiffness,
+                clearance_m: b.initial_clearance_m,
+                inner_raceway_m: b.inner_race_diameter_m,
+                outer_raceway_m: b.outer_race_diameter_m,
+            };
+            hertz
+                .validate()
+                .map_err(|e| mismatch(model, &field, e.to_string()))?;
+            let inner = pos(b.inner_node)
+                .ok_or_else(|| mismatch(model, &field, "inner node missing".into()))?;
+            let outer = b.outer_node.and_then(pos);
+            let (thermal, expansion) = match &network {
+                Some(net) => {
+                    let names = net.bearing_names();
+                    let t = names.iter().position(|n| *n == b.id).ok_or_else(|| {
+                        mismatch(
+                            model,
+                            &format!("thermal.bearings"),
+                            format!(
+                                "no thermal bearing named {:?} (mechanical bearing {field})",
+                                b.id
+                            ),
+                        )
+                    })?;
+                    let nodes4 = net.expansion_nodes(t);
+                    let mut local = [0usize; 4];
+                    for (slot, node) in local.iter_mut().zip(nodes4) {
+                        *slot = therm.iter().position(|&p| p == node).ok_or_else(|| {
+                            mismatch(
+                                model,
+                                "thermal.bearings",
+                                format!(
+                                    "expansion node {} of {:?} is not a nonlinear node",
+                                    node + 1,
+                                    b.id
+                                ),
+                            )
+                        })?;
+                    }
+                    (Some((t, local)), Some(net.expansion_geometry(t).clone()))
+                }
+                None => (None, None),
+            };
+            bearings.push(CoupledBearing {
+                id: b.id.clone(),
+                hertz,
+                inner,
+                outer,
+                inner_ratio: ratio_of(b.inner_node),
+                outer_ratio: b.outer_node.map_or(0.0, ratio_of),
+                thermal,
+                expansion,
+            });
+        }
+        Ok(Self {
+            assembly,
+            network,
+            bearings,
+            nl: NonlinearDofs { mech, therm },
+            ambient_temp_c,
+            frozen_clearance: options.frozen_clearance,
+            scratch: Mutex::new(Vec::new()),
+        })
+    }
+
+    /// The built-in dual rotor with the given study overrides, fully coupled.
+    pub fn dual_rotor(study: &StudyOverrides) -> Result<Self, CoupledError> {
+        Self::new(&Model::builtin()?, study, CouplingOptions::default())
+    }
+
+    /// The assembled linear rotor.
+    pub fn assembly(&self) -> &Assembly {
+        &self.assembly
+    }
+
+    /// The thermal network, if coupled.
+    pub fn network(&self) -> Option<&ThermalNetwork> {
+        self.network.as_ref()
+    }
+
+    /// Bearing ids in model order.
+    pub fn bearing_ids(&self) -> Vec<&str> {
+        self.bearings.iter().map(|b| b.id.as_str()).collect()
+    }
+
+    /// Ambient temperature (°C).
+    pub fn ambient_temp_c(&self) -> f64 {
+        self.ambient_temp_c
+    }
+
+    /// Bearing states at time `t` for full mechanical displacements `x` and full
+    /// temperatures `temp` (length 0 when uncoupled).
+    pub fn bearing_states(&self, omega: f64, t: f64, x: &[f64], temp: &[f64]) -> Vec<BearingState> {
+        let xs: Vec<f64> = self.nl.mech.iter().map(|&d| x[d]).collect();
+        let ts: Vec<f64> = self
+            .nl
+            .therm
+            .iter()
+            .map(|&d| temp.get(d).copied().unwrap_or(self.ambient_temp_c))
+            .collect();
+        self.bearings
+            .iter()
+            .map(|b| {
+                let (dv, u) = self.clearance_variation(b, &ts);
+                let (dx, dy) = relative(b, &xs);
+                let cage = cage_angle(b, omega, t);
+                let force = b.hertz.force(dx, dy, dv, cage);
+                BearingState {
+                    fx_n: force.fx,
+                    fy_n: force.fy,
+                    fb_n: force.fb,
+                    n_loaded: force.n_loaded,
+                    u_b_m: u[0],
+                    u_i_m: u[1],
+                    u_o_m: u[2],
+                    delta_v_m: dv,
+                }
+            })
+            .collect()
+    }
+
+    /// Per-bearing generalized thermal forces at time `t` (empty when uncoupled).
+    pub fn thermal_outputs(
+        &self,
+        omega: f64,
+        t: f64,
+        x: &[f64],
+        temp: &[f64],
+    ) -> Vec<BearingThermalOutputs> {
+        let Some(net) = &self.network else {
+            return Vec::new();
+        };
+        let loads = self.loads_from_states(&self.bearing_states(omega, t, x, temp));
+        net.bearing_outputs(omega, temp, &loads)
+    }
+
+    fn loads_from_states(&self, states: &[BearingState]) -> Vec<BearingLoad> {
+        let mut loads =
+            vec![BearingLoad::default(); self.network.as_ref().map_or(0, |n| n.n_bearings())];
+        for (b, s) in self.bearings.iter().zip(states) {
+            if let Some((t, _)) = b.thermal {
+                loads[t] = BearingLoad {
+                    fb_n: s.fb_n,
+                    n_loaded: s.n_loaded as f64,
+                };
+            }
+        }
+        loads
+    }
+
+    /// `δv` and `(u_b, u_i, u_o)` of bearing `b` from the nonlinear-node temperatures.
+    fn clearance_variation(&self, b: &CoupledBearing, ts: &[f64]) -> (f64, [f64; 3]) {
+        match (&b.thermal, &b.expansion) {
+            (Some((_, loc)), Some(geom)) => {
+                let cv = geom.evaluate(
+                    ts[loc[0]],
+                    ts[loc[1]],
+                    ts[loc[2]],
+                    ts[loc[3]],
+                    self.ambient_temp_c,
+                );
+                let dv = if self.frozen_clearance {
+                    0.0
+                } else {
+                    cv.delta_v
+                };
+                (dv, [cv.u_b, cv.u_i, cv.u_o])
+            }
+            _ => (0.0, [0.0; 3]),
+        }
+    }
+}
+
+fn apply_overrides(spec: &mut ThermalSpec, study: &StudyOverrides) -> Result<(), CoupledError> {
+    if let Some(q) = study.flow_l_min {
+        if !(q.is_finite() && q > 0.0) {
+            return Err(CoupledError::Study {
+                field: "flow_l_min",
+                value: q,
+                reason: "the lubricant flow rate must be positive",
+            });
+        }
+        spec.flow_l_min = q;
+    }
+    for (field, value, target) in [
+        (
+            "cooling_temp_c",
+            study.cooling_temp_c,
+            &mut spec.cooling_temp_c,
+        ),
+        (
+            "ambient_temp_c",
+            study.ambient_temp_c,
+            &mut spec.ambient_temp_c,
+        ),
+    ] {
+        if let Some(v) = value {
+            if !(v.is_finite() && v > -273.15 && v < 1000.0) {
+                return Err(CoupledError::Study {
+                    field,
+                    value: v,
+                    reason: "a temperature must lie between absolute zero and 1000 °C",
+                });
+            }
+            *target = v;
+        }
+    }
+    Ok(())
+}
+
+fn mismatch(model: &Model, field: &str, reason: String) -> CoupledError {
+    CoupledError::Mismatch {
+        file: model.source.clone(),
+        field: field.to_string(),
+        reason,
+    }
+}
+
+fn relative(b: &CoupledBearing, xs: &[f64]) -> (f64, f64) {
+    let (mut dx, mut dy) = (xs[b.inner], xs[b.inner + 1]);
+    if let Some(o) = b.outer {
+        dx -= xs[o];
+        dy -= xs[o + 1];
+    }
+    (dx, dy)
+}
+
+fn cage_angle(b: &CoupledBearing, omega: f64, t: f64) -> f64 {
+    b.hertz
+        .cage_speed_rad_s(b.inner_ratio * omega, b.outer_ratio * omega)
+        * t
+}
+
+impl System for CoupledRotor {
+    fn n_mech(&self) -> usize {
+        self.assembly.n_dof
+    }
+
+    fn n_therm(&self) -> usize {
+        self.network.as_ref().map_or(0, |n| n.n_nodes())
+    }
+
+    fn linear(&self, omega: f64) -> LinearPart {
+        let mut lp = self.assembly.linear_part(omega);
+        if let Some(net) = &self.network {
+            lp.thermal_capacity = net.capacity_matrix();
+            lp.thermal_conductance = net.conductance(omega);
+        } else {
+            lp.thermal_capacity = DenseMatrix::zeros(0);
+            lp.thermal_conductance = DenseMatrix::zeros(0);
+        }
+        lp
+    }
+
+    fn nonlinear_dofs(&self) -> &NonlinearDofs {
+        &self.nl
+    }
+
+    fn eval_nonlinear(
+        &self,
+        omega: f64,
+        t: f64,
+        x: &[f64],
+        _v: &[f64],
+        temp: &[f64],
+        out: &mut NonlinearEval,
+    ) {
+        out.clear();
+        let p = self.nl.mech.len();
+        let q = self.nl.therm.len();
+        // Per-bearing ∂F_b/∂(local mech DoF) and ∂F_b/∂(local thermal DoF), for the chain.
+        let m_net = self.network.as_ref().map_or(0, |n| n.n_bearings());
+        let mut scratch = self
+            .scratch
+            .lock()
+            .ok()
+            .and_then(|mut s| s.pop())
+            .unwrap_or_else(|| (Vec::new(), Vec::new(), ThermalEval::new(q, m_net)));
+        let (dfb, loads, teval) = &mut scratch;
+        dfb.clear();
+        dfb.resize(m_net * (p + q), 0.0);
+        loads.clear();
+        loads.resize(m_net, BearingLoad::default());
+
+        for b in &self.bearings {
+            let (dx, dy) = relative(b, x);
+            let (dv, _) = self.clearance_variation(b, temp);
+            let force = b.hertz.force(dx, dy, dv, cage_angle(b, omega, t));
+            let j = force.jac; // rows fx, fy, fb; columns dx, dy, δv
+            // Mechanical force and its displacement derivatives.
+            let sides: [(usize, f64); 2] = [(b.inner, 1.0), (b.outer.unwrap_or(usize::MAX), -1.0)];
+            for &(row_node, rs) in &sides {
+                if row_node == usize::MAX {
+                    continue;
+                }
+                out.f[row_node] += rs * force.fx;
+                out.f[row_node + 1] += rs * force.fy;
+                for &(col_node, cs) in &sides {
+                    if col_node == usize::MAX {
+                        continue;
+                    }
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            out.df_dx[(row_node + r) * p + col_node + c] += rs * cs * j[r][c];
+                        }
+                    }
+                }
+            }
+            // Thermal clearance: ∂F/∂T = ∂F/∂δv · ∂δv/∂T.
+            let ddv = match (&b.thermal, &b.expansion, self.frozen_clearance) {
+                (Some((_, loc)), Some(geom), false) => {
+                    let cv = geom.evaluate(
+                        temp[loc[0]],
+                        temp[loc[1]],
+                        temp[loc[2]],
+                        temp[loc[3]],
+                        self.ambient_temp_c,
+                    );
+                    Some((*loc, cv.d_delta_v_d_temp))
+                }
+                _ => None,
+            };
+            if let Some((loc, d)) = ddv {
+                for &(row_node, rs) in &sides {
+                    if row_node == usize::MAX {
+                        continue;
+                    }
+                    for r in 0..2 {
+                        for (l, dl) in loc.iter().zip(d) {
+                            out.df_dt[(row_node + r) * q + l] += rs * j[r][2] * dl;
+                        }
+                    }
+                }
+            }
+            if let Some((tb, _)) = b.thermal {
+                loads[tb] = BearingLoad {
+                    fb_n: force.fb,
+                    n_loaded: force.n_loaded as f64,
+                };
+                let row = &mut dfb[tb * (p + q)..(tb + 1) * (p + q)];
+                for &(col_node, cs) in &sides {
+                    if col_node == usize::MAX {
+                        continue;
+                    }
+                    row[col_node] += cs * j[2][0];
+                    row[col_node + 1] += cs * j[2][1];
+                }
+                if let Some((loc, d)) = ddv {
+                    for (l, dl) in loc.iter().zip(d) {
+                        row[p + l] += j[2][2] * dl;
+                    }
+                }
+            }
+        }
+
+        if let Some(net) = &self.network {
+            if net.eval_nonlinear(omega, temp, loads, teval).is_ok() {
+                out.g.copy_from_slice(&teval.g);
+                out.dg_dt.copy_from_slice(&teval.dg_dt);
+                // Chain through F_b: ∂g/∂x = Σ_k ∂g/∂F_bk ∂F_bk/∂x, same for T.
+                for r in 0..q {
+                    for k in 0..m_net {
+                        let s = teval.dg_dfb[r * m_net + k];
+                        if s == 0.0 {
+                            continue;
+                        }
+                        let row = &dfb[k * (p + q)..(k + 1) * (p + q)];
+                        for c in 0..p {
+                            out.dg_dx[r * p + c] += s * row[c];
+                        }
+                        for c in 0..q {
+                            out.dg_dt[r * q + c] += s * row[p + c];
+                        }
+                    }
+                }
+            } else {
+                out.g.iter_mut().for_each(|v| *v = f64::NAN);
+            }
+        }
+        if let Ok(mut s) = self.scratch.lock() {
+            s.push(scratch);
+        }
+    }
+
+    fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
+        self.assembly.forcing(omega, t, out);
+    }
+
+    fn thermal_load(&self, omega: f64, out: &mut [f64]) {
+        match &self.network {
+            Some(net) => out.copy_from_slice(&net.load(omega)),
+            None => out.iter_mut().for_each(|v| *v = 0.0),
+        }
+    }
+}

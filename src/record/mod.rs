@@ -1,1 +1,91 @@
-//! See the crate docs for where this layer sits in the pipeline.
+//! Recording of continuation runs as MCAP files, and reading them back (paper-independent
+//! output layer; SPEC §4).
+//!
+//! | type / module | role |
+//! |---|---|
+//! | [`types`] | domain types: [`RunInfo`], [`PointRecord`], [`BifurcationRecord`], [`RunStatus`] |
+//! | [`Sink`], [`MemorySink`], [`record_run`] | where the continuation writes; always finished |
+//! | [`McapSink`] | protobuf messages in zstd-chunked, indexed MCAP files (clock, layout, crash safety in [`mcap_sink`]) |
+//! | [`schema`] | topics, message types and their embedded descriptor sets |
+//! | [`convert`] | the only domain ↔ protobuf conversion |
+//! | [`reader`] | [`read_recording`]: back to domain types, tolerant of files cut short |
+//! | [`derive`](mod@derive) | time histories and Eq. 35 amplitudes from coefficients; re-derivation seams |
+//! | [`synthetic`] | a closed-form 2-DoF run for tests and examples |
+//! | [`replay`] | the `replay` command line (info, branch, orbit, stability, plot) |
+//!
+//! Only this module uses `mcap` and `prost`.
+//!
+//! ```
+//! use tmrotor::record::synthetic::{self, SyntheticOptions};
+//! use tmrotor::record::{McapOptions, McapSink, RunStatus, Sink, read_recording};
+//!
+//! let data = synthetic::generate(&SyntheticOptions::default());
+//! let dir = tempfile::tempdir()?;
+//! let path = dir.path().join("sweep.mcap");
+//! let mut sink = McapSink::create(&path, McapOptions::default())?;
+//! sink.begin_run(&data.run)?;
+//! for point in &data.points {
+//!     sink.write_point(point)?; // durable when this returns
+//! }
+//! sink.finish(RunStatus::Completed)?;
+//!
+//! let rec = read_recording(&path)?;
+//! assert!(rec.complete);
+//! assert_eq!(rec.points, data.points);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub mod convert;
+pub mod derive;
+pub mod mcap_sink;
+pub mod pb;
+pub mod reader;
+pub mod replay;
+pub mod schema;
+pub mod sink;
+pub mod synthetic;
+pub mod types;
+
+use std::path::PathBuf;
+
+use thiserror::Error;
+
+pub use mcap_sink::{McapOptions, McapSink};
+pub use reader::{ReadError, Recording, read_recording};
+pub use sink::{MemorySink, Sink, install_interrupt_flag, record_run};
+pub use types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+
+/// Errors writing a recording.
+#[derive(Debug, Error)]
+pub enum RecordError {
+    #[error("cannot create recording {path}: {source}")]
+    Create {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("writing recording {path}: {source}")]
+    Mcap {
+        path: PathBuf,
+        source: mcap::McapError,
+    },
+    #[error("invalid run description: {0}")]
+    InvalidRun(String),
+    #[error("point {index} (ω = {omega_rad_s} rad/s) does not match the run: {reason}")]
+    InvalidPoint {
+        index: u64,
+        omega_rad_s: f64,
+        reason: String,
+    },
+    #[error("bifurcation {number} does not match the run: {reason}")]
+    InvalidBifurcation { number: u32, reason: String },
+    #[error("point index {index} after {previous}: indices must increase strictly")]
+    NonIncreasingIndex { index: u64, previous: u64 },
+    #[error("{0} called before begin_run")]
+    NotStarted(&'static str),
+    #[error("begin_run called twice")]
+    AlreadyStarted,
+    #[error("the recording is already finished")]
+    Finished,
+    #[error("cannot install the Ctrl-C handler: {0}")]
+    CtrlC(String),
+}

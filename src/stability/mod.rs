@@ -6,7 +6,37 @@
 //! point, and [`classify_crossing`], which tells from the multipliers on both sides of a
 //! stability change how they left the unit circle: through +1 (saddle-node / fold),
 //! through −1 (period doubling) or as a complex pair (Neimark–Sacker).
+//!
+//! Methods (both implement [`StabilityMethod`] on any [`System`] + [`PeriodicOrbit`]):
+//!
+//! | method | what | default settings | accuracy (measured) |
+//! |---|---|---|---|
+//! | [`Sip`] | paper Eqs. 30–33: product of truncated exponential series of interval means | 256 intervals (more when `P·ρ(B)` needs them), order 4, 3 Gauss points | `O(Δ²)`; 2e-7…4e-4 on the reference oscillators at 256 intervals, exponent 0 of the Hill problem to 1e-8 |
+//! | [`Variational`] | `Φ̇ = B(t)Φ` over one period with Dormand–Prince 5(4) | `rtol` 1e-10, `atol` 1e-12 | ~1e-11 against shooting |
+//!
+//! Both build `B(t)` from [`crate::integrate::StateSpace`]: mechanical block
+//! `[[0, I], [−M⁻¹(K + ∂f/∂x), −M⁻¹(C + ∂f/∂v)]]`, thermal block `−C_T⁻¹(K_T + ∂g/∂T)` and
+//! the coupling blocks `−M⁻¹ ∂f/∂T`, `−C_T⁻¹ ∂g/∂x`, `−C_T⁻¹ ∂g/∂v`, applied in factored
+//! form (constant part + low-rank part on the nonlinear DoFs). Cost of one evaluation on a
+//! 210-state system (72 mechanical DoF ×2 + 66 thermal, `benches/stability.rs`): see the
+//! benchmark.
+//!
+//! Thermal multipliers sit within ~1e-5 of +1 (`exp(−P/τ)`, `τ` minutes, `P`
+//! milliseconds). They are kept in [`FloquetResult`] as computed (a thermal runaway is an
+//! instability), decided against the circle with [`UNIT_CIRCLE_TOL`], and can be reported
+//! apart with [`split_thermal`], which matches them to predictions from the orbit-averaged
+//! thermal block rather than by distance to +1 (which would also catch a mechanical
+//! multiplier at a fold).
 
+pub mod sip;
+pub mod thermal;
+pub mod variational;
+
+pub use sip::{Sip, SipMonodromy};
+pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
+pub use variational::Variational;
+
+use faer::MatRef;
 use num_complex::Complex64;
 use thiserror::Error;
 
@@ -91,12 +121,34 @@ pub enum StabilityError {
     NonFinite { omega: f64 },
     #[error("eigenvalue solver failed for the {dim}×{dim} monodromy matrix: {reason}")]
     Eigen { dim: usize, reason: String },
+    #[error("cannot set up the linearised equations at ω = {omega} rad/s: {reason}")]
+    Setup { omega: f64, reason: String },
     #[error("invalid stability setting {field} = {value}: {reason}")]
     Setting {
         field: &'static str,
         value: String,
         reason: &'static str,
     },
+}
+
+/// True when every entry of `a` is finite.
+pub(crate) fn all_finite(a: MatRef<'_, f64>) -> bool {
+    (0..a.ncols()).all(|j| a.col(j).iter().all(|v| v.is_finite()))
+}
+
+/// Eigenvalues of a monodromy matrix (faer's real Schur-based solver), rejecting
+/// non-finite input. `omega` only labels errors.
+pub fn eigenvalues_checked(
+    monodromy: MatRef<'_, f64>,
+    omega: f64,
+) -> Result<Vec<Complex64>, StabilityError> {
+    if !all_finite(monodromy) {
+        return Err(StabilityError::NonFinite { omega });
+    }
+    monodromy.eigenvalues().map_err(|e| StabilityError::Eigen {
+        dim: monodromy.nrows(),
+        reason: format!("{e:?}"),
+    })
 }
 
 /// A way of computing the Floquet multipliers of a periodic solution. The continuation

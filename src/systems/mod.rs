@@ -1,5 +1,7 @@
-//! See the crate docs for where this layer sits in the pipeline.
+//! Reference problems with known answers, shared by tests, examples and benchmarks.
 pub mod absorber;
 pub mod chain;
 pub mod duffing;
+pub mod hill;
 pub mod jeffcott;
+pub mod period_doubling;

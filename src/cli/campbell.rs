@@ -1,0 +1,106 @@
+//! `tmrotor campbell`: natural frequencies versus speed and critical speeds.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+
+use crate::linear;
+use crate::model::Assembly;
+
+/// Arguments of `tmrotor campbell`.
+#[derive(Debug, Args)]
+pub struct CampbellArgs {
+    /// Model file (default: the built-in dual rotor).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Reference-speed grid START:END:COUNT in rad/s (COUNT points, ends included).
+    #[arg(long)]
+    pub speeds: String,
+    /// Number of modes followed (lowest first).
+    #[arg(long, default_value_t = 10)]
+    pub count: usize,
+    /// Write the diagram as CSV to this file
+    /// (speed_rad_s,mode,frequency_rad_s,frequency_hz,damping_ratio,whirl).
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+}
+
+/// Parses `START:END:COUNT`.
+pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
+    let parts: Vec<&str> = s.split(':').collect();
+    if parts.len() != 3 {
+        anyhow::bail!("--speeds must be START:END:COUNT, got {s:?}");
+    }
+    let start: f64 = parts[0]
+        .trim()
+        .parse()
+        .with_context(|| format!("--speeds start {:?}", parts[0]))?;
+    let end: f64 = parts[1]
+        .trim()
+        .parse()
+        .with_context(|| format!("--speeds end {:?}", parts[1]))?;
+    let count: usize = parts[2]
+        .trim()
+        .parse()
+        .with_context(|| format!("--speeds count {:?}", parts[2]))?;
+    Ok(linear::speed_grid(start, end, count)?)
+}
+
+/// Runs `tmrotor campbell`, writing the critical speeds to `out`.
+pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
+    let speeds = parse_speeds(&args.speeds)?;
+    let model = super::model::load(args.model.as_ref())?;
+    let asm = Assembly::new(&model)?;
+    let diagram = linear::campbell(&asm, &speeds, args.count)?;
+    if let Some(path) = &args.csv {
+        let mut text =
+            String::from("speed_rad_s,mode,frequency_rad_s,frequency_hz,damping_ratio,whirl\n");
+        for p in &diagram.points {
+            for (i, m) in p.modes.iter().enumerate() {
+                text.push_str(&format!(
+                    "{:.6},{},{:.6},{:.6},{:.6},{}\n",
+                    p.speed_rad_s,
+                    i + 1,
+                    m.frequency_rad_s,
+                    m.frequency_rad_s / (2.0 * std::f64::consts::PI),
+                    m.damping_ratio,
+                    m.whirl
+                ));
+            }
+        }
+        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    writeln!(
+        out,
+        "{}: critical speeds in {:.1}–{:.1} rad/s ({} modes, {} speeds)",
+        model.spec.name,
+        speeds[0],
+        speeds[speeds.len() - 1],
+        args.count,
+        speeds.len()
+    )?;
+    writeln!(
+        out,
+        "{:>8}  {:>6}  {:>4}  {:>8}  {:>12}  {:>10}  {:>12}",
+        "line", "ratio", "mode", "whirl", "ω (rad/s)", "ω (rpm)", "freq (rad/s)"
+    )?;
+    for c in &diagram.critical_speeds {
+        writeln!(
+            out,
+            "{:>8}  {:>6.3}  {:>4}  {:>8}  {:>12.2}  {:>10.1}  {:>12.2}",
+            format!("1×{}", c.rotor_id),
+            c.speed_ratio,
+            c.mode,
+            c.whirl,
+            c.speed_rad_s,
+            c.speed_rad_s * 30.0 / std::f64::consts::PI,
+            c.frequency_rad_s
+        )?;
+    }
+    if diagram.critical_speeds.is_empty() {
+        writeln!(out, "  (none in this range)")?;
+    }
+    Ok(())
+}

@@ -1,0 +1,93 @@
+//! `tmrotor model check FILE` and `tmrotor model show`.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use clap::Subcommand;
+
+use crate::model::{Assembly, BUILTIN_TOML, Model};
+
+/// Model-file commands.
+#[derive(Debug, Subcommand)]
+pub enum ModelCommand {
+    /// Validate a model file (and assemble it); report the first problem with its field
+    /// path, or a summary.
+    Check {
+        /// The model file (TOML).
+        file: PathBuf,
+    },
+    /// Print the built-in dual-rotor model file (a documented starting point to copy).
+    Show,
+}
+
+/// Loads the model named by an optional `--model` flag (built-in when absent).
+pub fn load(file: Option<&PathBuf>) -> anyhow::Result<Model> {
+    Ok(match file {
+        Some(f) => Model::from_file(f)?,
+        None => Model::builtin()?,
+    })
+}
+
+/// Runs a model command, writing to `out`.
+pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
+    match cmd {
+        ModelCommand::Show => out.write_all(BUILTIN_TOML.as_bytes())?,
+        ModelCommand::Check { file } => {
+            let model = Model::from_file(file)?;
+            let asm = Assembly::new(&model)?;
+            let spec = &model.spec;
+            let rotors: Vec<String> = spec
+                .rotors
+                .iter()
+                .enumerate()
+                .map(|(r, rot)| {
+                    let q = model.speed_ratio(r);
+                    format!(
+                        "{} ({}/{}, {} nodes)",
+                        rot.id,
+                        q.num,
+                        q.den,
+                        rot.nodes.len()
+                    )
+                })
+                .collect();
+            writeln!(out, "{}: ok", model.source)?;
+            writeln!(out, "  name:     {}", spec.name)?;
+            writeln!(out, "  rotors:   {}", rotors.join(", "))?;
+            writeln!(
+                out,
+                "  nodes:    {} ({} DoF); shafts {}, disks {}, supports {}, bearings {}",
+                model.n_nodes(),
+                model.n_dof(),
+                spec.shafts.len(),
+                spec.disks.len(),
+                spec.supports.len(),
+                spec.bearings.len()
+            )?;
+            let (a0, a1) = model.rayleigh();
+            writeln!(out, "  damping:  a0 = {a0:.4} 1/s, a1 = {a1:.4e} s")?;
+            writeln!(
+                out,
+                "  gravity:  {}",
+                if spec.gravity.enabled { "on" } else { "off" }
+            )?;
+            for b in &asm.bearings {
+                writeln!(
+                    out,
+                    "  bearing {}: load {:.1} N, linearised kxx = {:.4e} N/m, kyy = {:.4e} N/m",
+                    b.id,
+                    b.load_n[0].hypot(b.load_n[1]),
+                    b.stiffness_n_m[0][0],
+                    b.stiffness_n_m[1][1]
+                )?;
+            }
+            if model.thermal().is_some() {
+                writeln!(
+                    out,
+                    "  thermal:  [thermal] table present (checked by the thermal layer)"
+                )?;
+            }
+        }
+    }
+    Ok(())
+}

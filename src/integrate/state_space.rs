@@ -1,0 +1,399 @@
+//! First-order form of a [`System`] at one value of `ω`, and its linearisation.
+//!
+//! The state is `y = [x, v, T]` (length `d = 2 n_mech + n_therm`), `v = ẋ`:
+//!
+//! ```text
+//!   ẋ = v
+//!   v̇ = M⁻¹ (F(t) − C v − K x − P f(x_P, v_P, T_Q, t))
+//!   Ṫ = C_T⁻¹ (F_T − K_T T − Q g(x_P, v_P, T_Q, t))
+//! ```
+//!
+//! where `P`, `Q` scatter the nonlinear terms onto their DoFs. `M` and `C_T` are factored
+//! once (partial-pivot LU, faer) when the [`StateSpace`] is built, and the products
+//! `M⁻¹K`, `M⁻¹C`, `C_T⁻¹K_T`, the columns `M⁻¹P`, `C_T⁻¹Q` and `C_T⁻¹F_T` are formed
+//! then, so that a right-hand side costs only matrix–vector products.
+//!
+//! The linearisation around a solution (paper Eq. 30, written in physical time) is
+//! `δẏ = B(t) δy` with
+//!
+//! ```text
+//!          ⎡ 0                           I                           0                         ⎤
+//!   B(t) = ⎢ −M⁻¹(K + P ∂f/∂x Pᵀ)        −M⁻¹(C + P ∂f/∂v Pᵀ)        −M⁻¹ P ∂f/∂T Qᵀ           ⎥
+//!          ⎣ −C_T⁻¹ Q ∂g/∂x Pᵀ           −C_T⁻¹ Q ∂g/∂v Pᵀ           −C_T⁻¹(K_T + Q ∂g/∂T Qᵀ)  ⎦
+//! ```
+//!
+//! `B(t) = B_lin + L D(t) S`: a constant part plus a part of rank at most `p + q` (`p`, `q`
+//! nonlinear mechanical and thermal DoFs) that reads only the rows `x_P`, `v_P`, `T_Q` of
+//! its operand (`S`), mixes them with the pointwise derivatives (`D`) and spreads them with
+//! the columns `L = [0; M⁻¹P; C_T⁻¹Q]`. [`StateSpace::apply_linearization`] applies `B` to
+//! a block of columns in this factored form and never forms `B`: its cost per column is
+//! `2 n_mech² + n_therm²` multiply–adds (the identity block is a copy) plus `O((p+q)·d)`,
+//! against `d²` for a dense product.
+
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatMut, MatRef, Par};
+
+use super::IntegrateError;
+use crate::system::{DenseMatrix, NonlinearDofs, NonlinearEval, System};
+
+/// The first-order form of a [`System`] at one `ω` (see the module docs).
+pub struct StateSpace<'a> {
+    system: &'a dyn System,
+    omega: f64,
+    n: usize,
+    m: usize,
+    dofs: NonlinearDofs,
+    /// `M⁻¹` (n × n), applied to the load.
+    minv: Mat<f64>,
+    /// `M⁻¹K` (n × n).
+    minv_k: Mat<f64>,
+    /// `M⁻¹C` (n × n).
+    minv_c: Mat<f64>,
+    /// Columns of `M⁻¹` at the nonlinear mechanical DoFs (n × p).
+    minv_p: Mat<f64>,
+    /// `C_T⁻¹K_T` (m × m).
+    ctinv_kt: Mat<f64>,
+    /// Columns of `C_T⁻¹` at the nonlinear thermal DoFs (m × q).
+    ctinv_q: Mat<f64>,
+    /// `C_T⁻¹F_T` (m).
+    ctinv_ft: Vec<f64>,
+}
+
+/// Scratch buffers for [`StateSpace`] evaluations; one per thread.
+pub struct Workspace {
+    force: Vec<f64>,
+    xp: Vec<f64>,
+    vp: Vec<f64>,
+    tq: Vec<f64>,
+    /// Pointwise nonlinear values and derivatives at the last evaluation.
+    pub eval: NonlinearEval,
+    gathered: Mat<f64>,
+    mixed: Mat<f64>,
+    d_mat: Mat<f64>,
+}
+
+fn to_faer(a: &DenseMatrix) -> Mat<f64> {
+    Mat::from_fn(a.n, a.n, |i, j| a.get(i, j))
+}
+
+/// Solves `A X = B` for `X` with a partial-pivot LU of `A`; `what` names `A` in errors.
+fn solve(a: &Mat<f64>, b: Mat<f64>, what: &'static str) -> Result<Mat<f64>, IntegrateError> {
+    use faer::linalg::solvers::Solve;
+    if a.nrows() == 0 {
+        return Ok(b);
+    }
+    let lu = a.partial_piv_lu();
+    let x = lu.solve(b);
+    if x.col_iter().flat_map(|c| c.iter()).any(|v| !v.is_finite()) {
+        return Err(IntegrateError::Singular { matrix: what });
+    }
+    Ok(x)
+}
+
+impl<'a> StateSpace<'a> {
+    /// Builds the first-order form of `system` at `omega` (rad/s), factoring `M` and `C_T`.
+    pub fn new(system: &'a dyn System, omega: f64) -> Result<Self, IntegrateError> {
+        let n = system.n_mech();
+        let m = system.n_therm();
+        let lin = system.linear(omega);
+        let dofs = system.nonlinear_dofs().clone();
+        for (what, mat, size) in [
+            ("mass", &lin.mass, n),
+            ("damping", &lin.damping, n),
+            ("stiffness", &lin.stiffness, n),
+            ("thermal_capacity", &lin.thermal_capacity, m),
+            ("thermal_conductance", &lin.thermal_conductance, m),
+        ] {
+            if mat.n != size || mat.data.len() != size * size {
+                return Err(IntegrateError::Dimension {
+                    what,
+                    expected: size,
+                    found: mat.n,
+                });
+            }
+        }
+        if let Some(&bad) = dofs.mech.iter().find(|&&i| i >= n) {
+            return Err(IntegrateError::Dimension {
+                what: "nonlinear mechanical DoF index",
+                expected: n,
+                found: bad,
+            });
+        }
+        if let Some(&bad) = dofs.therm.iter().find(|&&i| i >= m) {
+            return Err(IntegrateError::Dimension {
+                what: "nonlinear thermal DoF index",
+                expected: m,
+                found: bad,
+            });
+        }
+        let mass = to_faer(&lin.mass);
+        let minv = solve(&mass, Mat::identity(n, n), "mass")?;
+        let minv_k = &minv * to_faer(&lin.stiffness);
+        let minv_c = &minv * to_faer(&lin.damping);
+        let minv_p = Mat::from_fn(n, dofs.mech.len(), |i, j| minv[(i, dofs.mech[j])]);
+        let cap = to_faer(&lin.thermal_capacity);
+        let ctinv = solve(&cap, Mat::identity(m, m), "thermal_capacity")?;
+        let ctinv_kt = &ctinv * to_faer(&lin.thermal_conductance);
+        let ctinv_q = Mat::from_fn(m, dofs.therm.len(), |i, j| ctinv[(i, dofs.therm[j])]);
+        let mut ft = vec![0.0; m];
+        system.thermal_load(omega, &mut ft);
+        let ctinv_ft = (0..m)
+            .map(|i| (0..m).map(|j| ctinv[(i, j)] * ft[j]).sum())
+            .collect();
+        Ok(Self {
+            system,
+            omega,
+            n,
+            m,
+            dofs,
+            minv,
+            minv_k,
+            minv_c,
+            minv_p,
+            ctinv_kt,
+            ctinv_q,
+            ctinv_ft,
+        })
+    }
+
+    /// The system this state space was built from.
+    pub fn system(&self) -> &'a dyn System {
+        self.system
+    }
+
+    /// Continuation parameter `ω` (rad/s).
+    pub fn omega(&self) -> f64 {
+        self.omega
+    }
+
+    /// Number of mechanical DoFs.
+    pub fn n_mech(&self) -> usize {
+        self.n
+    }
+
+    /// Number of thermal DoFs.
+    pub fn n_therm(&self) -> usize {
+        self.m
+    }
+
+    /// State dimension `2 n_mech + n_therm`.
+    pub fn dim(&self) -> usize {
+        2 * self.n + self.m
+    }
+
+    /// The nonlinear DoFs.
+    pub fn dofs(&self) -> &NonlinearDofs {
+        &self.dofs
+    }
+
+    /// `M⁻¹K`, `M⁻¹C`, `C_T⁻¹K_T` (for norm estimates).
+    pub fn linear_blocks(&self) -> (MatRef<'_, f64>, MatRef<'_, f64>, MatRef<'_, f64>) {
+        (
+            self.minv_k.as_ref(),
+            self.minv_c.as_ref(),
+            self.ctinv_kt.as_ref(),
+        )
+    }
+
+    /// Columns `M⁻¹P` (n × p) and `C_T⁻¹Q` (m × q) that spread nonlinear terms.
+    pub fn spread_columns(&self) -> (MatRef<'_, f64>, MatRef<'_, f64>) {
+        (self.minv_p.as_ref(), self.ctinv_q.as_ref())
+    }
+
+    /// Scratch buffers sized for this state space.
+    pub fn workspace(&self) -> Workspace {
+        let p = self.dofs.mech.len();
+        let q = self.dofs.therm.len();
+        Workspace {
+            force: vec![0.0; self.n],
+            xp: vec![0.0; p],
+            vp: vec![0.0; p],
+            tq: vec![0.0; q],
+            eval: NonlinearEval::new(p, q),
+            gathered: Mat::zeros(2 * p + q, 0),
+            mixed: Mat::zeros(p + q, 0),
+            d_mat: Mat::zeros(p + q, 2 * p + q),
+        }
+    }
+
+    /// Evaluates the nonlinear terms and derivatives at time `t` for the full state
+    /// `x`, `v`, `temp` into `ws.eval`.
+    pub fn eval_nonlinear_at(
+        &self,
+        t: f64,
+        x: &[f64],
+        v: &[f64],
+        temp: &[f64],
+        ws: &mut Workspace,
+    ) {
+        for (k, &i) in self.dofs.mech.iter().enumerate() {
+            ws.xp[k] = x[i];
+            ws.vp[k] = v[i];
+        }
+        for (k, &i) in self.dofs.therm.iter().enumerate() {
+            ws.tq[k] = temp[i];
+        }
+        self.system
+            .eval_nonlinear(self.omega, t, &ws.xp, &ws.vp, &ws.tq, &mut ws.eval);
+    }
+
+    /// Right-hand side `ẏ = φ(t, y)` of the first-order equations.
+    pub fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64], ws: &mut Workspace) {
+        let (n, m) = (self.n, self.m);
+        let (x, rest) = y.split_at(n);
+        let (v, temp) = rest.split_at(n);
+        self.eval_nonlinear_at(t, x, v, temp, ws);
+        self.system.forcing(self.omega, t, &mut ws.force);
+        let (dx, drest) = dy.split_at_mut(n);
+        let (dv, dtemp) = drest.split_at_mut(n);
+        dx.copy_from_slice(v);
+        dv.iter_mut().for_each(|a| *a = 0.0);
+        for j in 0..n {
+            let (fj, xj, vj) = (ws.force[j], x[j], v[j]);
+            let (cm, ck, cc) = (self.minv.col(j), self.minv_k.col(j), self.minv_c.col(j));
+            for i in 0..n {
+                dv[i] += cm[i] * fj - ck[i] * xj - cc[i] * vj;
+            }
+        }
+        for (k, &fk) in ws.eval.f.iter().enumerate() {
+            let col = self.minv_p.col(k);
+            for i in 0..n {
+                dv[i] -= col[i] * fk;
+            }
+        }
+        dtemp.copy_from_slice(&self.ctinv_ft);
+        for j in 0..m {
+            let (col, tj) = (self.ctinv_kt.col(j), temp[j]);
+            for i in 0..m {
+                dtemp[i] -= col[i] * tj;
+            }
+        }
+        for (k, &gk) in ws.eval.g.iter().enumerate() {
+            let col = self.ctinv_q.col(k);
+            for i in 0..m {
+                dtemp[i] -= col[i] * gk;
+            }
+        }
+    }
+
+    /// `out = B W` (or `out += alpha·B W` with `accumulate`), with `B` built from the
+    /// derivatives in `derivs` (see the module docs). `w` and `out` are `d × c`.
+    pub fn apply_linearization(
+        &self,
+        derivs: &NonlinearEval,
+        w: MatRef<'_, f64>,
+        out: MatMut<'_, f64>,
+        ws: &mut Workspace,
+    ) {
+        let (n, m) = (self.n, self.m);
+        let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
+        let c = w.ncols();
+        // D = [[df_dx, df_dv, df_dt], [dg_dx, dg_dv, dg_dt]], (p+q) × (2p+q).
+        for i in 0..p {
+            for j in 0..p {
+                ws.d_mat[(i, j)] = derivs.df_dx[i * p + j];
+                ws.d_mat[(i, p + j)] = derivs.df_dv[i * p + j];
+            }
+            for j in 0..q {
+                ws.d_mat[(i, 2 * p + j)] = derivs.df_dt[i * q + j];
+            }
+        }
+        for i in 0..q {
+            for j in 0..p {
+                ws.d_mat[(p + i, j)] = derivs.dg_dx[i * p + j];
+                ws.d_mat[(p + i, p + j)] = derivs.dg_dv[i * p + j];
+            }
+            for j in 0..q {
+                ws.d_mat[(p + i, 2 * p + j)] = derivs.dg_dt[i * q + j];
+            }
+        }
+        if ws.gathered.ncols() != c {
+            ws.gathered = Mat::zeros(2 * p + q, c);
+            ws.mixed = Mat::zeros(p + q, c);
+        }
+        for col in 0..c {
+            let wc = w.col(col);
+            for (k, &i) in self.dofs.mech.iter().enumerate() {
+                ws.gathered[(k, col)] = wc[i];
+                ws.gathered[(p + k, col)] = wc[n + i];
+            }
+            for (k, &i) in self.dofs.therm.iter().enumerate() {
+                ws.gathered[(2 * p + k, col)] = wc[2 * n + i];
+            }
+        }
+        if p + q > 0 {
+            matmul(
+                ws.mixed.as_mut(),
+                Accum::Replace,
+                ws.d_mat.as_ref(),
+                ws.gathered.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+        }
+        let (wx, wrest) = w.split_at_row(n);
+        let (wv, wt) = wrest.split_at_row(n);
+        let (mut ox, orest) = out.split_at_row_mut(n);
+        let (mut ov, mut ot) = orest.split_at_row_mut(n);
+        ox.copy_from(wv);
+        matmul(
+            ov.as_mut(),
+            Accum::Replace,
+            self.minv_k.as_ref(),
+            wx,
+            -1.0,
+            Par::Seq,
+        );
+        matmul(
+            ov.as_mut(),
+            Accum::Add,
+            self.minv_c.as_ref(),
+            wv,
+            -1.0,
+            Par::Seq,
+        );
+        if p > 0 {
+            matmul(
+                ov.as_mut(),
+                Accum::Add,
+                self.minv_p.as_ref(),
+                ws.mixed.as_ref().subrows(0, p),
+                -1.0,
+                Par::Seq,
+            );
+        }
+        if m > 0 {
+            matmul(
+                ot.as_mut(),
+                Accum::Replace,
+                self.ctinv_kt.as_ref(),
+                wt,
+                -1.0,
+                Par::Seq,
+            );
+            if q > 0 {
+                matmul(
+                    ot.as_mut(),
+                    Accum::Add,
+                    self.ctinv_q.as_ref(),
+                    ws.mixed.as_ref().subrows(p, q),
+                    -1.0,
+                    Par::Seq,
+                );
+            }
+        }
+    }
+
+    /// The dense state matrix `B` for the derivatives in `derivs` (tests, small systems).
+    pub fn linearization_dense(&self, derivs: &NonlinearEval, ws: &mut Workspace) -> Mat<f64> {
+        let d = self.dim();
+        let mut out = Mat::zeros(d, d);
+        self.apply_linearization(
+            derivs,
+            Mat::<f64>::identity(d, d).as_ref(),
+            out.as_mut(),
+            ws,
+        );
+        out
+    }
+}

@@ -1,0 +1,250 @@
+//! The model file as written on disk: plain `serde` structures, one per TOML table.
+//!
+//! Every table rejects unknown keys (`deny_unknown_fields`). Units are SI and appear in
+//! the key names (`length_m`, `mass_kg`, ...). These structures are checked for
+//! consistency by [`super::Model`]; on their own they only guarantee the types.
+
+use serde::Deserialize;
+
+/// A whole model file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// Short name of the model.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: String,
+    /// Gravity; absent means on, along −x, 9.81 m/s².
+    #[serde(default)]
+    pub gravity: GravitySpec,
+    /// Rayleigh damping `C = a0 M + a1 K`; absent means no Rayleigh damping.
+    #[serde(default)]
+    pub damping: Option<DampingSpec>,
+    /// Materials, referred to by `id`.
+    #[serde(default)]
+    pub materials: Vec<MaterialSpec>,
+    /// Rotors: each owns a set of nodes and spins at `speed_ratio × ω`.
+    #[serde(default)]
+    pub rotors: Vec<RotorSpec>,
+    /// Timoshenko shaft elements between two nodes of one rotor.
+    #[serde(default)]
+    pub shafts: Vec<ShaftSpec>,
+    /// Rigid disks on a node.
+    #[serde(default)]
+    pub disks: Vec<DiskSpec>,
+    /// Linear spring–dashpot supports.
+    #[serde(default)]
+    pub supports: Vec<SupportSpec>,
+    /// Rolling bearings (nonlinear Hertz contact; linearised for modal analysis).
+    #[serde(default)]
+    pub bearings: Vec<BearingSpec>,
+    /// Thermal network; defined and validated by the thermal layer, kept opaque here.
+    #[serde(default)]
+    pub thermal: Option<toml::Table>,
+}
+
+/// `[gravity]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GravitySpec {
+    /// Whether the gravity load is applied (default `true`).
+    #[serde(default = "default_true")]
+    pub enabled: bool,
+    /// Gravitational acceleration, acting along −x (default 9.81 m/s²).
+    #[serde(default = "default_g")]
+    pub acceleration_m_s2: f64,
+}
+
+impl Default for GravitySpec {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            acceleration_m_s2: default_g(),
+        }
+    }
+}
+
+fn default_true() -> bool {
+    true
+}
+
+fn default_g() -> f64 {
+    9.81
+}
+
+/// `[damping]`: either `a0_1_s` and `a1_s` directly, or a modal damping ratio matched at
+/// two angular frequencies.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DampingSpec {
+    /// Mass-proportional coefficient `a0` (1/s).
+    pub a0_1_s: Option<f64>,
+    /// Stiffness-proportional coefficient `a1` (s).
+    pub a1_s: Option<f64>,
+    /// Modal damping ratio ζ to reach at both `frequencies_rad_s`.
+    pub damping_ratio: Option<f64>,
+    /// The two angular frequencies (rad/s) at which the damping ratio is ζ.
+    pub frequencies_rad_s: Option<[f64; 2]>,
+}
+
+/// `[[materials]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub id: String,
+    pub youngs_modulus_pa: f64,
+    pub poisson_ratio: f64,
+    pub density_kg_m3: f64,
+    /// Specific heat capacity (J/(kg·K)); used by the thermal network.
+    pub specific_heat_j_kg_k: Option<f64>,
+    /// Thermal conductivity (W/(m·K)); used by the thermal network.
+    pub conductivity_w_m_k: Option<f64>,
+    /// Linear expansion coefficient (1/K); used by the bearing clearance model.
+    pub expansion_1_k: Option<f64>,
+}
+
+/// A speed ratio: a string `"p/q"` / `"p"` / decimal, or a number that is a clean
+/// rational (denominator ≤ 100).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum SpeedRatioSpec {
+    Text(String),
+    Number(f64),
+}
+
+/// `[[rotors]]`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RotorSpec {
+    pub id: String,
+    /// Rotor speed divided by the reference speed ω.
+    pub speed_ratio: SpeedRatioSpec,
+    /// Node ids that belong to this rotor (each node belongs to exactly one rotor).
+    pub nodes: Vec<u32>,
+}
+
+/// `[[shafts]]`: one hollow Timoshenko element (paper Appendix B).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShaftSpec {
+    /// The two end nodes, both on the same rotor (exactly two).
+    pub nodes: Vec<u32>,
+    pub length_m: f64,
+    pub inner_diameter_m: f64,
+    pub outer_diameter_m: f64,
+    /// Material id.
+    pub material: String,
+}
+
+/// `[[disks]]`: a rigid disk (paper Eq. 6).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DiskSpec {
+    pub id: String,
+    pub node: u32,
+    pub mass_kg: f64,
+    /// Polar moment of inertia `J_p` (kg·m²).
+    pub polar_inertia_kg_m2: f64,
+    /// Diametral moment of inertia `J_d` (kg·m²).
+    pub diametral_inertia_kg_m2: f64,
+    /// Mass eccentricity `e` (m); default 0.
+    #[serde(default)]
+    pub eccentricity_m: f64,
+    /// Angular position of the unbalance at `t = 0`, measured from +x towards +y (degrees);
+    /// default 0.
+    #[serde(default)]
+    pub phase_deg: f64,
+}
+
+/// `[[supports]]`: isotropic linear spring and dashpot on x and y.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupportSpec {
+    pub id: String,
+    pub node: u32,
+    /// Second node; absent means the support goes to ground.
+    pub to_node: Option<u32>,
+    pub stiffness_n_m: f64,
+    #[serde(default)]
+    pub damping_n_s_m: f64,
+    /// Rotational stiffness on θx and θy (N·m/rad); default 0.
+    #[serde(default)]
+    pub rotational_stiffness_n_m_rad: f64,
+}
+
+/// Rolling-element type, which sets the Hertz exponent `n` of Eq. 4.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum BearingKind {
+    /// Point contact, `n = 3/2`.
+    Ball,
+    /// Line contact, `n = 10/9`.
+    Roller,
+}
+
+impl BearingKind {
+    /// The Hertz load–deflection exponent of Eq. 4.
+    pub fn exponent(self) -> f64 {
+        match self {
+            Self::Ball => 1.5,
+            Self::Roller => 10.0 / 9.0,
+        }
+    }
+}
+
+/// `[[bearings]]`: a rolling bearing with all data of paper Tables A.1/A.2.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BearingSpec {
+    pub id: String,
+    pub kind: BearingKind,
+    /// Node carrying the inner ring.
+    pub inner_node: u32,
+    /// Node carrying the outer ring; absent means the outer ring sits in a rigid housing
+    /// fixed to ground.
+    pub outer_node: Option<u32>,
+    /// Material id of rings and rolling elements.
+    pub material: String,
+    /// Material id of the housing (or of the shaft holding the outer ring).
+    pub housing_material: Option<String>,
+    /// Bore `d_b` / `d_r` (m).
+    pub bore_diameter_m: f64,
+    /// Outside diameter `D_b` / `D_r` (m).
+    pub outside_diameter_m: f64,
+    /// Inner-ring raceway diameter `d_bi` / `d_ri` (m).
+    pub inner_race_diameter_m: f64,
+    /// Outer-ring raceway diameter `d_bo` / `d_ro` (m).
+    pub outer_race_diameter_m: f64,
+    /// Pitch diameter `D_bm` / `D_rm` (m).
+    pub pitch_diameter_m: f64,
+    /// Number of rolling elements `N`.
+    pub element_count: u32,
+    /// Ball or roller diameter (m).
+    pub element_diameter_m: f64,
+    /// Roller length `a_roller` (m); rollers only.
+    pub roller_length_m: Option<f64>,
+    /// Bearing width `B` (m).
+    pub width_m: f64,
+    /// Hertz contact stiffness `k_b` of Eq. 4, in N/m^n (n = 3/2 ball, 10/9 roller).
+    pub hertz_stiffness: f64,
+    /// Initial radial clearance `δ0` (m).
+    pub initial_clearance_m: f64,
+    /// Housing radius `r_h` (m); absent for an outer ring held by a shaft.
+    pub housing_radius_m: Option<f64>,
+    /// Housing length `l_h` (m).
+    pub housing_length_m: Option<f64>,
+    /// Length of the part of the housing `l_hs` (m).
+    pub housing_part_length_m: Option<f64>,
+    /// Inner radius of the shaft element under the inner ring, `r_LP` (m).
+    pub shaft_inner_radius_m: f64,
+    /// Outer radius of the shaft element holding the outer ring, `r_HP` (m);
+    /// inter-shaft bearings only.
+    pub outer_shaft_radius_m: Option<f64>,
+    /// Linearised radial stiffness for modal analysis (N/m, isotropic). If absent, it is
+    /// derived from the Hertz law (see [`crate::model::bearing_linear`]).
+    pub linear_stiffness_n_m: Option<f64>,
+    /// Radial load (N) at which the Hertz law is linearised when `linear_stiffness_n_m` is
+    /// absent. If both are absent, the load of the static gravity equilibrium is used.
+    pub linearization_load_n: Option<f64>,
+}

@@ -1,0 +1,645 @@
+//! Parsing and validation of model files into a [`Model`].
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use super::error::{InvalidKind, ModelError};
+use super::file::{BearingKind, ModelFile, SpeedRatioSpec};
+use crate::hb::Ratio;
+
+/// Largest denominator accepted for a speed ratio given as a number.
+pub const MAX_RATIO_DEN: u32 = 100;
+
+/// The built-in dual-rotor model file (paper Tables A.1–A.5, node layout of the spec).
+pub const BUILTIN_TOML: &str = include_str!("../../models/dual_rotor.toml");
+
+/// Name under which the built-in model reports errors.
+pub const BUILTIN_NAME: &str = "<built-in dual_rotor.toml>";
+
+/// Direction of a nodal DoF. See the module docs of [`crate::model`] for the ordering.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Dir {
+    /// Vertical displacement (gravity acts along −x).
+    X = 0,
+    /// Horizontal displacement.
+    Y = 1,
+    /// Slope `dx/dz` of the x–z plane (the paper's θx).
+    ThetaX = 2,
+    /// Slope `dy/dz` of the y–z plane (the paper's θy).
+    ThetaY = 3,
+}
+
+/// Number of DoFs per node.
+pub const DOF_PER_NODE: usize = 4;
+
+/// A validated model: the file contents plus the derived indexing.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// File name (or the built-in name) used in error messages.
+    pub source: String,
+    /// The validated file contents.
+    pub spec: ModelFile,
+    nodes: Vec<u32>,
+    node_rotor: Vec<usize>,
+    speed_ratios: Vec<Ratio>,
+    rayleigh: (f64, f64),
+}
+
+impl Model {
+    /// The built-in dual rotor of the paper.
+    pub fn builtin() -> Result<Self, ModelError> {
+        Self::from_str(BUILTIN_TOML, BUILTIN_NAME)
+    }
+
+    /// Reads and validates a model file.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
+        let path = path.as_ref();
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            file: name.clone(),
+            source,
+        })?;
+        Self::from_str(&text, &name)
+    }
+
+    /// Parses and validates model text; `name` is used in error messages.
+    #[allow(clippy::should_implement_trait)]
+    pub fn from_str(text: &str, name: &str) -> Result<Self, ModelError> {
+        let spec: ModelFile = toml::from_str(text).map_err(|e| {
+            let (line, path) = match e.span() {
+                Some(span) => {
+                    let (l, p) = path_at(text, span.start);
+                    (Some(l), p)
+                }
+                None => (None, String::new()),
+            };
+            let msg = e.message().to_string();
+            let kind = if let Some(rest) = msg.strip_prefix("unknown field ") {
+                InvalidKind::UnknownKey(rest.to_string())
+            } else if let Some(rest) = msg.strip_prefix("missing field ") {
+                InvalidKind::MissingKey(rest.to_string())
+            } else if msg.starts_with("invalid type")
+                || msg.starts_with("invalid value")
+                || msg.starts_with("invalid length")
+                || msg.starts_with("unknown variant")
+                || msg.starts_with("data did not match")
+            {
+                InvalidKind::WrongType(msg)
+            } else {
+                InvalidKind::Syntax(msg)
+            };
+            ModelError::Invalid {
+                file: name.to_string(),
+                line,
+                path: if path.is_empty() {
+                    "(top level)".into()
+                } else {
+                    path
+                },
+                kind,
+            }
+        })?;
+        Validator::new(name).run(spec, text)
+    }
+
+    /// Node ids in DoF order (ascending id).
+    pub fn node_ids(&self) -> &[u32] {
+        &self.nodes
+    }
+
+    /// Number of nodes.
+    pub fn n_nodes(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of mechanical DoFs (`4 × nodes`).
+    pub fn n_dof(&self) -> usize {
+        DOF_PER_NODE * self.nodes.len()
+    }
+
+    /// Position of node `id` in the DoF ordering.
+    pub fn node_index(&self, id: u32) -> Option<usize> {
+        self.nodes.binary_search(&id).ok()
+    }
+
+    /// Global DoF of node `id` in direction `dir`.
+    pub fn dof(&self, id: u32, dir: Dir) -> Option<usize> {
+        self.node_index(id).map(|i| dof(i, dir))
+    }
+
+    /// Index (into `spec.rotors`) of the rotor owning node index `node_index`.
+    pub fn rotor_of(&self, node_index: usize) -> usize {
+        self.node_rotor[node_index]
+    }
+
+    /// Speed ratio of rotor `r` (index into `spec.rotors`).
+    pub fn speed_ratio(&self, r: usize) -> Ratio {
+        self.speed_ratios[r]
+    }
+
+    /// All speed ratios, in rotor order.
+    pub fn speed_ratios(&self) -> &[Ratio] {
+        &self.speed_ratios
+    }
+
+    /// Rayleigh coefficients `(a0 [1/s], a1 [s])`.
+    pub fn rayleigh(&self) -> (f64, f64) {
+        self.rayleigh
+    }
+
+    /// The opaque `[thermal]` table, if present.
+    pub fn thermal(&self) -> Option<&toml::Table> {
+        self.spec.thermal.as_ref()
+    }
+
+    /// Index of material `id` in `spec.materials`.
+    pub fn material_index(&self, id: &str) -> Option<usize> {
+        self.spec.materials.iter().position(|m| m.id == id)
+    }
+}
+
+/// Global DoF of node index `node_index` in direction `dir` (node-major `[x, y, θx, θy]`).
+#[inline]
+pub fn dof(node_index: usize, dir: Dir) -> usize {
+    DOF_PER_NODE * node_index + dir as usize
+}
+
+/// Parses a speed ratio: `"p/q"`, `"p"`, a decimal string, or a number; numbers must be a
+/// rational with denominator ≤ [`MAX_RATIO_DEN`] within 1e-9.
+pub fn parse_ratio(spec: &SpeedRatioSpec) -> Result<Ratio, InvalidKind> {
+    let bad = |s: String| InvalidKind::IrrationalRatio(s);
+    match spec {
+        SpeedRatioSpec::Number(x) => {
+            Ratio::approximate(*x, MAX_RATIO_DEN).ok_or(bad(x.to_string()))
+        }
+        SpeedRatioSpec::Text(s) => {
+            let t = s.trim();
+            if let Some((p, q)) = t.split_once('/') {
+                let p: u32 = p.trim().parse().map_err(|_| bad(s.clone()))?;
+                let q: u32 = q.trim().parse().map_err(|_| bad(s.clone()))?;
+                Ratio::new(p, q).map_err(|_| bad(s.clone()))
+            } else {
+                let x: f64 = t.parse().map_err(|_| bad(s.clone()))?;
+                Ratio::approximate(x, MAX_RATIO_DEN).ok_or(bad(s.clone()))
+            }
+        }
+    }
+}
+
+/// Line (1-based) and field path (`disks[1].mass_kg`) of a byte offset in TOML text,
+/// found from the table headers above it and the key on its line.
+fn path_at(text: &str, offset: usize) -> (usize, String) {
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    let mut current = String::new();
+    let mut pos = 0;
+    for (i, line) in text.split_inclusive('\n').enumerate() {
+        let end = pos + line.len();
+        let t = line.trim();
+        if let Some(inner) = t.strip_prefix("[[").and_then(|r| r.split("]]").next()) {
+            let name = inner.trim().to_string();
+            let c = counts.entry(name.clone()).or_insert(0);
+            current = format!("{name}[{c}]");
+            *c += 1;
+        } else if let Some(inner) = t.strip_prefix('[').and_then(|r| r.split(']').next()) {
+            current = inner.trim().to_string();
+        }
+        if offset < end || end == text.len() {
+            let is_header = t.starts_with('[');
+            let key = if is_header {
+                None
+            } else {
+                line.split_once('=').map(|(k, _)| k.trim().to_string())
+            };
+            let path = match key {
+                Some(k) if current.is_empty() => k,
+                Some(k) => format!("{current}.{k}"),
+                None => current,
+            };
+            return (i + 1, path);
+        }
+        pos = end;
+    }
+    (text.lines().count().max(1), current)
+}
+
+struct Validator<'a> {
+    file: &'a str,
+}
+
+type VResult<T> = Result<T, ModelError>;
+
+impl<'a> Validator<'a> {
+    fn new(file: &'a str) -> Self {
+        Self { file }
+    }
+
+    fn err(&self, path: impl Into<String>, kind: InvalidKind) -> ModelError {
+        ModelError::Invalid {
+            file: self.file.to_string(),
+            line: None,
+            path: path.into(),
+            kind,
+        }
+    }
+
+    fn positive(&self, path: impl Into<String>, v: f64) -> VResult<()> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(path, InvalidKind::NotPositive(v)))
+        }
+    }
+
+    fn non_negative(&self, path: impl Into<String>, v: f64) -> VResult<()> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(path, InvalidKind::Negative(v)))
+        }
+    }
+
+    fn unique<'s>(&self, section: &str, ids: impl Iterator<Item = &'s str>) -> VResult<()> {
+        let mut seen = BTreeSet::new();
+        for (i, id) in ids.enumerate() {
+            if !seen.insert(id) {
+                return Err(self.err(
+                    format!("{section}[{i}].id"),
+                    InvalidKind::DuplicateId(format!("\"{id}\"")),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn node(&self, nodes: &[u32], path: impl Into<String>, id: u32) -> VResult<usize> {
+        nodes
+            .binary_search(&id)
+            .map_err(|_| self.err(path, InvalidKind::UnknownNode(id)))
+    }
+
+    fn material(&self, spec: &ModelFile, path: impl Into<String>, id: &str) -> VResult<()> {
+        if spec.materials.iter().any(|m| m.id == id) {
+            Ok(())
+        } else {
+            Err(self.err(path, InvalidKind::UnknownMaterial(id.to_string())))
+        }
+    }
+
+    fn run(self, spec: ModelFile, _text: &str) -> VResult<Model> {
+        // Gravity.
+        self.non_negative("gravity.acceleration_m_s2", spec.gravity.acceleration_m_s2)?;
+
+        // Damping.
+        let rayleigh = match &spec.damping {
+            None => (0.0, 0.0),
+            Some(d) => {
+                let direct = d.a0_1_s.is_some() || d.a1_s.is_some();
+                let modal = d.damping_ratio.is_some() || d.frequencies_rad_s.is_some();
+                match (direct, modal) {
+                    (true, true) => {
+                        return Err(self.err(
+                            "damping",
+                            InvalidKind::Conflict(
+                                "give either a0_1_s/a1_s or damping_ratio/frequencies_rad_s, not both"
+                                    .into(),
+                            ),
+                        ));
+                    }
+                    (false, false) => {
+                        return Err(self.err(
+                            "damping",
+                            InvalidKind::Conflict(
+                                "give a0_1_s/a1_s or damping_ratio with frequencies_rad_s".into(),
+                            ),
+                        ));
+                    }
+                    (true, false) => {
+                        let a0 = d.a0_1_s.unwrap_or(0.0);
+                        let a1 = d.a1_s.unwrap_or(0.0);
+                        self.non_negative("damping.a0_1_s", a0)?;
+                        self.non_negative("damping.a1_s", a1)?;
+                        (a0, a1)
+                    }
+                    (false, true) => {
+                        let zeta = d.damping_ratio.ok_or_else(|| {
+                            self.err("damping", InvalidKind::MissingKey("`damping_ratio`".into()))
+                        })?;
+                        let [w1, w2] = d.frequencies_rad_s.ok_or_else(|| {
+                            self.err(
+                                "damping",
+                                InvalidKind::MissingKey("`frequencies_rad_s`".into()),
+                            )
+                        })?;
+                        self.non_negative("damping.damping_ratio", zeta)?;
+                        self.positive("damping.frequencies_rad_s[0]", w1)?;
+                        self.positive("damping.frequencies_rad_s[1]", w2)?;
+                        if (w1 - w2).abs() <= 1e-12 * w1.max(w2) {
+                            return Err(self.err(
+                                "damping.frequencies_rad_s",
+                                InvalidKind::OutOfRange {
+                                    value: w2,
+                                    reason: "the two frequencies must differ".into(),
+                                },
+                            ));
+                        }
+                        rayleigh_from_ratio(zeta, w1, w2)
+                    }
+                }
+            }
+        };
+
+        // Materials.
+        self.unique("materials", spec.materials.iter().map(|m| m.id.as_str()))?;
+        for (i, m) in spec.materials.iter().enumerate() {
+            let p = |f: &str| format!("materials[{i}].{f}");
+            self.positive(p("youngs_modulus_pa"), m.youngs_modulus_pa)?;
+            self.positive(p("density_kg_m3"), m.density_kg_m3)?;
+            if !(m.poisson_ratio.is_finite() && (0.0..0.5).contains(&m.poisson_ratio)) {
+                return Err(self.err(
+                    p("poisson_ratio"),
+                    InvalidKind::OutOfRange {
+                        value: m.poisson_ratio,
+                        reason: "must lie in [0, 0.5)".into(),
+                    },
+                ));
+            }
+            for (f, v) in [
+                ("specific_heat_j_kg_k", m.specific_heat_j_kg_k),
+                ("conductivity_w_m_k", m.conductivity_w_m_k),
+                ("expansion_1_k", m.expansion_1_k),
+            ] {
+                if let Some(v) = v {
+                    self.positive(p(f), v)?;
+                }
+            }
+        }
+
+        // Rotors and nodes.
+        if spec.rotors.is_empty() {
+            return Err(self.err("rotors", InvalidKind::MissingKey("`rotors`".into())));
+        }
+        self.unique("rotors", spec.rotors.iter().map(|r| r.id.as_str()))?;
+        let mut owner: BTreeMap<u32, usize> = BTreeMap::new();
+        let mut speed_ratios = Vec::with_capacity(spec.rotors.len());
+        for (r, rotor) in spec.rotors.iter().enumerate() {
+            speed_ratios.push(
+                parse_ratio(&rotor.speed_ratio)
+                    .map_err(|k| self.err(format!("rotors[{r}].speed_ratio"), k))?,
+            );
+            if rotor.nodes.is_empty() {
+                return Err(self.err(
+                    format!("rotors[{r}].nodes"),
+                    InvalidKind::Conflict("a rotor needs at least one node".into()),
+                ));
+            }
+            for (j, &n) in rotor.nodes.iter().enumerate() {
+                if owner.insert(n, r).is_some() {
+                    return Err(self.err(
+                        format!("rotors[{r}].nodes[{j}]"),
+                        InvalidKind::DuplicateId(format!("node {n}")),
+                    ));
+                }
+            }
+        }
+        let nodes: Vec<u32> = owner.keys().copied().collect();
+        let node_rotor: Vec<usize> = owner.values().copied().collect();
+        let mut has_mass = vec![false; nodes.len()];
+
+        // Shaft elements.
+        let mut pairs = BTreeSet::new();
+        for (i, s) in spec.shafts.iter().enumerate() {
+            let p = |f: &str| format!("shafts[{i}].{f}");
+            if s.nodes.len() != 2 {
+                return Err(self.err(
+                    p("nodes"),
+                    InvalidKind::WrongType(format!(
+                        "expected exactly 2 node ids, got {}",
+                        s.nodes.len()
+                    )),
+                ));
+            }
+            let a = self.node(&nodes, format!("shafts[{i}].nodes[0]"), s.nodes[0])?;
+            let b = self.node(&nodes, format!("shafts[{i}].nodes[1]"), s.nodes[1])?;
+            if a == b {
+                return Err(self.err(
+                    p("nodes"),
+                    InvalidKind::BadConnection(format!(
+                        "an element needs two different nodes, got {} twice",
+                        s.nodes[0]
+                    )),
+                ));
+            }
+            if node_rotor[a] != node_rotor[b] {
+                return Err(self.err(
+                    p("nodes"),
+                    InvalidKind::BadConnection(format!(
+                        "nodes {} and {} belong to different rotors; couple rotors with a bearing or support",
+                        s.nodes[0], s.nodes[1]
+                    )),
+                ));
+            }
+            if !pairs.insert((a.min(b), a.max(b))) {
+                return Err(self.err(
+                    p("nodes"),
+                    InvalidKind::DuplicateId(format!("element {}–{}", s.nodes[0], s.nodes[1])),
+                ));
+            }
+            self.positive(p("length_m"), s.length_m)?;
+            self.positive(p("outer_diameter_m"), s.outer_diameter_m)?;
+            self.non_negative(p("inner_diameter_m"), s.inner_diameter_m)?;
+            if s.inner_diameter_m >= s.outer_diameter_m {
+                return Err(self.err(
+                    p("inner_diameter_m"),
+                    InvalidKind::DiameterOrder {
+                        inner_m: s.inner_diameter_m,
+                        outer_m: s.outer_diameter_m,
+                    },
+                ));
+            }
+            self.material(&spec, p("material"), &s.material)?;
+            has_mass[a] = true;
+            has_mass[b] = true;
+        }
+
+        // Disks.
+        self.unique("disks", spec.disks.iter().map(|d| d.id.as_str()))?;
+        for (i, d) in spec.disks.iter().enumerate() {
+            let p = |f: &str| format!("disks[{i}].{f}");
+            let n = self.node(&nodes, p("node"), d.node)?;
+            self.positive(p("mass_kg"), d.mass_kg)?;
+            self.non_negative(p("polar_inertia_kg_m2"), d.polar_inertia_kg_m2)?;
+            self.non_negative(p("diametral_inertia_kg_m2"), d.diametral_inertia_kg_m2)?;
+            self.non_negative(p("eccentricity_m"), d.eccentricity_m)?;
+            if !d.phase_deg.is_finite() {
+                return Err(self.err(
+                    p("phase_deg"),
+                    InvalidKind::OutOfRange {
+                        value: d.phase_deg,
+                        reason: "must be finite".into(),
+                    },
+                ));
+            }
+            if d.diametral_inertia_kg_m2 > 0.0 {
+                has_mass[n] = true;
+            }
+        }
+        if let Some(n) = has_mass.iter().position(|&m| !m) {
+            return Err(self.err(
+                format!("rotors[{}].nodes", node_rotor[n]),
+                InvalidKind::BadConnection(format!(
+                    "node {} has no shaft element and no disk with diametral inertia, so it has no mass",
+                    nodes[n]
+                )),
+            ));
+        }
+
+        // Supports.
+        self.unique("supports", spec.supports.iter().map(|s| s.id.as_str()))?;
+        for (i, s) in spec.supports.iter().enumerate() {
+            let p = |f: &str| format!("supports[{i}].{f}");
+            self.node(&nodes, p("node"), s.node)?;
+            if let Some(t) = s.to_node {
+                self.node(&nodes, p("to_node"), t)?;
+                if t == s.node {
+                    return Err(self.err(
+                        p("to_node"),
+                        InvalidKind::BadConnection(format!("support connects node {t} to itself")),
+                    ));
+                }
+            }
+            self.non_negative(p("stiffness_n_m"), s.stiffness_n_m)?;
+            self.non_negative(p("damping_n_s_m"), s.damping_n_s_m)?;
+            self.non_negative(
+                p("rotational_stiffness_n_m_rad"),
+                s.rotational_stiffness_n_m_rad,
+            )?;
+        }
+
+        // Bearings.
+        self.unique("bearings", spec.bearings.iter().map(|b| b.id.as_str()))?;
+        for (i, b) in spec.bearings.iter().enumerate() {
+            let p = |f: &str| format!("bearings[{i}].{f}");
+            self.node(&nodes, p("inner_node"), b.inner_node)?;
+            if let Some(o) = b.outer_node {
+                self.node(&nodes, p("outer_node"), o)?;
+                if o == b.inner_node {
+                    return Err(self.err(
+                        p("outer_node"),
+                        InvalidKind::BadConnection(format!(
+                            "inner and outer ring on the same node {o}"
+                        )),
+                    ));
+                }
+            }
+            self.material(&spec, p("material"), &b.material)?;
+            if let Some(h) = &b.housing_material {
+                self.material(&spec, p("housing_material"), h)?;
+            }
+            for (f, v) in [
+                ("bore_diameter_m", b.bore_diameter_m),
+                ("inner_race_diameter_m", b.inner_race_diameter_m),
+                ("pitch_diameter_m", b.pitch_diameter_m),
+                ("outer_race_diameter_m", b.outer_race_diameter_m),
+                ("outside_diameter_m", b.outside_diameter_m),
+                ("element_diameter_m", b.element_diameter_m),
+                ("width_m", b.width_m),
+                ("hertz_stiffness", b.hertz_stiffness),
+                ("shaft_inner_radius_m", b.shaft_inner_radius_m),
+            ] {
+                self.positive(p(f), v)?;
+            }
+            // Radial order of the diameters: bore < inner race < pitch < outer race < outside.
+            let order = [
+                ("bore_diameter_m", b.bore_diameter_m),
+                ("inner_race_diameter_m", b.inner_race_diameter_m),
+                ("pitch_diameter_m", b.pitch_diameter_m),
+                ("outer_race_diameter_m", b.outer_race_diameter_m),
+                ("outside_diameter_m", b.outside_diameter_m),
+            ];
+            for w in order.windows(2) {
+                if w[0].1 >= w[1].1 {
+                    return Err(self.err(
+                        p(w[0].0),
+                        InvalidKind::DiameterOrder {
+                            inner_m: w[0].1,
+                            outer_m: w[1].1,
+                        },
+                    ));
+                }
+            }
+            if b.element_count < 3 {
+                return Err(self.err(
+                    p("element_count"),
+                    InvalidKind::OutOfRange {
+                        value: f64::from(b.element_count),
+                        reason: "a radial bearing needs at least 3 rolling elements".into(),
+                    },
+                ));
+            }
+            self.non_negative(p("initial_clearance_m"), b.initial_clearance_m)?;
+            match (b.kind, b.roller_length_m) {
+                (BearingKind::Roller, None) => {
+                    return Err(self.err(
+                        p("roller_length_m"),
+                        InvalidKind::MissingKey("`roller_length_m` (required for rollers)".into()),
+                    ));
+                }
+                (BearingKind::Ball, Some(_)) => {
+                    return Err(self.err(
+                        p("roller_length_m"),
+                        InvalidKind::Conflict("a ball bearing has no roller length".into()),
+                    ));
+                }
+                (_, Some(v)) => self.positive(p("roller_length_m"), v)?,
+                _ => {}
+            }
+            for (f, v) in [
+                ("housing_radius_m", b.housing_radius_m),
+                ("housing_length_m", b.housing_length_m),
+                ("housing_part_length_m", b.housing_part_length_m),
+                ("outer_shaft_radius_m", b.outer_shaft_radius_m),
+                ("linear_stiffness_n_m", b.linear_stiffness_n_m),
+                ("linearization_load_n", b.linearization_load_n),
+            ] {
+                if let Some(v) = v {
+                    self.positive(p(f), v)?;
+                }
+            }
+            if b.linear_stiffness_n_m.is_some() && b.linearization_load_n.is_some() {
+                return Err(self.err(
+                    p("linearization_load_n"),
+                    InvalidKind::Conflict(
+                        "give linear_stiffness_n_m or linearization_load_n, not both".into(),
+                    ),
+                ));
+            }
+            if !spec.gravity.enabled
+                && b.linear_stiffness_n_m.is_none()
+                && b.linearization_load_n.is_none()
+            {
+                return Err(self.err(
+                    format!("bearings[{i}]"),
+                    InvalidKind::Conflict(
+                        "with gravity off the linearised stiffness cannot come from the static gravity load: give linear_stiffness_n_m or linearization_load_n".into(),
+                    ),
+                ));
+            }
+        }
+
+        Ok(Model {
+            source: self.file.to_string(),
+            spec,
+            nodes,
+            node_rotor,
+            speed_ratios,
+            rayleigh,
+        })
+    }
+}
+
+/// Rayleigh coefficients giving modal damping ratio `zeta` at `w1` and `w2` (rad/s):
+/// from `ζ(ω) = a0/(2ω) + a1 ω/2` at both frequencies,
+/// `a0 = 2ζ ω1 ω2/(ω1+ω2)`, `a1 = 2ζ/(ω1+ω2)`.
+pub fn rayleigh_from_ratio(zeta: f64, w1: f64, w2: f64) -> (f64, f64) {
+    (2.0 * zeta * w1 * w2 / (w1 + w2), 2.0 * zeta / (w1 + w2))
+}

@@ -1,0 +1,767 @@
+//! The one place where domain types ([`super::types`]) and protobuf messages
+//! ([`super::pb`]) are converted into each other.
+//!
+//! Writing: a [`PointRecord`] becomes one message per topic ([`PointMessages`]), plus a
+//! `foxglove.SceneUpdate` of its orbits. Reading: the messages of one point index are
+//! gathered into a [`PointParts`] and assembled back. Conversions from the wire check
+//! sizes against the [`RunInfo`] and return the reason as text; the reader adds the file,
+//! topic and point index.
+
+use num_complex::Complex64;
+use sha2::{Digest, Sha256};
+
+use super::pb::foxglove as fg;
+use super::pb::tmrotor::v1 as pb;
+use super::types::{
+    BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, NodeOrbit,
+    PointRecord, RunInfo, TemperatureStats, ThermalForces, ThermalNode,
+};
+use crate::hb::Ratio;
+use crate::stability::BifurcationKind;
+
+/// Lower-case hex SHA-256 of a text.
+pub fn sha256_hex(text: &str) -> String {
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn ratio_to_pb(r: Ratio) -> pb::Ratio {
+    pb::Ratio {
+        num: r.num,
+        den: r.den,
+    }
+}
+
+fn ratio_from_pb(r: &pb::Ratio, what: &str) -> Result<Ratio, String> {
+    Ratio::new(r.num, r.den).map_err(|e| format!("{what}: {e}"))
+}
+
+fn complex_to_pb(c: &Complex64) -> pb::Complex {
+    pb::Complex { re: c.re, im: c.im }
+}
+
+fn complex_from_pb(c: &pb::Complex) -> Complex64 {
+    Complex64::new(c.re, c.im)
+}
+
+/// Wire value of an optional bifurcation kind.
+pub fn bifurcation_to_pb(kind: Option<BifurcationKind>) -> pb::BifurcationType {
+    match kind {
+        None => pb::BifurcationType::None,
+        Some(BifurcationKind::SaddleNode) => pb::BifurcationType::SaddleNode,
+        Some(BifurcationKind::PeriodDoubling) => pb::BifurcationType::PeriodDoubling,
+        Some(BifurcationKind::NeimarkSacker) => pb::BifurcationType::NeimarkSacker,
+    }
+}
+
+fn bifurcation_from_pb(value: i32) -> Result<Option<BifurcationKind>, String> {
+    match pb::BifurcationType::try_from(value) {
+        Ok(pb::BifurcationType::None) => Ok(None),
+        Ok(pb::BifurcationType::SaddleNode) => Ok(Some(BifurcationKind::SaddleNode)),
+        Ok(pb::BifurcationType::PeriodDoubling) => Ok(Some(BifurcationKind::PeriodDoubling)),
+        Ok(pb::BifurcationType::NeimarkSacker) => Ok(Some(BifurcationKind::NeimarkSacker)),
+        Err(_) => Err(format!("unknown bifurcation type {value}")),
+    }
+}
+
+fn stability_to_pb(stable: Option<bool>) -> pb::Stability {
+    match stable {
+        None => pb::Stability::Unknown,
+        Some(true) => pb::Stability::Stable,
+        Some(false) => pb::Stability::Unstable,
+    }
+}
+
+fn stability_from_pb(value: i32) -> Result<Option<bool>, String> {
+    match pb::Stability::try_from(value) {
+        Ok(pb::Stability::Unknown) => Ok(None),
+        Ok(pb::Stability::Stable) => Ok(Some(true)),
+        Ok(pb::Stability::Unstable) => Ok(Some(false)),
+        Err(_) => Err(format!("unknown stability value {value}")),
+    }
+}
+
+/// DoF counts and indices on the wire are `uint32`; real models are far below its range,
+/// so saturate rather than wrap.
+fn index_u32(i: usize) -> u32 {
+    u32::try_from(i).unwrap_or(u32::MAX)
+}
+
+/// The `/run_info` message (the model text travels as an attachment, not here).
+pub fn run_info_to_pb(run: &RunInfo) -> pb::RunInfo {
+    pb::RunInfo {
+        tool_name: run.tool_name.clone(),
+        tool_version: run.tool_version.clone(),
+        model_name: run.model_name.clone(),
+        model_sha256: sha256_hex(&run.model_text),
+        settings: run
+            .settings
+            .iter()
+            .map(|(k, v)| pb::Setting {
+                key: k.clone(),
+                value: v.clone(),
+            })
+            .collect(),
+        settings_toml: run.settings_toml.clone(),
+        harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
+        lambda: Some(ratio_to_pb(run.lambda)),
+        n_mech: index_u32(run.n_mech),
+        n_therm: index_u32(run.n_therm),
+        nodes: run
+            .nodes
+            .iter()
+            .map(|n| pb::DynamicNode {
+                id: n.id,
+                name: n.name.clone(),
+                dof_x: index_u32(n.dof_x),
+                dof_y: index_u32(n.dof_y),
+                axial_position_m: n.axial_position_m,
+                rotor: n.rotor.clone(),
+            })
+            .collect(),
+        thermal_nodes: run
+            .thermal_nodes
+            .iter()
+            .map(|n| pb::ThermalNode {
+                id: n.id,
+                name: n.name.clone(),
+                dof: index_u32(n.dof),
+            })
+            .collect(),
+        bearings: run
+            .bearings
+            .iter()
+            .map(|b| pb::Bearing {
+                name: b.name.clone(),
+                initial_clearance_m: b.initial_clearance_m,
+            })
+            .collect(),
+        parameter: "omega".into(),
+    }
+}
+
+/// Back from `/run_info` plus the model text found in the attachment.
+pub fn run_info_from_pb(msg: &pb::RunInfo, model_text: String) -> Result<RunInfo, String> {
+    let lambda = msg
+        .lambda
+        .as_ref()
+        .ok_or_else(|| "field lambda is missing".to_string())
+        .and_then(|r| ratio_from_pb(r, "lambda"))?;
+    let harmonics = msg
+        .harmonics
+        .iter()
+        .enumerate()
+        .map(|(i, r)| ratio_from_pb(r, &format!("harmonics[{i}]")))
+        .collect::<Result<Vec<_>, _>>()?;
+    let run = RunInfo {
+        tool_name: msg.tool_name.clone(),
+        tool_version: msg.tool_version.clone(),
+        model_name: msg.model_name.clone(),
+        model_text,
+        settings: msg
+            .settings
+            .iter()
+            .map(|s| (s.key.clone(), s.value.clone()))
+            .collect(),
+        settings_toml: msg.settings_toml.clone(),
+        harmonics,
+        lambda,
+        n_mech: msg.n_mech as usize,
+        n_therm: msg.n_therm as usize,
+        nodes: msg
+            .nodes
+            .iter()
+            .map(|n| DynamicNode {
+                id: n.id,
+                name: n.name.clone(),
+                dof_x: n.dof_x as usize,
+                dof_y: n.dof_y as usize,
+                axial_position_m: n.axial_position_m,
+                rotor: n.rotor.clone(),
+            })
+            .collect(),
+        thermal_nodes: msg
+            .thermal_nodes
+            .iter()
+            .map(|n| ThermalNode {
+                id: n.id,
+                name: n.name.clone(),
+                dof: n.dof as usize,
+            })
+            .collect(),
+        bearings: msg
+            .bearings
+            .iter()
+            .map(|b| BearingInfo {
+                name: b.name.clone(),
+                initial_clearance_m: b.initial_clearance_m,
+            })
+            .collect(),
+    };
+    validate_run(&run)?;
+    Ok(run)
+}
+
+/// Checks the internal consistency of a run description.
+pub fn validate_run(run: &RunInfo) -> Result<(), String> {
+    if run.harmonics.is_empty() {
+        return Err("the basis has no harmonics".into());
+    }
+    run.basis().map_err(|e| format!("harmonics: {e}"))?;
+    for (i, n) in run.nodes.iter().enumerate() {
+        if n.dof_x >= run.n_mech || n.dof_y >= run.n_mech {
+            return Err(format!(
+                "nodes[{i}] (id {}): DoF indices {}, {} outside 0..{}",
+                n.id, n.dof_x, n.dof_y, run.n_mech
+            ));
+        }
+    }
+    for (i, n) in run.thermal_nodes.iter().enumerate() {
+        if n.dof >= run.n_therm {
+            return Err(format!(
+                "thermal_nodes[{i}] (id {}): DoF index {} outside 0..{}",
+                n.id, n.dof, run.n_therm
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Checks that the sizes of a point match its run.
+pub fn validate_point(run: &RunInfo, p: &PointRecord) -> Result<(), String> {
+    let nc = run.n_coeffs();
+    let check = |what: &str, got: usize, want: usize, allow_empty: bool| {
+        if got == want || (allow_empty && got == 0) {
+            Ok(())
+        } else {
+            Err(format!("{what}: {got} values, expected {want}"))
+        }
+    };
+    check(
+        "amplitude_rms_m",
+        p.amplitude_rms_m.len(),
+        run.nodes.len(),
+        false,
+    )?;
+    check("coeffs_mech", p.coeffs_mech.len(), run.n_mech * nc, false)?;
+    check(
+        "coeffs_therm",
+        p.coeffs_therm.len(),
+        run.n_therm * nc,
+        false,
+    )?;
+    check("orbits", p.orbits.len(), run.nodes.len(), false)?;
+    for (i, o) in p.orbits.iter().enumerate() {
+        check(&format!("orbits[{i}].y_m"), o.y_m.len(), o.x_m.len(), false)?;
+    }
+    check(
+        "temperatures",
+        p.temperatures.len(),
+        run.thermal_nodes.len(),
+        true,
+    )?;
+    check("clearances", p.clearances.len(), run.bearings.len(), true)?;
+    check(
+        "bearing_loads",
+        p.bearing_loads.len(),
+        run.bearings.len(),
+        true,
+    )?;
+    check(
+        "thermal_forces",
+        p.thermal_forces.len(),
+        run.bearings.len(),
+        true,
+    )?;
+    if !(p.omega_rad_s.is_finite() && p.period_s.is_finite() && p.period_s > 0.0) {
+        return Err(format!(
+            "ω = {} rad/s, period = {} s: need finite values and a positive period",
+            p.omega_rad_s, p.period_s
+        ));
+    }
+    Ok(())
+}
+
+/// The messages of one point, one per topic; optional parts are `None` when the point has
+/// no data for them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointMessages {
+    pub summary: pb::PointSummary,
+    pub harmonics: pb::Harmonics,
+    pub orbits: pb::Orbits,
+    pub temperatures: Option<pb::Temperatures>,
+    pub clearances: Option<pb::Clearances>,
+    pub bearing_loads: Option<pb::BearingLoads>,
+    pub thermal_forces: Option<pb::ThermalForces>,
+    pub floquet: Option<pb::Floquet>,
+}
+
+/// Splits a point into its topic messages.
+pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
+    let (index, omega_rad_s) = (p.index, p.omega_rad_s);
+    let stability = stability_to_pb(p.stable);
+    let summary = pb::PointSummary {
+        index,
+        omega_rad_s,
+        arc_length: p.arc_length,
+        amplitude_rms_m: p.amplitude_rms_m.clone(),
+        stability: stability as i32,
+        bifurcation: bifurcation_to_pb(p.bifurcation) as i32,
+        residual_mech: p.residual_mech,
+        residual_therm: p.residual_therm,
+        newton_iterations: p.newton_iterations,
+        spectral_radius: p.spectral_radius(),
+    };
+    let harmonics = pb::Harmonics {
+        index,
+        omega_rad_s,
+        lambda: Some(ratio_to_pb(run.lambda)),
+        harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
+        n_mech: index_u32(run.n_mech),
+        n_therm: index_u32(run.n_therm),
+        mech: p.coeffs_mech.clone(),
+        therm: p.coeffs_therm.clone(),
+    };
+    let orbits = pb::Orbits {
+        index,
+        omega_rad_s,
+        period_s: p.period_s,
+        nodes: run
+            .nodes
+            .iter()
+            .zip(&p.orbits)
+            .map(|(n, o)| pb::NodeOrbit {
+                node_id: n.id,
+                x_m: o.x_m.clone(),
+                y_m: o.y_m.clone(),
+            })
+            .collect(),
+    };
+    let temperatures = (!p.temperatures.is_empty()).then(|| pb::Temperatures {
+        index,
+        omega_rad_s,
+        nodes: run
+            .thermal_nodes
+            .iter()
+            .zip(&p.temperatures)
+            .map(|(n, t)| pb::NodeTemperature {
+                node_id: n.id,
+                mean_c: t.mean_c,
+                min_c: t.min_c,
+                max_c: t.max_c,
+            })
+            .collect(),
+    });
+    let clearances = (!p.clearances.is_empty()).then(|| pb::Clearances {
+        index,
+        omega_rad_s,
+        bearings: run
+            .bearings
+            .iter()
+            .zip(&p.clearances)
+            .map(|(b, c)| pb::BearingClearance {
+                bearing: b.name.clone(),
+                delta_v_m: c.delta_v_m,
+                ub_m: c.ub_m,
+                ui_m: c.ui_m,
+                uo_m: c.uo_m,
+                effective_m: c.effective_m,
+            })
+            .collect(),
+    });
+    let bearing_loads = (!p.bearing_loads.is_empty()).then(|| pb::BearingLoads {
+        index,
+        omega_rad_s,
+        period_s: p.period_s,
+        bearings: run
+            .bearings
+            .iter()
+            .zip(&p.bearing_loads)
+            .map(|(b, l)| pb::BearingLoad {
+                bearing: b.name.clone(),
+                mean_n: l.mean_n,
+                radial_n: l.radial_n.clone(),
+            })
+            .collect(),
+    });
+    let thermal_forces = (!p.thermal_forces.is_empty()).then(|| pb::ThermalForces {
+        index,
+        omega_rad_s,
+        bearings: run
+            .bearings
+            .iter()
+            .zip(&p.thermal_forces)
+            .map(|(b, f)| pb::BearingThermalForces {
+                bearing: b.name.clone(),
+                bearing_w: f.bearing_w,
+                lubricant_w: f.lubricant_w,
+                generation_w: f.generation_w,
+                dissipation_w: f.dissipation_w,
+            })
+            .collect(),
+    });
+    let floquet = (!p.multipliers.is_empty()).then(|| pb::Floquet {
+        index,
+        omega_rad_s,
+        stability: stability as i32,
+        spectral_radius: p.spectral_radius(),
+        multipliers: p.multipliers.iter().map(complex_to_pb).collect(),
+    });
+    PointMessages {
+        summary,
+        harmonics,
+        orbits,
+        temperatures,
+        clearances,
+        bearing_loads,
+        thermal_forces,
+        floquet,
+    }
+}
+
+/// The messages of one point index as found in a recording.
+#[derive(Clone, Debug, Default)]
+pub struct PointParts {
+    pub summary: Option<pb::PointSummary>,
+    pub harmonics: Option<pb::Harmonics>,
+    pub orbits: Option<pb::Orbits>,
+    pub temperatures: Option<pb::Temperatures>,
+    pub clearances: Option<pb::Clearances>,
+    pub bearing_loads: Option<pb::BearingLoads>,
+    pub thermal_forces: Option<pb::ThermalForces>,
+    pub floquet: Option<pb::Floquet>,
+}
+
+/// Assembles a point from its messages. `summary`, `harmonics` and `orbits` are required.
+pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, String> {
+    let s = parts
+        .summary
+        .as_ref()
+        .ok_or("no /summary message (the point was not written completely)")?;
+    let h = parts.harmonics.as_ref().ok_or("no /harmonics message")?;
+    let o = parts.orbits.as_ref().ok_or("no /orbits message")?;
+    let point = PointRecord {
+        index: s.index,
+        omega_rad_s: s.omega_rad_s,
+        arc_length: s.arc_length,
+        amplitude_rms_m: s.amplitude_rms_m.clone(),
+        stable: stability_from_pb(s.stability)?,
+        bifurcation: bifurcation_from_pb(s.bifurcation)?,
+        residual_mech: s.residual_mech,
+        residual_therm: s.residual_therm,
+        newton_iterations: s.newton_iterations,
+        coeffs_mech: h.mech.clone(),
+        coeffs_therm: h.therm.clone(),
+        period_s: o.period_s,
+        orbits: o
+            .nodes
+            .iter()
+            .map(|n| NodeOrbit {
+                x_m: n.x_m.clone(),
+                y_m: n.y_m.clone(),
+            })
+            .collect(),
+        temperatures: parts
+            .temperatures
+            .as_ref()
+            .map(|t| {
+                t.nodes
+                    .iter()
+                    .map(|n| TemperatureStats {
+                        mean_c: n.mean_c,
+                        min_c: n.min_c,
+                        max_c: n.max_c,
+                    })
+                    .collect()
+            })
+            .unwrap_or_default(),
+        clearances: parts
+            .clearances
+            .as_ref()
+            .map(|c| {
+                c.bearings
+                    .iter()
+                    .map(|b| ClearanceVariation {
+                        delta_v_m: b.delta_v_m,
+                        ub_m: b.ub_m,
+                        ui_m: b.ui_m,
+                        uo_m: b.uo_m,
+                        effective_m: b.effective_m,
+                    })
+                    .collect()
+            })
+            .unwrap_or_default(),
+        bearing_loads: parts
+            .bearing_loads
+            .as_ref()
+            .map(|l| {
+                l.bearings
+                    .iter()
+                    .map(|b| BearingLoad {
+                        mean_n: b.mean_n,
+                        radial_n: b.radial_n.clone(),
+                    })
+                    .collect()
+            })
+            .unwrap_or_default(),
+        thermal_forces: parts
+            .thermal_forces
+            .as_ref()
+            .map(|f| {
+                f.bearings
+                    .iter()
+                    .map(|b| ThermalForces {
+                        bearing_w: b.bearing_w,
+                        lubricant_w: b.lubricant_w,
+                        generation_w: b.generation_w,
+                        dissipation_w: b.dissipation_w,
+                    })
+                    .collect()
+            })
+            .unwrap_or_default(),
+        multipliers: parts
+            .floquet
+            .as_ref()
+            .map(|f| f.multipliers.iter().map(complex_from_pb).collect())
+            .unwrap_or_default(),
+    };
+    validate_point(run, &point)?;
+    Ok(point)
+}
+
+/// The `/bifurcations` message.
+pub fn bifurcation_record_to_pb(b: &BifurcationRecord) -> pb::Bifurcation {
+    pb::Bifurcation {
+        number: b.number,
+        r#type: bifurcation_to_pb(Some(b.kind)) as i32,
+        omega_rad_s: b.omega_rad_s,
+        arc_length: b.arc_length,
+        after_point: b.after_point,
+        amplitude_rms_m: b.amplitude_rms_m.clone(),
+        multipliers: b.multipliers.iter().map(complex_to_pb).collect(),
+    }
+}
+
+/// Back from `/bifurcations`.
+pub fn bifurcation_record_from_pb(m: &pb::Bifurcation) -> Result<BifurcationRecord, String> {
+    let kind =
+        bifurcation_from_pb(m.r#type)?.ok_or("bifurcation message with type NONE".to_string())?;
+    Ok(BifurcationRecord {
+        number: m.number,
+        kind,
+        omega_rad_s: m.omega_rad_s,
+        arc_length: m.arc_length,
+        after_point: m.after_point,
+        amplitude_rms_m: m.amplitude_rms_m.clone(),
+        multipliers: m.multipliers.iter().map(complex_from_pb).collect(),
+    })
+}
+
+/// A protobuf timestamp from nanoseconds.
+pub fn timestamp(ns: u64) -> prost_types::Timestamp {
+    prost_types::Timestamp {
+        seconds: i64::try_from(ns / 1_000_000_000).unwrap_or(i64::MAX),
+        nanos: i32::try_from(ns % 1_000_000_000).unwrap_or(0),
+    }
+}
+
+/// A `foxglove.Log` message.
+pub fn log_to_pb(time_ns: u64, level: fg::log::Level, text: &str) -> fg::Log {
+    fg::Log {
+        timestamp: Some(timestamp(time_ns)),
+        level: level as i32,
+        message: text.to_string(),
+        name: "tmrotor".into(),
+        file: String::new(),
+        line: 0,
+    }
+}
+
+/// Scale and frame of the whirl-orbit scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneOptions {
+    /// Factor applied to displacements so that µm-size orbits are visible next to a
+    /// metre-long shaft. Default 1000 (1 mm of whirl is drawn as 1 m).
+    pub displacement_scale: f64,
+    /// Frame id of the entities. Default `"rotor"`.
+    pub frame_id: String,
+}
+
+impl Default for SceneOptions {
+    fn default() -> Self {
+        Self {
+            displacement_scale: 1000.0,
+            frame_id: "rotor".into(),
+        }
+    }
+}
+
+fn colour_of(rotor: &str) -> fg::Color {
+    // LP blue, HP orange, anything else grey (matplotlib's default palette).
+    let (r, g, b) = match rotor {
+        "LP" | "lp" => (0.12, 0.47, 0.71),
+        "HP" | "hp" => (1.0, 0.5, 0.05),
+        _ => (0.5, 0.5, 0.5),
+    };
+    fg::Color { r, g, b, a: 1.0 }
+}
+
+fn point3(x: f64, y: f64, z: f64) -> fg::Point3 {
+    fg::Point3 { x, y, z }
+}
+
+/// Whirl orbits of a point as a `foxglove.SceneUpdate` (paper Fig. 12): one entity per
+/// dynamic node with its orbit as a closed line strip in the plane normal to the shaft,
+/// placed at the node's axial position; scene x = axial position (m), scene y = horizontal
+/// displacement y, scene z = vertical displacement x (both times
+/// [`SceneOptions::displacement_scale`]), so the vertical stays up in the viewer. One more
+/// entity draws the undeformed shaft axis of each rotor.
+pub fn scene_to_pb(
+    run: &RunInfo,
+    p: &PointRecord,
+    time_ns: u64,
+    options: &SceneOptions,
+) -> fg::SceneUpdate {
+    let s = options.displacement_scale;
+    let ts = Some(timestamp(time_ns));
+    let mut entities = Vec::with_capacity(run.nodes.len() + 1);
+    for (n, o) in run.nodes.iter().zip(&p.orbits) {
+        let mut points: Vec<fg::Point3> = o
+            .x_m
+            .iter()
+            .zip(&o.y_m)
+            .map(|(x, y)| point3(n.axial_position_m, s * y, s * x))
+            .collect();
+        if let Some(first) = points.first().cloned() {
+            points.push(first);
+        }
+        entities.push(fg::SceneEntity {
+            timestamp: ts,
+            frame_id: options.frame_id.clone(),
+            id: format!("orbit/{}", n.id),
+            metadata: vec![
+                fg::KeyValuePair {
+                    key: "node".into(),
+                    value: n.name.clone(),
+                },
+                fg::KeyValuePair {
+                    key: "omega_rad_s".into(),
+                    value: format!("{}", p.omega_rad_s),
+                },
+                fg::KeyValuePair {
+                    key: "displacement_scale".into(),
+                    value: format!("{s}"),
+                },
+            ],
+            lines: vec![fg::LinePrimitive {
+                r#type: fg::line_primitive::Type::LineStrip as i32,
+                pose: None,
+                thickness: 2.0,
+                scale_invariant: true,
+                points,
+                color: Some(colour_of(&n.rotor)),
+                colors: Vec::new(),
+                indices: Vec::new(),
+            }],
+            ..Default::default()
+        });
+    }
+    let mut axis_points = Vec::new();
+    let mut axis_colours = Vec::new();
+    let mut rotors: Vec<&str> = run.nodes.iter().map(|n| n.rotor.as_str()).collect();
+    rotors.dedup();
+    for rotor in rotors {
+        let zs: Vec<f64> = run
+            .nodes
+            .iter()
+            .filter(|n| n.rotor == rotor)
+            .map(|n| n.axial_position_m)
+            .collect();
+        let lo = zs.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = zs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if lo.is_finite() && hi > lo {
+            axis_points.push(point3(lo, 0.0, 0.0));
+            axis_points.push(point3(hi, 0.0, 0.0));
+            axis_colours.push(colour_of(rotor));
+            axis_colours.push(colour_of(rotor));
+        }
+    }
+    if !axis_points.is_empty() {
+        entities.push(fg::SceneEntity {
+            timestamp: ts,
+            frame_id: options.frame_id.clone(),
+            id: "shaft_axis".into(),
+            lines: vec![fg::LinePrimitive {
+                r#type: fg::line_primitive::Type::LineList as i32,
+                thickness: 1.0,
+                scale_invariant: true,
+                points: axis_points,
+                colors: axis_colours,
+                ..Default::default()
+            }],
+            ..Default::default()
+        });
+    }
+    fg::SceneUpdate {
+        deletions: Vec::new(),
+        entities,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::synthetic::{self, SyntheticOptions};
+
+    #[test]
+    fn enums_map_both_ways() {
+        for kind in [
+            None,
+            Some(BifurcationKind::SaddleNode),
+            Some(BifurcationKind::PeriodDoubling),
+            Some(BifurcationKind::NeimarkSacker),
+        ] {
+            assert_eq!(
+                bifurcation_from_pb(bifurcation_to_pb(kind) as i32),
+                Ok(kind)
+            );
+        }
+        for s in [None, Some(true), Some(false)] {
+            assert_eq!(stability_from_pb(stability_to_pb(s) as i32), Ok(s));
+        }
+        assert!(bifurcation_from_pb(17).is_err());
+    }
+
+    #[test]
+    fn run_info_checks_dof_indices() {
+        let mut run = synthetic::run_info(true);
+        let msg = run_info_to_pb(&run);
+        assert_eq!(
+            run_info_from_pb(&msg, run.model_text.clone()),
+            Ok(run.clone())
+        );
+        run.nodes[0].dof_y = 2;
+        let err = run_info_from_pb(&run_info_to_pb(&run), String::new()).expect_err("bad dof");
+        assert!(err.contains("nodes[0]"), "{err}");
+    }
+
+    #[test]
+    fn scene_places_each_orbit_at_its_axial_position() {
+        let data = synthetic::generate(&SyntheticOptions::default());
+        let p = &data.points[3];
+        let scene = scene_to_pb(&data.run, p, 7, &SceneOptions::default());
+        let line = &scene.entities[0].lines[0];
+        // closed strip: one more point than samples, first == last
+        assert_eq!(line.points.len(), p.orbits[0].x_m.len() + 1);
+        assert_eq!(line.points.first(), line.points.last());
+        assert!(
+            line.points
+                .iter()
+                .all(|q| q.x == data.run.nodes[0].axial_position_m)
+        );
+        assert_eq!(line.points[0].z, 1000.0 * p.orbits[0].x_m[0]);
+        assert_eq!(line.points[0].y, 1000.0 * p.orbits[0].y_m[0]);
+    }
+}

@@ -1,0 +1,362 @@
+//! Quantities re-derived from stored harmonic coefficients, and the seams through which
+//! replay re-derives model-dependent quantities.
+//!
+//! Time histories come from [`Basis::eval`] (the one evaluator of the crate) at any
+//! sampling `t_k = k·T/S`, `k = 0..S`, over the period `T = 2π q_base/ω` of the basis.
+//! The RMS amplitude of paper Eq. 35,
+//! `sqrt( (1/T) ∫ (x − x̄)² + (y − ȳ)² dt )`, is evaluated exactly from the coefficients by
+//! Parseval's identity: every harmonic is an integer multiple of `ω/q_base`, so over `T`
+//! the harmonics are orthogonal and `(1/T)∫(a cos + b sin)² dt = (a² + b²)/2`.
+//!
+//! Bearing loads, clearances and thermal forces need the model; Floquet multipliers need
+//! the model and a stability method. Replay reaches them through [`ModelRederive`] and
+//! [`StabilityRederive`], built from the recording's embedded model file by
+//! [`rederivers_for`].
+
+use num_complex::Complex64;
+use thiserror::Error;
+
+use super::types::{
+    BearingLoad, ClearanceVariation, NodeOrbit, PointRecord, RunInfo, TemperatureStats,
+    ThermalForces,
+};
+use crate::hb::{Basis, BasisError};
+
+/// Orbit samples per period recommended for recordings: 128.
+///
+/// Why: the paper's basis at truncation order 3 with λ = 6/5 reaches 36·(ω/10); a discrete
+/// mean over `S` equally spaced samples integrates a product of two such harmonics exactly
+/// when `S > 2·36 = 72`, so Eq. 35 evaluated from the stored orbit agrees with the
+/// coefficients; 128 leaves margin and draws smooth orbits.
+pub const DEFAULT_ORBIT_SAMPLES: usize = 128;
+
+/// Errors re-deriving quantities.
+#[derive(Debug, Error)]
+pub enum DeriveError {
+    #[error("invalid basis in the recording: {0}")]
+    Basis(#[from] BasisError),
+    #[error("need at least 1 sample per period, got {0}")]
+    Samples(usize),
+    #[error("{what}: {got} coefficients, expected {want}")]
+    Size {
+        what: &'static str,
+        got: usize,
+        want: usize,
+    },
+    #[error("{0}")]
+    Model(String),
+}
+
+/// Sample times `t_k = k·T/S`, `k = 0..S`.
+pub fn sample_times(period_s: f64, samples: usize) -> Vec<f64> {
+    (0..samples)
+        .map(|k| period_s * k as f64 / samples as f64)
+        .collect()
+}
+
+fn block<'a>(
+    coeffs: &'a [f64],
+    dof: usize,
+    nc: usize,
+    what: &'static str,
+) -> Result<&'a [f64], DeriveError> {
+    coeffs
+        .get(dof * nc..(dof + 1) * nc)
+        .ok_or(DeriveError::Size {
+            what,
+            got: coeffs.len(),
+            want: (dof + 1) * nc,
+        })
+}
+
+/// Time history of one DoF from its coefficients over one period of the basis.
+pub fn dof_history(
+    basis: &Basis,
+    coeffs: &[f64],
+    omega_rad_s: f64,
+    samples: usize,
+) -> Result<Vec<f64>, DeriveError> {
+    if samples == 0 {
+        return Err(DeriveError::Samples(samples));
+    }
+    if coeffs.len() != basis.n_coeffs() {
+        return Err(DeriveError::Size {
+            what: "one DoF",
+            got: coeffs.len(),
+            want: basis.n_coeffs(),
+        });
+    }
+    Ok(sample_times(basis.period(omega_rad_s), samples)
+        .into_iter()
+        .map(|t| basis.eval(coeffs, omega_rad_s, t).0)
+        .collect())
+}
+
+/// Orbits of every dynamic node of the run from the mechanical coefficients.
+pub fn orbits(
+    run: &RunInfo,
+    coeffs_mech: &[f64],
+    omega_rad_s: f64,
+    samples: usize,
+) -> Result<Vec<NodeOrbit>, DeriveError> {
+    let basis = run.basis()?;
+    let nc = basis.n_coeffs();
+    run.nodes
+        .iter()
+        .map(|n| {
+            Ok(NodeOrbit {
+                x_m: dof_history(
+                    &basis,
+                    block(coeffs_mech, n.dof_x, nc, "coeffs_mech")?,
+                    omega_rad_s,
+                    samples,
+                )?,
+                y_m: dof_history(
+                    &basis,
+                    block(coeffs_mech, n.dof_y, nc, "coeffs_mech")?,
+                    omega_rad_s,
+                    samples,
+                )?,
+            })
+        })
+        .collect()
+}
+
+/// Mean square of the oscillating part of one DoF (Parseval, see the module docs).
+fn oscillating_mean_square(coeffs: &[f64], n_harmonics: usize) -> f64 {
+    (0..n_harmonics)
+        .map(|h| {
+            let (a, b) = (coeffs[1 + h], coeffs[1 + n_harmonics + h]);
+            0.5 * (a * a + b * b)
+        })
+        .sum()
+}
+
+/// RMS amplitude of paper Eq. 35 for every dynamic node, m.
+pub fn amplitude_rms(run: &RunInfo, coeffs_mech: &[f64]) -> Result<Vec<f64>, DeriveError> {
+    let nc = run.n_coeffs();
+    let nh = run.harmonics.len();
+    run.nodes
+        .iter()
+        .map(|n| {
+            let x = block(coeffs_mech, n.dof_x, nc, "coeffs_mech")?;
+            let y = block(coeffs_mech, n.dof_y, nc, "coeffs_mech")?;
+            Ok((oscillating_mean_square(x, nh) + oscillating_mean_square(y, nh)).sqrt())
+        })
+        .collect()
+}
+
+/// Temperature histories of every thermal node, °C, at `samples` points per period.
+pub fn temperature_histories(
+    run: &RunInfo,
+    coeffs_therm: &[f64],
+    omega_rad_s: f64,
+    samples: usize,
+) -> Result<Vec<Vec<f64>>, DeriveError> {
+    let basis = run.basis()?;
+    let nc = basis.n_coeffs();
+    run.thermal_nodes
+        .iter()
+        .map(|n| {
+            dof_history(
+                &basis,
+                block(coeffs_therm, n.dof, nc, "coeffs_therm")?,
+                omega_rad_s,
+                samples,
+            )
+        })
+        .collect()
+}
+
+/// Mean (the constant coefficient, exact) and sampled min/max temperature per thermal node.
+pub fn temperature_stats(
+    run: &RunInfo,
+    coeffs_therm: &[f64],
+    omega_rad_s: f64,
+    samples: usize,
+) -> Result<Vec<TemperatureStats>, DeriveError> {
+    let nc = run.n_coeffs();
+    let hist = temperature_histories(run, coeffs_therm, omega_rad_s, samples)?;
+    run.thermal_nodes
+        .iter()
+        .zip(hist)
+        .map(|(n, h)| {
+            let mean_c = block(coeffs_therm, n.dof, nc, "coeffs_therm")?[0];
+            let min_c = h.iter().copied().fold(f64::INFINITY, f64::min);
+            let max_c = h.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            Ok(TemperatureStats {
+                mean_c,
+                min_c,
+                max_c,
+            })
+        })
+        .collect()
+}
+
+/// A point with everything that follows from the coefficients filled in: RMS amplitudes
+/// (Eq. 35), orbits and temperature statistics at `samples` points per period, and the
+/// period. The caller sets what needs the solver or the model: `arc_length`, `stable`,
+/// `bifurcation`, residuals, iterations, multipliers, clearances, bearing loads, thermal
+/// forces (all zero or empty here).
+pub fn point_from_coefficients(
+    run: &RunInfo,
+    index: u64,
+    omega_rad_s: f64,
+    coeffs_mech: Vec<f64>,
+    coeffs_therm: Vec<f64>,
+    samples: usize,
+) -> Result<PointRecord, DeriveError> {
+    let basis = run.basis()?;
+    let want_therm = run.n_therm * basis.n_coeffs();
+    if coeffs_therm.len() != want_therm {
+        return Err(DeriveError::Size {
+            what: "coeffs_therm",
+            got: coeffs_therm.len(),
+            want: want_therm,
+        });
+    }
+    Ok(PointRecord {
+        index,
+        omega_rad_s,
+        arc_length: 0.0,
+        amplitude_rms_m: amplitude_rms(run, &coeffs_mech)?,
+        stable: None,
+        bifurcation: None,
+        residual_mech: 0.0,
+        residual_therm: 0.0,
+        newton_iterations: 0,
+        period_s: basis.period(omega_rad_s),
+        orbits: orbits(run, &coeffs_mech, omega_rad_s, samples)?,
+        temperatures: temperature_stats(run, &coeffs_therm, omega_rad_s, samples)?,
+        coeffs_mech,
+        coeffs_therm,
+        clearances: Vec::new(),
+        bearing_loads: Vec::new(),
+        thermal_forces: Vec::new(),
+        multipliers: Vec::new(),
+    })
+}
+
+/// Bearing quantities re-derived through the model at one point.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RederivedBearings {
+    /// Per bearing, sampled over one period.
+    pub loads: Vec<BearingLoad>,
+    pub clearances: Vec<ClearanceVariation>,
+    pub thermal_forces: Vec<ThermalForces>,
+}
+
+/// Re-derives bearing loads, clearances and thermal forces of a recorded point from its
+/// coefficients through the model embedded in the recording.
+pub trait ModelRederive {
+    fn bearings(
+        &self,
+        point: &PointRecord,
+        samples: usize,
+    ) -> Result<RederivedBearings, DeriveError>;
+}
+
+/// Recomputes the Floquet multipliers of a recorded point from its coefficients and the
+/// embedded model.
+pub trait StabilityRederive {
+    fn multipliers(&self, point: &PointRecord) -> Result<Vec<Complex64>, DeriveError>;
+}
+
+/// The re-derivation seams available for a recording, and why the missing ones are missing.
+pub struct Rederivers {
+    pub model: Option<Box<dyn ModelRederive>>,
+    pub stability: Option<Box<dyn StabilityRederive>>,
+    /// Why `model`/`stability` are `None`, for the user.
+    pub unavailable_reason: String,
+}
+
+/// Builds the re-derivation seams for a recording from its embedded model file.
+///
+/// This is the single place where model kinds are wired to replay. No model kind is wired
+/// yet, so both seams are `None` and the reason says so.
+pub fn rederivers_for(run: &RunInfo) -> Rederivers {
+    Rederivers {
+        model: None,
+        stability: None,
+        unavailable_reason: format!(
+            "this build of replay cannot rebuild the model {:?} (embedded, {} bytes) for \
+             re-derivation yet; only quantities stored in the recording or derived from \
+             its harmonic coefficients are available",
+            run.model_name,
+            run.model_text.len()
+        ),
+    }
+}
+
+/// Largest distance between stored and recomputed multipliers, pairing each recomputed
+/// multiplier with the nearest stored one not yet paired (largest moduli first). `None`
+/// when the counts differ or one side is empty.
+pub fn multiplier_deviation(stored: &[Complex64], recomputed: &[Complex64]) -> Option<f64> {
+    if stored.len() != recomputed.len() || stored.is_empty() {
+        return None;
+    }
+    let mut order: Vec<&Complex64> = recomputed.iter().collect();
+    order.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
+    let mut used = vec![false; stored.len()];
+    let mut worst: f64 = 0.0;
+    for m in order {
+        let (j, d) = stored
+            .iter()
+            .enumerate()
+            .filter(|(j, _)| !used[*j])
+            .map(|(j, s)| (j, (s - m).norm()))
+            .min_by(|a, b| a.1.total_cmp(&b.1))?;
+        used[j] = true;
+        worst = worst.max(d);
+    }
+    Some(worst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::record::synthetic::{self, SyntheticOptions};
+
+    #[test]
+    fn multiplier_deviation_pairs_nearest_regardless_of_order() {
+        let a = [
+            Complex64::new(0.5, 0.5),
+            Complex64::new(0.5, -0.5),
+            Complex64::new(1.1, 0.0),
+        ];
+        let b = [
+            Complex64::new(1.1, 0.0),
+            Complex64::new(0.5, -0.5 + 1e-3),
+            Complex64::new(0.5, 0.5),
+        ];
+        let d = multiplier_deviation(&a, &b).expect("same count");
+        assert!((d - 1e-3).abs() < 1e-12);
+        assert_eq!(multiplier_deviation(&a, &b[..2]), None);
+        assert_eq!(multiplier_deviation(&[], &[]), None);
+    }
+
+    #[test]
+    fn point_from_coefficients_matches_the_closed_form_point() {
+        let data = synthetic::generate(&SyntheticOptions::default());
+        let p = &data.points[7];
+        let q = point_from_coefficients(
+            &data.run,
+            p.index,
+            p.omega_rad_s,
+            p.coeffs_mech.clone(),
+            p.coeffs_therm.clone(),
+            p.orbits[0].x_m.len(),
+        )
+        .expect("point");
+        assert!((q.period_s - p.period_s).abs() <= 1e-15 * p.period_s);
+        assert!(
+            (q.amplitude_rms_m[0] - p.amplitude_rms_m[0]).abs() <= 1e-12 * p.amplitude_rms_m[0]
+        );
+        for (a, b) in q.orbits[0].y_m.iter().zip(&p.orbits[0].y_m) {
+            assert!((a - b).abs() <= 1e-12 * p.amplitude_rms_m[0]);
+        }
+        assert_eq!(q.temperatures[0].mean_c, p.temperatures[0].mean_c);
+        let short = point_from_coefficients(&data.run, 0, 300.0, vec![0.0; 3], Vec::new(), 8);
+        assert!(matches!(short, Err(DeriveError::Size { .. })));
+    }
+}

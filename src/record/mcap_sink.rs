@@ -1,0 +1,380 @@
+//! The MCAP file sink.
+//!
+//! # File layout
+//! * Profile: none (protobuf has no MCAP profile); every channel has message encoding
+//!   `protobuf`, every schema encoding `protobuf`, name = fully qualified message name, data
+//!   = `FileDescriptorSet` with imports ([`super::schema`]).
+//! * Chunks: zstd-compressed, with message indexes, chunk indexes, statistics and a
+//!   summary section when the file is finished.
+//! * Self-contained: the model file is an attachment (its file name, media type
+//!   `application/toml`), the settings are an attachment `settings.toml` and the metadata
+//!   record `tmrotor.settings`; the metadata record `tmrotor.run` holds the tool name and
+//!   version, model name and SHA-256 and the creation time; `tmrotor.status` is written by
+//!   `finish` (`completed`, `interrupted`, `failed: <reason>`).
+//!
+//! # Clock
+//! Log (and publish) times are not wall-clock times: they count along the branch, so that
+//! they increase strictly with the point index whatever the solver's speed. `/run_info` is
+//! at 0; point `i` at `(i + 1)` ms; a bifurcation located after point `i` at `(i + 1.5)` ms;
+//! the closing `/log` entry 1 ms after the last point. The time axis of a viewer therefore
+//! walks the branch; plot against ω with the message path `/summary.omega_rad_s` as x-axis.
+//! The wall-clock creation time is in the `tmrotor.run` metadata.
+//!
+//! # Crash safety
+//! After every point (all its topics) and every bifurcation the current chunk is closed and
+//! the file flushed to the operating system ([`McapOptions::flush_every`] = 1 point by
+//! default), so a killed process loses at most the point being written. The `/summary`
+//! message of a point is written last: a reader treats a point without it as cut off. On
+//! [`Sink::finish`] (also called from `Drop` with a `failed` status if the owner forgot)
+//! the summary section and footer are written.
+
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use mcap::records::MessageHeader;
+use mcap::{Attachment, WriteOptions, Writer};
+use prost::Message;
+
+use super::RecordError;
+use super::convert::{
+    SceneOptions, bifurcation_record_to_pb, log_to_pb, point_to_pb, run_info_to_pb, scene_to_pb,
+    sha256_hex,
+};
+use super::pb::foxglove::log::Level;
+use super::schema::{self, Topic, names};
+use super::sink::{Sink, SinkChecks};
+use super::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+
+/// One millisecond in nanoseconds: the step of the branch clock.
+pub const CLOCK_STEP_NS: u64 = 1_000_000;
+
+/// Log time of point `index` (see the module docs).
+pub fn point_time_ns(index: u64) -> u64 {
+    index.saturating_add(1).saturating_mul(CLOCK_STEP_NS)
+}
+
+/// Log time of a bifurcation located after point `after_point`.
+pub fn bifurcation_time_ns(after_point: u64) -> u64 {
+    point_time_ns(after_point).saturating_add(CLOCK_STEP_NS / 2)
+}
+
+/// Options of the MCAP sink.
+#[derive(Clone, Debug)]
+pub struct McapOptions {
+    /// Close the chunk and flush the file after this many points. Default 1: at most the
+    /// point being written is lost when the process is killed.
+    pub flush_every: u32,
+    /// Target uncompressed chunk size, bytes, for chunks that grow between flushes.
+    /// Default 1 MiB (the mcap crate's default).
+    pub chunk_size: u64,
+    /// zstd level; 0 is the library default (3).
+    pub compression_level: u32,
+    /// Publish `/scene` (`foxglove.SceneUpdate` whirl orbits). Default true.
+    pub scene: bool,
+    /// Scene scale and frame.
+    pub scene_options: SceneOptions,
+}
+
+impl Default for McapOptions {
+    fn default() -> Self {
+        Self {
+            flush_every: 1,
+            chunk_size: 1 << 20,
+            compression_level: 0,
+            scene: true,
+            scene_options: SceneOptions::default(),
+        }
+    }
+}
+
+/// Writes a run into an MCAP file. See the module docs for the layout.
+pub struct McapSink {
+    path: PathBuf,
+    writer: Option<Writer<BufWriter<File>>>,
+    options: McapOptions,
+    checks: SinkChecks,
+    /// The run, shared so that writing a point does not copy it.
+    run: Option<std::sync::Arc<RunInfo>>,
+    channels: BTreeMap<&'static str, u16>,
+    sequence: u32,
+    since_flush: u32,
+    last_time_ns: u64,
+}
+
+impl McapSink {
+    /// Creates (or truncates) the file at `path`.
+    pub fn create(path: impl AsRef<Path>, options: McapOptions) -> Result<Self, RecordError> {
+        let path = path.as_ref().to_path_buf();
+        let file = File::create(&path).map_err(|source| RecordError::Create {
+            path: path.clone(),
+            source,
+        })?;
+        let writer = WriteOptions::new()
+            .compression(Some(mcap::Compression::Zstd))
+            .compression_level(options.compression_level)
+            .compression_threads(0)
+            .chunk_size(Some(options.chunk_size))
+            .library(format!(
+                "tmrotor/{}; {}",
+                env!("CARGO_PKG_VERSION"),
+                mcap::LIBRARY_IDENTIFIER
+            ))
+            .create(BufWriter::new(file))
+            .map_err(|source| RecordError::Mcap {
+                path: path.clone(),
+                source,
+            })?;
+        Ok(Self {
+            path,
+            writer: Some(writer),
+            options,
+            checks: SinkChecks::default(),
+            run: None,
+            channels: BTreeMap::new(),
+            sequence: 0,
+            since_flush: 0,
+            last_time_ns: 0,
+        })
+    }
+
+    /// The file being written.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    fn err(&self, source: mcap::McapError) -> RecordError {
+        RecordError::Mcap {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    fn writer(&mut self) -> Result<&mut Writer<BufWriter<File>>, RecordError> {
+        self.writer.as_mut().ok_or(RecordError::Finished)
+    }
+
+    fn channel(&mut self, topic: Topic) -> Result<u16, RecordError> {
+        if let Some(&id) = self.channels.get(topic.name) {
+            return Ok(id);
+        }
+        let w = self.writer()?;
+        let added = w
+            .add_schema(topic.schema.name, "protobuf", topic.schema.descriptor_set)
+            .and_then(|schema_id| {
+                w.add_channel(schema_id, topic.name, "protobuf", &BTreeMap::new())
+            });
+        let id = added.map_err(|e| self.err(e))?;
+        self.channels.insert(topic.name, id);
+        Ok(id)
+    }
+
+    fn publish(
+        &mut self,
+        topic: Topic,
+        time_ns: u64,
+        msg: &impl Message,
+    ) -> Result<(), RecordError> {
+        let channel_id = self.channel(topic)?;
+        let header = MessageHeader {
+            channel_id,
+            sequence: self.sequence,
+            log_time: time_ns,
+            publish_time: time_ns,
+        };
+        self.sequence = self.sequence.wrapping_add(1);
+        self.last_time_ns = self.last_time_ns.max(time_ns);
+        let data = msg.encode_to_vec();
+        let res = self.writer()?.write_to_known_channel(&header, &data);
+        res.map_err(|e| self.err(e))
+    }
+
+    fn flush(&mut self) -> Result<(), RecordError> {
+        self.since_flush = 0;
+        let res = self.writer()?.flush();
+        res.map_err(|e| self.err(e))
+    }
+
+    fn attach(&mut self, name: &str, media_type: &str, text: &str) -> Result<(), RecordError> {
+        let attachment = Attachment {
+            log_time: 0,
+            create_time: 0,
+            name: name.to_string(),
+            media_type: media_type.to_string(),
+            data: std::borrow::Cow::Borrowed(text.as_bytes()),
+        };
+        let res = self.writer()?.attach(&attachment);
+        res.map_err(|e| self.err(e))
+    }
+
+    fn metadata(
+        &mut self,
+        name: &str,
+        entries: BTreeMap<String, String>,
+    ) -> Result<(), RecordError> {
+        let md = mcap::records::Metadata {
+            name: name.to_string(),
+            metadata: entries,
+        };
+        let res = self.writer()?.write_metadata(&md);
+        res.map_err(|e| self.err(e))
+    }
+
+    fn close(&mut self, status: &RunStatus) -> Result<(), RecordError> {
+        let time_ns = self.last_time_ns.saturating_add(CLOCK_STEP_NS);
+        let level = match status {
+            RunStatus::Completed => Level::Info,
+            RunStatus::Interrupted => Level::Warning,
+            RunStatus::Failed(_) => Level::Error,
+        };
+        let points = self
+            .checks
+            .last_index()
+            .map_or("no points".to_string(), |i| format!("last point {i}"));
+        let text = format!("run {} ({points})", status.label());
+        let logged = self.publish(
+            schema::TOPIC_LOG,
+            time_ns,
+            &log_to_pb(time_ns, level, &text),
+        );
+        let status_md = self.metadata(
+            names::METADATA_STATUS,
+            BTreeMap::from([("status".to_string(), status.label())]),
+        );
+        let mut writer = self.writer.take().ok_or(RecordError::Finished)?;
+        let finished = writer.finish().map_err(|e| self.err(e));
+        let mut inner = writer.into_inner();
+        let flushed = inner.flush().map_err(|source| RecordError::Mcap {
+            path: self.path.clone(),
+            source: source.into(),
+        });
+        logged.and(status_md).and(finished.map(|_| ())).and(flushed)
+    }
+}
+
+impl Sink for McapSink {
+    fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+        self.checks.begin(run)?;
+        self.run = Some(std::sync::Arc::new(run.clone()));
+        let model_name = if run.model_name.is_empty() {
+            "model.toml".to_string()
+        } else {
+            run.model_name.clone()
+        };
+        self.attach(&model_name, names::MODEL_MEDIA_TYPE, &run.model_text)?;
+        self.attach(
+            names::SETTINGS_ATTACHMENT,
+            names::MODEL_MEDIA_TYPE,
+            &run.settings_toml,
+        )?;
+        let created = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map(|d| d.as_secs())
+            .unwrap_or(0);
+        self.metadata(
+            names::METADATA_RUN,
+            BTreeMap::from([
+                ("tool_name".to_string(), run.tool_name.clone()),
+                ("tool_version".to_string(), run.tool_version.clone()),
+                ("model_name".to_string(), model_name),
+                ("model_sha256".to_string(), sha256_hex(&run.model_text)),
+                ("created_unix_s".to_string(), created.to_string()),
+                (
+                    "clock".to_string(),
+                    "branch clock: point i at (i+1) ms".into(),
+                ),
+            ]),
+        )?;
+        self.metadata(
+            names::METADATA_SETTINGS,
+            run.settings.iter().cloned().collect(),
+        )?;
+        self.publish(schema::TOPIC_RUN_INFO, 0, &run_info_to_pb(run))?;
+        let text = format!(
+            "run started: {} {}, model {}, {} nodes, {} thermal nodes, {} bearings",
+            run.tool_name,
+            run.tool_version,
+            run.model_name,
+            run.nodes.len(),
+            run.thermal_nodes.len(),
+            run.bearings.len()
+        );
+        self.publish(schema::TOPIC_LOG, 0, &log_to_pb(0, Level::Info, &text))?;
+        self.flush()
+    }
+
+    fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError> {
+        self.checks.point(point)?;
+        let run = self
+            .run
+            .clone()
+            .ok_or(RecordError::NotStarted("write_point"))?;
+        let t = point_time_ns(point.index);
+        let m = point_to_pb(&run, point);
+        self.publish(schema::TOPIC_HARMONICS, t, &m.harmonics)?;
+        self.publish(schema::TOPIC_ORBITS, t, &m.orbits)?;
+        if let Some(msg) = &m.temperatures {
+            self.publish(schema::TOPIC_TEMPERATURES, t, msg)?;
+        }
+        if let Some(msg) = &m.clearances {
+            self.publish(schema::TOPIC_CLEARANCE, t, msg)?;
+        }
+        if let Some(msg) = &m.bearing_loads {
+            self.publish(schema::TOPIC_BEARING_LOADS, t, msg)?;
+        }
+        if let Some(msg) = &m.thermal_forces {
+            self.publish(schema::TOPIC_THERMAL_FORCES, t, msg)?;
+        }
+        if let Some(msg) = &m.floquet {
+            self.publish(schema::TOPIC_FLOQUET, t, msg)?;
+        }
+        if self.options.scene {
+            let scene = scene_to_pb(&run, point, t, &self.options.scene_options);
+            self.publish(schema::TOPIC_SCENE, t, &scene)?;
+        }
+        // Last: its presence marks the point as completely written.
+        self.publish(schema::TOPIC_SUMMARY, t, &m.summary)?;
+        self.since_flush += 1;
+        if self.since_flush >= self.options.flush_every.max(1) {
+            self.flush()?;
+        }
+        Ok(())
+    }
+
+    fn write_bifurcation(&mut self, b: &BifurcationRecord) -> Result<(), RecordError> {
+        self.checks.bifurcation(b)?;
+        let t = bifurcation_time_ns(b.after_point);
+        self.publish(schema::TOPIC_BIFURCATIONS, t, &bifurcation_record_to_pb(b))?;
+        let text = format!(
+            "{} bifurcation #{} at ω = {:.4} rad/s (between points {} and {})",
+            b.kind.label(),
+            b.number,
+            b.omega_rad_s,
+            b.after_point,
+            b.after_point.saturating_add(1)
+        );
+        self.publish(schema::TOPIC_LOG, t, &log_to_pb(t, Level::Warning, &text))?;
+        self.flush()
+    }
+
+    fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
+        self.checks.finish()?;
+        self.close(&status)
+    }
+}
+
+impl Drop for McapSink {
+    fn drop(&mut self) {
+        if self.writer.is_some() && !self.checks.is_finished() {
+            let status = if std::thread::panicking() {
+                RunStatus::Failed("the writing thread panicked".into())
+            } else {
+                RunStatus::Failed("the recording was dropped without finish".into())
+            };
+            let _ = self.checks.finish();
+            let _ = self.close(&status);
+        }
+    }
+}

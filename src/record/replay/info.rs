@@ -1,0 +1,121 @@
+//! `replay info FILE`.
+
+use std::io::Write;
+
+use crate::record::reader::Recording;
+
+fn stable_label(s: Option<bool>) -> &'static str {
+    match s {
+        Some(true) => "stable",
+        Some(false) => "unstable",
+        None => "unknown",
+    }
+}
+
+/// Prints a summary of the recording.
+pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
+    let r = &rec.run;
+    writeln!(out, "file:        {}", rec.file.display())?;
+    writeln!(
+        out,
+        "state:       {}",
+        if rec.complete {
+            "complete".to_string()
+        } else {
+            format!("INCOMPLETE ({})", rec.notes.join("; "))
+        }
+    )?;
+    writeln!(
+        out,
+        "status:      {}",
+        rec.status
+            .as_ref()
+            .map_or("none (the run did not finish writing)".into(), |s| s
+                .label())
+    )?;
+    writeln!(out, "written by:  {} {}", r.tool_name, r.tool_version)?;
+    writeln!(
+        out,
+        "model:       {} ({} bytes embedded)",
+        r.model_name,
+        r.model_text.len()
+    )?;
+    let harmonics: Vec<String> = r
+        .harmonics
+        .iter()
+        .map(|h| {
+            if h.den == 1 {
+                format!("{}ω", h.num)
+            } else {
+                format!("{}/{}ω", h.num, h.den)
+            }
+        })
+        .collect();
+    writeln!(out, "runs:        1")?;
+    writeln!(
+        out,
+        "basis:       {} harmonics: {}; λ = {}/{}",
+        r.harmonics.len(),
+        harmonics.join(", "),
+        r.lambda.num,
+        r.lambda.den
+    )?;
+    writeln!(
+        out,
+        "DoFs:        {} mechanical, {} thermal; {} dynamic nodes, {} thermal nodes, {} bearings",
+        r.n_mech,
+        r.n_therm,
+        r.nodes.len(),
+        r.thermal_nodes.len(),
+        r.bearings.len()
+    )?;
+    writeln!(out, "points:      {}", rec.points.len())?;
+    if let Some((lo, hi)) = rec.omega_range() {
+        writeln!(out, "ω range:     {lo:.4} … {hi:.4} rad/s")?;
+    }
+    let unstable = rec
+        .points
+        .iter()
+        .filter(|p| p.stable == Some(false))
+        .count();
+    let unknown = rec.points.iter().filter(|p| p.stable.is_none()).count();
+    writeln!(
+        out,
+        "stability:   {} stable, {unstable} unstable, {unknown} not assessed",
+        rec.points.len() - unstable - unknown
+    )?;
+    writeln!(out, "bifurcations: {}", rec.bifurcations.len())?;
+    for b in &rec.bifurcations {
+        writeln!(
+            out,
+            "  #{} {} at ω = {:.4} rad/s (after point {})",
+            b.number,
+            b.kind.label(),
+            b.omega_rad_s,
+            b.after_point
+        )?;
+    }
+    writeln!(out, "topics:")?;
+    for t in &rec.topics {
+        writeln!(
+            out,
+            "  {:<16} {:<26} {:>6} messages",
+            t.topic, t.schema, t.messages
+        )?;
+    }
+    writeln!(out, "attachments: {}", rec.attachments.join(", "))?;
+    writeln!(out, "settings:")?;
+    for (k, v) in &r.settings {
+        writeln!(out, "  {k} = {v}")?;
+    }
+    if let Some(p) = rec.points.last() {
+        writeln!(
+            out,
+            "last point:  {} at ω = {:.4} rad/s, {}",
+            p.index,
+            p.omega_rad_s,
+            stable_label(p.stable)
+        )?;
+    }
+    Ok(())
+}

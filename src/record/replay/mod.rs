@@ -1,0 +1,156 @@
+//! The `replay` command line: works from a recording alone.
+//!
+//! One file per subcommand, each with `run(args, out)` writing to any `io::Write`, so
+//! tests call them in-process; `src/bin/replay.rs` only parses and maps errors to exit
+//! codes ([`main`]).
+//!
+//! | subcommand | output |
+//! |---|---|
+//! | `info FILE` | runs, topics, counts, ω range, bifurcations, settings, completeness |
+//! | `branch FILE --csv` | one row per point: ω, amplitude per node, stable, bifurcation, residuals |
+//! | `orbit FILE --point N [--node K] [--samples S]` | time histories re-derived from the coefficients |
+//! | `stability FILE` | Floquet multipliers recomputed and compared with the stored ones |
+//! | `plot FILE [--out DIR]` | PNG amplitude–frequency curves, RC variations, temperatures |
+//!
+//! Model-dependent re-derivations go through [`super::derive::rederivers_for`]; where it
+//! has nothing for the recording's model, replay says so instead of guessing.
+
+pub mod branch;
+pub mod info;
+pub mod orbit;
+pub mod plot;
+pub mod stability;
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use super::reader::{Recording, read_recording};
+
+/// Inspect, export and re-derive tmrotor recordings (MCAP) without rerunning anything.
+#[derive(Debug, Parser)]
+#[command(name = "replay", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Runs, topics, message counts, ω range, bifurcations and settings of a recording.
+    Info { file: PathBuf },
+    /// The branch as a table: one row per point.
+    Branch {
+        file: PathBuf,
+        /// Comma-separated values with a header row (default: aligned text).
+        #[arg(long)]
+        csv: bool,
+    },
+    /// Time histories of one point re-derived from its harmonic coefficients, as CSV.
+    Orbit {
+        file: PathBuf,
+        /// Point index (as in `replay branch`).
+        #[arg(long)]
+        point: u64,
+        /// Dynamic node id (default: all nodes).
+        #[arg(long)]
+        node: Option<u32>,
+        /// Samples per period.
+        #[arg(long, default_value_t = 256)]
+        samples: usize,
+    },
+    /// Recompute the Floquet multipliers and compare them with the stored ones.
+    Stability { file: PathBuf },
+    /// PNG figures: amplitude–frequency curves, RC variations, temperatures.
+    Plot {
+        file: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long, default_value = ".")]
+        out: PathBuf,
+    },
+    /// Write a synthetic recording (closed-form 2-DoF rotor) for trying the tools.
+    #[command(hide = true)]
+    Synthetic {
+        file: PathBuf,
+        /// Without thermal node and bearing.
+        #[arg(long)]
+        mechanical: bool,
+        /// Points on each side of the resonance.
+        #[arg(long, default_value_t = 20)]
+        points: usize,
+        /// Stop without finishing the file, as a killed process would.
+        #[arg(long)]
+        unfinished: bool,
+    },
+}
+
+/// A requested re-derivation is not available for this recording (exit code 2).
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct NotAvailable(pub String);
+
+/// Reads a recording and reports on stderr when it is incomplete.
+pub fn open(file: &PathBuf, err: &mut dyn Write) -> anyhow::Result<Recording> {
+    let rec = read_recording(file)?;
+    if !rec.complete {
+        writeln!(
+            err,
+            "note: {} is incomplete ({} points readable): {}",
+            file.display(),
+            rec.points.len(),
+            rec.notes.join("; ")
+        )?;
+    }
+    Ok(rec)
+}
+
+/// Runs a parsed command line, writing results to `out` and notes to `err`.
+pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Info { file } => info::run(&open(&file, err)?, out),
+        Command::Branch { file, csv } => branch::run(&open(&file, err)?, csv, out),
+        Command::Orbit {
+            file,
+            point,
+            node,
+            samples,
+        } => orbit::run(&open(&file, err)?, point, node, samples, out, err),
+        Command::Stability { file } => stability::run(&open(&file, err)?, None, out),
+        Command::Plot { file, out: dir } => plot::run(&open(&file, err)?, &dir, out, err),
+        Command::Synthetic {
+            file,
+            mechanical,
+            points,
+            unfinished,
+        } => {
+            let options = super::synthetic::SyntheticOptions {
+                points_per_side: points,
+                thermal: !mechanical,
+                ..Default::default()
+            };
+            let n = super::synthetic::write_mcap(&file, &options, !unfinished)?;
+            writeln!(out, "wrote {} ({n} points)", file.display())?;
+            Ok(())
+        }
+    }
+}
+
+/// Entry point of the binary: parse, run, map errors to exit codes (1 error, 2 not
+/// available for this recording).
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let (mut out, mut err) = (std::io::stdout().lock(), std::io::stderr());
+    match run(cli, &mut out, &mut err) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<NotAvailable>().is_some() => {
+            eprintln!("replay: {e:#}");
+            ExitCode::from(2)
+        }
+        Err(e) => {
+            eprintln!("replay: error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}

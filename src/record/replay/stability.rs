@@ -1,0 +1,101 @@
+//! `replay stability FILE`.
+
+use std::io::Write;
+
+use crate::record::derive::{StabilityRederive, multiplier_deviation, rederivers_for};
+use crate::record::reader::Recording;
+
+use super::NotAvailable;
+
+/// Result of comparing recomputed and stored multipliers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StabilityComparison {
+    /// Points compared.
+    pub compared: usize,
+    /// Largest multiplier deviation over all points, and at which point index.
+    pub max_deviation: Option<(f64, u64)>,
+    /// Points whose stable flag would change.
+    pub flag_changes: Vec<u64>,
+}
+
+/// Recomputes the multipliers of every point that has stored ones with `method` and
+/// compares them.
+pub fn compare(
+    rec: &Recording,
+    method: &dyn StabilityRederive,
+) -> anyhow::Result<StabilityComparison> {
+    let mut result = StabilityComparison {
+        compared: 0,
+        max_deviation: None,
+        flag_changes: Vec::new(),
+    };
+    for p in rec.points.iter().filter(|p| !p.multipliers.is_empty()) {
+        let fresh = method.multipliers(p)?;
+        let dev = multiplier_deviation(&p.multipliers, &fresh).ok_or_else(|| {
+            anyhow::anyhow!(
+                "point {}: {} multipliers recomputed, {} stored",
+                p.index,
+                fresh.len(),
+                p.multipliers.len()
+            )
+        })?;
+        result.compared += 1;
+        if result.max_deviation.is_none_or(|(d, _)| dev > d) {
+            result.max_deviation = Some((dev, p.index));
+        }
+        let stable = crate::stability::FloquetResult::new(fresh).stable;
+        if p.stable.is_some_and(|s| s != stable) {
+            result.flag_changes.push(p.index);
+        }
+    }
+    Ok(result)
+}
+
+/// Runs the comparison with `method`, or with the method rebuilt from the recording's
+/// model; fails with [`NotAvailable`] when there is none.
+pub fn run(
+    rec: &Recording,
+    method: Option<&dyn StabilityRederive>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    let hooks;
+    let method = match method {
+        Some(m) => m,
+        None => {
+            hooks = rederivers_for(&rec.run);
+            match &hooks.stability {
+                Some(m) => m.as_ref(),
+                None => {
+                    let stored = rec
+                        .points
+                        .iter()
+                        .filter(|p| !p.multipliers.is_empty())
+                        .count();
+                    return Err(NotAvailable(format!(
+                        "Floquet multipliers cannot be recomputed for {}: {} ({stored} of {} \
+                         points have stored multipliers; `replay branch` lists their stability)",
+                        rec.file.display(),
+                        hooks.unavailable_reason,
+                        rec.points.len()
+                    ))
+                    .into());
+                }
+            }
+        }
+    };
+    let c = compare(rec, method)?;
+    writeln!(out, "points compared: {}", c.compared)?;
+    match c.max_deviation {
+        Some((d, i)) => writeln!(
+            out,
+            "largest deviation |μ_recomputed − μ_stored|: {d:e} (point {i})"
+        )?,
+        None => writeln!(out, "no point has stored multipliers")?,
+    }
+    if c.flag_changes.is_empty() {
+        writeln!(out, "stable flags: all agree")?;
+    } else {
+        writeln!(out, "stable flag differs at points: {:?}", c.flag_changes)?;
+    }
+    Ok(())
+}

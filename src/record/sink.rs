@@ -1,0 +1,252 @@
+//! The [`Sink`] trait the continuation writes to, an in-memory sink for tests, the
+//! checks every sink applies, and the helpers that make sure a run is always finished
+//! (on errors too) and that Ctrl-C can stop a sweep cleanly.
+
+use std::sync::atomic::AtomicBool;
+use std::sync::{Arc, OnceLock};
+
+use super::RecordError;
+use super::convert::{validate_point, validate_run};
+use super::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+
+/// Where the points of a continuation run go.
+///
+/// Call order: [`Sink::begin_run`] once, then any number of [`Sink::write_point`] (point
+/// indices strictly increasing) and [`Sink::write_bifurcation`], then [`Sink::finish`]
+/// exactly once, also when the run failed or was interrupted ([`record_run`] does this).
+pub trait Sink {
+    /// Starts the run: stores its description.
+    fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError>;
+    /// Writes one converged point; durable on return for sinks backed by a file.
+    fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError>;
+    /// Writes one located bifurcation.
+    fn write_bifurcation(&mut self, bifurcation: &BifurcationRecord) -> Result<(), RecordError>;
+    /// Ends the run with its status. Further writes fail with [`RecordError::Finished`].
+    fn finish(&mut self, status: RunStatus) -> Result<(), RecordError>;
+}
+
+macro_rules! forward_sink {
+    ($($t:ty),*) => {$(
+        impl<S: Sink + ?Sized> Sink for $t {
+            fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+                (**self).begin_run(run)
+            }
+            fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError> {
+                (**self).write_point(point)
+            }
+            fn write_bifurcation(&mut self, b: &BifurcationRecord) -> Result<(), RecordError> {
+                (**self).write_bifurcation(b)
+            }
+            fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
+                (**self).finish(status)
+            }
+        }
+    )*};
+}
+
+forward_sink!(&mut S, Box<S>);
+
+/// The call-order and size checks shared by all sinks.
+#[derive(Clone, Debug, Default)]
+pub struct SinkChecks {
+    run: Option<RunInfo>,
+    last_index: Option<u64>,
+    finished: bool,
+}
+
+impl SinkChecks {
+    /// Checks a `begin_run` call.
+    pub fn begin(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+        if self.finished {
+            return Err(RecordError::Finished);
+        }
+        if self.run.is_some() {
+            return Err(RecordError::AlreadyStarted);
+        }
+        validate_run(run).map_err(RecordError::InvalidRun)?;
+        self.run = Some(run.clone());
+        Ok(())
+    }
+
+    /// Checks a `write_point` call; returns the run.
+    pub fn point(&mut self, p: &PointRecord) -> Result<&RunInfo, RecordError> {
+        if self.finished {
+            return Err(RecordError::Finished);
+        }
+        let run = self
+            .run
+            .as_ref()
+            .ok_or(RecordError::NotStarted("write_point"))?;
+        if let Some(previous) = self.last_index
+            && p.index <= previous
+        {
+            return Err(RecordError::NonIncreasingIndex {
+                index: p.index,
+                previous,
+            });
+        }
+        validate_point(run, p).map_err(|reason| RecordError::InvalidPoint {
+            index: p.index,
+            omega_rad_s: p.omega_rad_s,
+            reason,
+        })?;
+        self.last_index = Some(p.index);
+        Ok(run)
+    }
+
+    /// Checks a `write_bifurcation` call; returns the run.
+    pub fn bifurcation(&mut self, b: &BifurcationRecord) -> Result<&RunInfo, RecordError> {
+        if self.finished {
+            return Err(RecordError::Finished);
+        }
+        let run = self
+            .run
+            .as_ref()
+            .ok_or(RecordError::NotStarted("write_bifurcation"))?;
+        if b.amplitude_rms_m.len() != run.nodes.len() {
+            return Err(RecordError::InvalidBifurcation {
+                number: b.number,
+                reason: format!(
+                    "amplitude_rms_m: {} values, expected {}",
+                    b.amplitude_rms_m.len(),
+                    run.nodes.len()
+                ),
+            });
+        }
+        Ok(run)
+    }
+
+    /// Checks a `finish` call.
+    pub fn finish(&mut self) -> Result<(), RecordError> {
+        if self.finished {
+            return Err(RecordError::Finished);
+        }
+        self.finished = true;
+        Ok(())
+    }
+
+    /// Whether `finish` was called.
+    pub fn is_finished(&self) -> bool {
+        self.finished
+    }
+
+    /// Index of the last point written.
+    pub fn last_index(&self) -> Option<u64> {
+        self.last_index
+    }
+
+    /// The run, once begun.
+    pub fn run(&self) -> Option<&RunInfo> {
+        self.run.as_ref()
+    }
+}
+
+/// Keeps everything in memory; used by tests and as a reference for the file sinks.
+#[derive(Clone, Debug, Default)]
+pub struct MemorySink {
+    checks: SinkChecks,
+    pub run: Option<RunInfo>,
+    pub points: Vec<PointRecord>,
+    pub bifurcations: Vec<BifurcationRecord>,
+    pub status: Option<RunStatus>,
+}
+
+impl MemorySink {
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+impl Sink for MemorySink {
+    fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+        self.checks.begin(run)?;
+        self.run = Some(run.clone());
+        Ok(())
+    }
+
+    fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError> {
+        self.checks.point(point)?;
+        self.points.push(point.clone());
+        Ok(())
+    }
+
+    fn write_bifurcation(&mut self, bifurcation: &BifurcationRecord) -> Result<(), RecordError> {
+        self.checks.bifurcation(bifurcation)?;
+        self.bifurcations.push(bifurcation.clone());
+        Ok(())
+    }
+
+    fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
+        self.checks.finish()?;
+        self.status = Some(status);
+        Ok(())
+    }
+}
+
+/// Begins the run on `sink`, runs `body`, and finishes the sink in every case: with the
+/// status `body` returns, or with [`RunStatus::Failed`] carrying the error text when it
+/// fails (the error is then returned unchanged, after the recording was closed).
+pub fn record_run<S, T, E, F>(sink: &mut S, run: &RunInfo, body: F) -> Result<T, E>
+where
+    S: Sink + ?Sized,
+    E: std::fmt::Display + From<RecordError>,
+    F: FnOnce(&mut S) -> Result<(T, RunStatus), E>,
+{
+    sink.begin_run(run)?;
+    match body(sink) {
+        Ok((value, status)) => {
+            sink.finish(status)?;
+            Ok(value)
+        }
+        Err(err) => {
+            // The body's error is the one to report; a failure to close is secondary.
+            let _ = sink.finish(RunStatus::Failed(err.to_string()));
+            Err(err)
+        }
+    }
+}
+
+static INTERRUPT: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+
+/// Installs (once per process) a Ctrl-C handler that sets the returned flag instead of
+/// killing the process. A sweep loop polls it (`flag.load(Ordering::Relaxed)`) between
+/// points, stops, and finishes its sink with [`RunStatus::Interrupted`]. A second Ctrl-C
+/// while the flag is already set exits the process at once (status 130).
+pub fn install_interrupt_flag() -> Result<Arc<AtomicBool>, RecordError> {
+    if let Some(flag) = INTERRUPT.get() {
+        return Ok(flag.clone());
+    }
+    let flag = Arc::new(AtomicBool::new(false));
+    let handler_flag = flag.clone();
+    ctrlc::set_handler(move || {
+        if handler_flag.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    })
+    .map_err(|e| RecordError::CtrlC(e.to_string()))?;
+    Ok(INTERRUPT.get_or_init(|| flag).clone())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interrupt_flag_is_installed_once_and_shared() {
+        let a = install_interrupt_flag().expect("handler");
+        let b = install_interrupt_flag().expect("same handler");
+        assert!(Arc::ptr_eq(&a, &b));
+        assert!(!a.load(std::sync::atomic::Ordering::Relaxed));
+    }
+
+    #[test]
+    fn status_labels_round_trip() {
+        for s in [
+            RunStatus::Completed,
+            RunStatus::Interrupted,
+            RunStatus::Failed("Newton: 30 iterations".into()),
+        ] {
+            assert_eq!(RunStatus::from_label(&s.label()), s);
+        }
+    }
+}

@@ -1,0 +1,482 @@
+//! The `[thermal]` section of a model file: network layout, geometry, materials, lubricant
+//! and the study parameters (flow rate, cooling and ambient temperatures, Palmgren
+//! coefficients, viscosity law), parsed with `deny_unknown_fields` and validated with
+//! errors naming the field path.
+//!
+//! The network is described by geometry, not by precomputed resistances: shaft elements
+//! split into segment nodes, disks, bearing housings and bearings; [`super::network`]
+//! derives masses, heat capacities and resistances from it. Every node number `1..=n_nodes`
+//! must be used exactly once. The paper's dual rotor is the built-in
+//! [`DUAL_ROTOR_THERMAL_TOML`], which documents its layout table and sources.
+
+use super::ThermalError;
+use crate::bearing::ContactLaw;
+use serde::Deserialize;
+
+/// The built-in `[thermal]` table of the paper's dual rotor (contents of the table).
+pub const DUAL_ROTOR_THERMAL_TOML: &str = include_str!("../../models/dual_rotor_thermal.toml");
+
+/// Viscosity law (Eq. 12).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ViscositySpec {
+    /// `ν0` (mm²/s) at `ref_temp_c`.
+    pub nu0_mm2_s: f64,
+    /// `T_L0` (°C).
+    pub ref_temp_c: f64,
+    /// `β` (1/K).
+    pub beta_per_k: f64,
+}
+
+/// Lubricant properties (Table A.6).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LubricantSpec {
+    pub density_kg_m3: f64,
+    pub specific_heat_j_kg_k: f64,
+    pub conductivity_w_m_k: f64,
+    pub diffusivity_m2_s: f64,
+}
+
+/// Ambient air and the housing convection coefficient.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct AirSpec {
+    pub kinematic_viscosity_m2_s: f64,
+    pub conductivity_w_m_k: f64,
+    /// Housing outer surface to ambient (Table 1: 15 W/(m²·K)).
+    pub housing_h_w_m2_k: f64,
+}
+
+/// A solid material (Table A.5).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    pub density_kg_m3: f64,
+    pub specific_heat_j_kg_k: f64,
+    pub conductivity_w_m_k: f64,
+    pub expansion_per_k: f64,
+    pub modulus_pa: f64,
+    pub poisson: f64,
+}
+
+/// Materials of bearings and of shafts/disks/housings.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialsSpec {
+    pub bearing: MaterialSpec,
+    pub shaft: MaterialSpec,
+}
+
+/// One FE shaft element split into equal segment nodes, conducting along its chain.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ShaftSpec {
+    /// Chain name (one per rotor); consecutive entries of a chain conduct to each other.
+    pub chain: String,
+    /// Speed of this rotor relative to `ω`.
+    pub speed_ratio: f64,
+    pub inner_diameter_m: f64,
+    pub outer_diameter_m: f64,
+    pub length_m: f64,
+    /// Thermal nodes of the segments, in axial order.
+    pub nodes: Vec<usize>,
+    /// Free text (e.g. the FE element).
+    #[serde(default)]
+    pub label: String,
+}
+
+/// A rigid disk, represented by an equivalent uniform annular disk with the given mass and
+/// polar moment of inertia.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct DiskSpec {
+    pub name: String,
+    pub node: usize,
+    /// Shaft segment node the disk hub sits on.
+    pub shaft_node: usize,
+    pub speed_ratio: f64,
+    pub mass_kg: f64,
+    pub polar_inertia_kg_m2: f64,
+    /// Hub bore = shaft outer diameter (m).
+    pub bore_diameter_m: f64,
+}
+
+/// A bearing housing: a sleeve (bore `bore_diameter_m`, outer radius `radius_m`, length
+/// `length_m`) split into a seat of length `seat_length_m` around the outer ring and two
+/// equal flanks, each wetted by the lubricant on its bore.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HousingSpec {
+    pub name: String,
+    pub seat_node: usize,
+    pub flank_nodes: [usize; 2],
+    pub bore_diameter_m: f64,
+    pub radius_m: f64,
+    pub length_m: f64,
+    pub seat_length_m: f64,
+}
+
+/// Thermal data of one bearing.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct BearingThermalSpec {
+    pub name: String,
+    pub kind: ContactLaw,
+    pub element_node: usize,
+    pub inner_node: usize,
+    pub outer_node: usize,
+    pub lubricant_node: usize,
+    /// Shaft segment node under the inner ring.
+    pub inner_shaft_node: usize,
+    /// Housing (by name) holding the outer ring; exclusive with `outer_shaft_node`.
+    #[serde(default)]
+    pub housing: Option<String>,
+    /// Shaft segment node holding the outer ring (inter-shaft bearing).
+    #[serde(default)]
+    pub outer_shaft_node: Option<usize>,
+    /// Seat diameter `d_h` of Eq. 2 (m): `2 r_h` or `2 r_HP`.
+    pub seat_diameter_m: f64,
+    pub inner_speed_ratio: f64,
+    pub outer_speed_ratio: f64,
+    pub n_elements: usize,
+    pub element_diameter_m: f64,
+    pub inner_raceway_m: f64,
+    pub outer_raceway_m: f64,
+    pub pitch_diameter_m: f64,
+    pub bore_diameter_m: f64,
+    pub outer_diameter_m: f64,
+    pub width_m: f64,
+    /// Roller length `a_roller` (rollers only).
+    #[serde(default)]
+    pub roller_length_m: Option<f64>,
+    /// Groove conformity `r_groove/d` (balls only).
+    #[serde(default)]
+    pub conformity: Option<f64>,
+    pub cage_mass_kg: f64,
+    pub f_l: f64,
+    pub f_v: f64,
+}
+
+/// The `[thermal]` section.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ThermalSpec {
+    pub n_nodes: usize,
+    pub ambient_temp_c: f64,
+    pub cooling_temp_c: f64,
+    /// Lubricant flow rate `q_l` per bearing (L/min).
+    pub flow_l_min: f64,
+    /// Floor of the load used in the contact resistances (N), see [`super::contact`].
+    pub min_contact_load_n: f64,
+    pub viscosity: ViscositySpec,
+    pub lubricant: LubricantSpec,
+    pub air: AirSpec,
+    pub materials: MaterialsSpec,
+    pub shafts: Vec<ShaftSpec>,
+    pub disks: Vec<DiskSpec>,
+    pub housings: Vec<HousingSpec>,
+    pub bearings: Vec<BearingThermalSpec>,
+}
+
+fn invalid(file: &str, path: String, reason: impl Into<String>) -> ThermalError {
+    ThermalError::Invalid {
+        file: file.to_string(),
+        path,
+        reason: reason.into(),
+    }
+}
+
+fn positive(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
+    if v > 0.0 && v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(
+            file,
+            path,
+            format!("must be a finite number > 0, got {v}"),
+        ))
+    }
+}
+
+fn non_negative(v: f64) -> bool {
+    v.is_finite() && v >= 0.0
+}
+
+fn finite(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid(file, path, format!("must be finite, got {v}")))
+    }
+}
+
+impl ThermalSpec {
+    /// Parses the contents of a `[thermal]` table; `file` names the source in errors.
+    pub fn from_table(table: &toml::Table, file: &str) -> Result<Self, ThermalError> {
+        let text = toml::to_string(table).map_err(|e| ThermalError::Parse {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        Self::from_toml_str(&text, file)
+    }
+
+    /// Parses the text of a `[thermal]` table body and validates it.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Self, ThermalError> {
+        let spec: ThermalSpec = toml::from_str(text).map_err(|e| ThermalError::Parse {
+            file: file.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        spec.validate(file)?;
+        Ok(spec)
+    }
+
+    /// The built-in dual-rotor network.
+    pub fn dual_rotor() -> Result<Self, ThermalError> {
+        Self::from_toml_str(DUAL_ROTOR_THERMAL_TOML, "models/dual_rotor_thermal.toml")
+    }
+
+    /// The same spec with the study parameters replaced: lubricant flow rate per bearing
+    /// `q_l` (L/min), lubricant cooling temperature `T_L∞` and ambient temperature `T_∞`
+    /// (°C).
+    pub fn with_study(mut self, flow_l_min: f64, cooling_temp_c: f64, ambient_temp_c: f64) -> Self {
+        self.flow_l_min = flow_l_min;
+        self.cooling_temp_c = cooling_temp_c;
+        self.ambient_temp_c = ambient_temp_c;
+        self
+    }
+
+    /// Checks ranges and the node layout; errors name `thermal.<path>`.
+    pub fn validate(&self, file: &str) -> Result<(), ThermalError> {
+        let p = |s: &str| format!("thermal.{s}");
+        if self.n_nodes == 0 {
+            return Err(invalid(file, p("n_nodes"), "must be > 0"));
+        }
+        finite(file, p("ambient_temp_c"), self.ambient_temp_c)?;
+        finite(file, p("cooling_temp_c"), self.cooling_temp_c)?;
+        if !non_negative(self.flow_l_min) {
+            return Err(invalid(
+                file,
+                p("flow_l_min"),
+                format!("must be >= 0, got {}", self.flow_l_min),
+            ));
+        }
+        positive(file, p("min_contact_load_n"), self.min_contact_load_n)?;
+        positive(file, p("viscosity.nu0_mm2_s"), self.viscosity.nu0_mm2_s)?;
+        finite(file, p("viscosity.ref_temp_c"), self.viscosity.ref_temp_c)?;
+        finite(file, p("viscosity.beta_per_k"), self.viscosity.beta_per_k)?;
+        let l = &self.lubricant;
+        positive(file, p("lubricant.density_kg_m3"), l.density_kg_m3)?;
+        positive(
+            file,
+            p("lubricant.specific_heat_j_kg_k"),
+            l.specific_heat_j_kg_k,
+        )?;
+        positive(
+            file,
+            p("lubricant.conductivity_w_m_k"),
+            l.conductivity_w_m_k,
+        )?;
+        positive(file, p("lubricant.diffusivity_m2_s"), l.diffusivity_m2_s)?;
+        positive(
+            file,
+            p("air.kinematic_viscosity_m2_s"),
+            self.air.kinematic_viscosity_m2_s,
+        )?;
+        positive(
+            file,
+            p("air.conductivity_w_m_k"),
+            self.air.conductivity_w_m_k,
+        )?;
+        if !non_negative(self.air.housing_h_w_m2_k) {
+            return Err(invalid(file, p("air.housing_h_w_m2_k"), "must be >= 0"));
+        }
+        for (name, m) in [
+            ("bearing", &self.materials.bearing),
+            ("shaft", &self.materials.shaft),
+        ] {
+            let q = |f: &str| p(&format!("materials.{name}.{f}"));
+            positive(file, q("density_kg_m3"), m.density_kg_m3)?;
+            positive(file, q("specific_heat_j_kg_k"), m.specific_heat_j_kg_k)?;
+            positive(file, q("conductivity_w_m_k"), m.conductivity_w_m_k)?;
+            positive(file, q("expansion_per_k"), m.expansion_per_k)?;
+            positive(file, q("modulus_pa"), m.modulus_pa)?;
+            if !(m.poisson > -1.0 && m.poisson < 0.5) {
+                return Err(invalid(file, q("poisson"), "must lie in (-1, 0.5)"));
+            }
+        }
+
+        // Node usage: every node exactly once.
+        let mut owner: Vec<Option<String>> = vec![None; self.n_nodes + 1];
+        let mut claim = |node: usize, path: String| -> Result<(), ThermalError> {
+            if node == 0 || node > self.n_nodes {
+                return Err(invalid(
+                    file,
+                    path,
+                    format!("node {node} outside 1..={}", self.n_nodes),
+                ));
+            }
+            if let Some(prev) = &owner[node] {
+                return Err(invalid(
+                    file,
+                    path,
+                    format!("node {node} already used by {prev}"),
+                ));
+            }
+            owner[node] = Some(path);
+            Ok(())
+        };
+        for (k, s) in self.shafts.iter().enumerate() {
+            let q = |f: &str| p(&format!("shafts[{k}].{f}"));
+            finite(file, q("speed_ratio"), s.speed_ratio)?;
+            if !non_negative(s.inner_diameter_m) {
+                return Err(invalid(file, q("inner_diameter_m"), "must be >= 0"));
+            }
+            positive(file, q("outer_diameter_m"), s.outer_diameter_m)?;
+            positive(file, q("length_m"), s.length_m)?;
+            if s.inner_diameter_m >= s.outer_diameter_m {
+                return Err(invalid(
+                    file,
+                    q("inner_diameter_m"),
+                    "must be < outer_diameter_m",
+                ));
+            }
+            if s.nodes.is_empty() {
+                return Err(invalid(file, q("nodes"), "needs at least one node"));
+            }
+            for (j, &n) in s.nodes.iter().enumerate() {
+                claim(n, q(&format!("nodes[{j}]")))?;
+            }
+        }
+        let shaft_node = |n: usize| self.shafts.iter().any(|s| s.nodes.contains(&n));
+        for (k, d) in self.disks.iter().enumerate() {
+            let q = |f: &str| p(&format!("disks[{k}].{f}"));
+            claim(d.node, q("node"))?;
+            if !shaft_node(d.shaft_node) {
+                return Err(invalid(
+                    file,
+                    q("shaft_node"),
+                    format!("{} is not a shaft node", d.shaft_node),
+                ));
+            }
+            positive(file, q("mass_kg"), d.mass_kg)?;
+            positive(file, q("polar_inertia_kg_m2"), d.polar_inertia_kg_m2)?;
+            positive(file, q("bore_diameter_m"), d.bore_diameter_m)?;
+            let r_b = 0.5 * d.bore_diameter_m;
+            if 2.0 * d.polar_inertia_kg_m2 / d.mass_kg <= 2.0 * r_b * r_b {
+                return Err(invalid(
+                    file,
+                    q("polar_inertia_kg_m2"),
+                    "too small for an annular disk of this bore and mass",
+                ));
+            }
+        }
+        for (k, h) in self.housings.iter().enumerate() {
+            let q = |f: &str| p(&format!("housings[{k}].{f}"));
+            claim(h.seat_node, q("seat_node"))?;
+            claim(h.flank_nodes[0], q("flank_nodes[0]"))?;
+            claim(h.flank_nodes[1], q("flank_nodes[1]"))?;
+            positive(file, q("bore_diameter_m"), h.bore_diameter_m)?;
+            positive(file, q("seat_length_m"), h.seat_length_m)?;
+            if h.radius_m <= 0.5 * h.bore_diameter_m {
+                return Err(invalid(file, q("radius_m"), "must exceed the bore radius"));
+            }
+            if h.length_m <= h.seat_length_m {
+                return Err(invalid(file, q("length_m"), "must exceed seat_length_m"));
+            }
+        }
+        for (k, b) in self.bearings.iter().enumerate() {
+            let q = |f: &str| p(&format!("bearings[{k}].{f}"));
+            claim(b.element_node, q("element_node"))?;
+            claim(b.inner_node, q("inner_node"))?;
+            claim(b.outer_node, q("outer_node"))?;
+            claim(b.lubricant_node, q("lubricant_node"))?;
+            if !shaft_node(b.inner_shaft_node) {
+                return Err(invalid(file, q("inner_shaft_node"), "is not a shaft node"));
+            }
+            match (&b.housing, b.outer_shaft_node) {
+                (Some(name), None) => {
+                    if !self.housings.iter().any(|h| &h.name == name) {
+                        return Err(invalid(
+                            file,
+                            q("housing"),
+                            format!("no housing named {name:?}"),
+                        ));
+                    }
+                }
+                (None, Some(n)) => {
+                    if !shaft_node(n) {
+                        return Err(invalid(file, q("outer_shaft_node"), "is not a shaft node"));
+                    }
+                }
+                _ => {
+                    return Err(invalid(
+                        file,
+                        q("housing"),
+                        "give exactly one of `housing` and `outer_shaft_node`",
+                    ));
+                }
+            }
+            if b.n_elements == 0 {
+                return Err(invalid(file, q("n_elements"), "must be > 0"));
+            }
+            for (f, v) in [
+                ("seat_diameter_m", b.seat_diameter_m),
+                ("element_diameter_m", b.element_diameter_m),
+                ("inner_raceway_m", b.inner_raceway_m),
+                ("outer_raceway_m", b.outer_raceway_m),
+                ("pitch_diameter_m", b.pitch_diameter_m),
+                ("bore_diameter_m", b.bore_diameter_m),
+                ("outer_diameter_m", b.outer_diameter_m),
+                ("width_m", b.width_m),
+                ("f_l", b.f_l),
+                ("f_v", b.f_v),
+            ] {
+                positive(file, q(f), v)?;
+            }
+            if !non_negative(b.cage_mass_kg) {
+                return Err(invalid(file, q("cage_mass_kg"), "must be >= 0"));
+            }
+            if !(b.bore_diameter_m < b.inner_raceway_m
+                && b.inner_raceway_m < b.outer_raceway_m
+                && b.outer_raceway_m < b.outer_diameter_m)
+            {
+                return Err(invalid(
+                    file,
+                    q("inner_raceway_m"),
+                    "need bore < inner raceway < outer raceway < outer diameter",
+                ));
+            }
+            match b.kind {
+                ContactLaw::Ball => match b.conformity {
+                    Some(f) if f > 0.5 => {}
+                    _ => {
+                        return Err(invalid(
+                            file,
+                            q("conformity"),
+                            "ball bearings need conformity > 0.5",
+                        ));
+                    }
+                },
+                ContactLaw::Roller => match b.roller_length_m {
+                    Some(l) if l > 0.0 => {}
+                    _ => {
+                        return Err(invalid(
+                            file,
+                            q("roller_length_m"),
+                            "roller bearings need roller_length_m > 0",
+                        ));
+                    }
+                },
+            }
+        }
+        if let Some(n) = (1..=self.n_nodes).find(|&n| owner[n].is_none()) {
+            return Err(invalid(
+                file,
+                p("n_nodes"),
+                format!("node {n} is not used by any entry"),
+            ));
+        }
+        Ok(())
+    }
+}

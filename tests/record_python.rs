@@ -1,0 +1,72 @@
+//! The official MCAP Python reader (`mcap` + `mcap-protobuf-support`) decodes every
+//! message of a small recording. `.ci/run` installs the packages into `.venv` and exports
+//! `TMROTOR_PYTHON`; without it the test says why it is skipped, except under `CI=true`
+//! where a missing reader is a failure.
+
+use std::process::Command;
+
+use tmrotor::record::synthetic::{self, SyntheticOptions};
+
+#[test]
+fn official_python_reader_decodes_every_message() {
+    let python = match std::env::var("TMROTOR_PYTHON") {
+        Ok(p) if !p.is_empty() => p,
+        _ => {
+            let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
+            assert!(
+                !ci,
+                "CI=true but TMROTOR_PYTHON is not set: the Python MCAP reader check cannot run"
+            );
+            eprintln!(
+                "skipped: TMROTOR_PYTHON is not set (point it at a python with `mcap` and \
+                 `mcap-protobuf-support`, as .ci/run does)"
+            );
+            return;
+        }
+    };
+    let probe = Command::new(&python)
+        .args(["-c", "import mcap, mcap_protobuf"])
+        .status();
+    assert!(
+        probe.is_ok_and(|s| s.success()),
+        "TMROTOR_PYTHON={python} cannot import mcap and mcap_protobuf"
+    );
+
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("small.mcap");
+    let options = SyntheticOptions {
+        points_per_side: 6,
+        ..Default::default()
+    };
+    let n = synthetic::write_mcap(&path, &options, true).expect("write");
+    let bifs = synthetic::generate(&options).bifurcations.len();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tools/check_recording.py");
+    let mut expected = vec!["/run_info=1".to_string(), format!("/log={}", 2 + bifs)];
+    expected.push(format!("/bifurcations={bifs}"));
+    for topic in [
+        "/summary",
+        "/harmonics",
+        "/orbits",
+        "/temperatures",
+        "/clearance",
+        "/bearing_loads",
+        "/thermal_forces",
+        "/floquet",
+        "/scene",
+    ] {
+        expected.push(format!("{topic}={n}"));
+    }
+    let output = Command::new(&python)
+        .arg(script)
+        .arg(&path)
+        .args(&expected)
+        .output()
+        .expect("run python");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "Python reader check failed:\n{stdout}\n{stderr}"
+    );
+    assert!(stdout.contains("decoded"), "{stdout}");
+}

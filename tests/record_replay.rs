@@ -1,0 +1,243 @@
+//! The `replay` tool, in-process (`Cli::try_parse_from`) and as a process.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use clap::Parser;
+use num_complex::Complex64;
+use tmrotor::record::derive::{DeriveError, StabilityRederive};
+use tmrotor::record::replay::{self, Cli, stability};
+use tmrotor::record::synthetic::{self, SyntheticOptions};
+use tmrotor::record::{PointRecord, read_recording};
+
+fn recording(dir: &Path, finish: bool) -> PathBuf {
+    let path = dir.join(if finish { "run.mcap" } else { "cut.mcap" });
+    let options = SyntheticOptions {
+        points_per_side: 8,
+        ..Default::default()
+    };
+    synthetic::write_mcap(&path, &options, finish).expect("write");
+    path
+}
+
+fn replay_in_process(args: &[&str]) -> (anyhow::Result<()>, String, String) {
+    let cli = Cli::try_parse_from(std::iter::once("replay").chain(args.iter().copied()))
+        .expect("arguments parse");
+    let (mut out, mut err) = (Vec::new(), Vec::new());
+    let res = replay::run(cli, &mut out, &mut err);
+    (
+        res,
+        String::from_utf8_lossy(&out).into_owned(),
+        String::from_utf8_lossy(&err).into_owned(),
+    )
+}
+
+#[test]
+fn branch_csv_has_one_row_per_point_with_recorded_values() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = recording(dir.path(), true);
+    let rec = read_recording(&path).expect("read");
+    let file = path.to_str().expect("utf-8 path");
+    let (res, out, _) = replay_in_process(&["branch", file, "--csv"]);
+    res.expect("branch");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(
+        lines[0],
+        "index,omega,arc_length,amp_1_m,stable,bifurcation,residual_mech,residual_therm,newton_iterations"
+    );
+    assert_eq!(lines.len(), rec.points.len() + 1);
+    for (line, p) in lines[1..].iter().zip(&rec.points) {
+        let cols: Vec<&str> = line.split(',').collect();
+        assert_eq!(cols[1].parse::<f64>().expect("omega"), p.omega_rad_s);
+        assert_eq!(cols[3].parse::<f64>().expect("amp"), p.amplitude_rms_m[0]);
+        assert_eq!(cols[4], if p.stable == Some(true) { "1" } else { "0" });
+        assert_eq!(
+            cols[5],
+            p.bifurcation.map_or("", |b| b.label()),
+            "bifurcation column"
+        );
+    }
+    assert_eq!(out.matches("saddle-node").count(), 2);
+}
+
+#[test]
+fn orbit_rederives_closed_form_histories_at_any_sampling() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = recording(dir.path(), true);
+    let file = path.to_str().expect("utf-8 path");
+    let rec = read_recording(&path).expect("read");
+    let p = &rec.points[5];
+    let (res, out, err) = replay_in_process(&[
+        "orbit",
+        file,
+        "--point",
+        "5",
+        "--node",
+        "1",
+        "--samples",
+        "37",
+    ]);
+    res.expect("orbit");
+    assert!(err.contains("cannot be re-derived"), "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines[0], "t_s,x_1_m,y_1_m,T_52_c");
+    assert_eq!(lines.len(), 38);
+    // Independent reference: the synthetic closed form x = a cos(ωt − φ) + c cos(λωt),
+    // recovered from the stored harmonic-1 coefficients (a cos φ, a sin φ).
+    let nc = rec.run.n_coeffs();
+    let nh = rec.run.harmonics.len();
+    let h1 = rec
+        .run
+        .harmonics
+        .iter()
+        .position(|r| r.num == 1 && r.den == 1)
+        .expect("ω");
+    let (ac, as_) = (p.coeffs_mech[1 + h1], p.coeffs_mech[1 + nh + h1]);
+    let c = synthetic::LAMBDA_AMPLITUDE_M;
+    let w = p.omega_rad_s;
+    for line in &lines[1..] {
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|s| s.parse().expect("number"))
+            .collect();
+        let t = v[0];
+        let x = ac * (w * t).cos() + as_ * (w * t).sin() + c * (1.2 * w * t).cos();
+        assert!(
+            (v[1] - x).abs() < 1e-12 * p.amplitude_rms_m[0],
+            "x at t = {t}"
+        );
+        let temp = p.temperatures[0].mean_c + 0.1 * (0.5 * w * t).cos();
+        assert!((v[3] - temp).abs() < 1e-9, "T at t = {t}");
+    }
+    assert_eq!(nc, 9);
+
+    let (res, _, _) = replay_in_process(&["orbit", file, "--point", "999"]);
+    let e = res.expect_err("no such point").to_string();
+    assert!(e.contains("no point 999"), "{e}");
+    let (res, _, _) = replay_in_process(&["orbit", file, "--point", "1", "--node", "7"]);
+    assert!(
+        res.expect_err("no such node")
+            .to_string()
+            .contains("no dynamic node 7")
+    );
+}
+
+struct Perturbed(f64);
+impl StabilityRederive for Perturbed {
+    fn multipliers(&self, p: &PointRecord) -> Result<Vec<Complex64>, DeriveError> {
+        // Reverse the order (matching must not depend on it) and shift by a known amount.
+        Ok(p.multipliers
+            .iter()
+            .rev()
+            .map(|m| m + Complex64::new(0.0, self.0))
+            .collect())
+    }
+}
+
+#[test]
+fn stability_reports_largest_deviation_or_says_it_is_unavailable() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = recording(dir.path(), true);
+    let rec = read_recording(&path).expect("read");
+    let c = stability::compare(&rec, &Perturbed(1e-7)).expect("compare");
+    assert_eq!(c.compared, rec.points.len());
+    let (dev, _) = c.max_deviation.expect("deviation");
+    assert!((dev - 1e-7).abs() < 1e-12, "{dev}");
+    assert!(c.flag_changes.is_empty());
+
+    let (res, _, _) = replay_in_process(&["stability", path.to_str().expect("utf-8")]);
+    let e = res.expect_err("no model to rebuild");
+    assert!(e.downcast_ref::<replay::NotAvailable>().is_some());
+    assert!(e.to_string().contains("cannot be recomputed"), "{e}");
+}
+
+#[test]
+fn info_on_complete_and_cut_recordings() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = recording(dir.path(), true);
+    let (res, out, err) = replay_in_process(&["info", path.to_str().expect("utf-8")]);
+    res.expect("info");
+    assert!(err.is_empty());
+    for want in [
+        "state:       complete",
+        "completed",
+        "saddle-node",
+        "/summary",
+        "hb.order = 1",
+        "ω range",
+    ] {
+        assert!(out.contains(want), "missing {want:?} in\n{out}");
+    }
+    let cut = recording(dir.path(), false);
+    let (res, out, err) = replay_in_process(&["info", cut.to_str().expect("utf-8")]);
+    res.expect("info on an unfinished file");
+    assert!(
+        out.contains("INCOMPLETE") && err.contains("incomplete"),
+        "{out}\n{err}"
+    );
+}
+
+fn png_pixels(path: &Path) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(path).expect("png"),
+    ));
+    let mut reader = decoder.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    (info.width, info.height, buf)
+}
+
+#[test]
+fn plot_binary_writes_pngs_with_stable_and_unstable_colours_and_handles_bad_files() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = recording(dir.path(), true);
+    let figs = dir.path().join("figs");
+    let exe = env!("CARGO_BIN_EXE_replay");
+    for font in [None, Some("none")] {
+        let mut cmd = Command::new(exe);
+        cmd.arg("plot").arg(&path).arg("--out").arg(&figs);
+        if let Some(f) = font {
+            cmd.env("TMROTOR_FONT", f);
+        }
+        let out = cmd.output().expect("run replay");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        for name in ["amplitude_node1.png", "clearance.png", "temperatures.png"] {
+            let (w, h, px) = png_pixels(&figs.join(name));
+            assert_eq!((w, h), (1000, 650));
+            if name.starts_with("amplitude") {
+                let has = |r: u8, g: u8, b: u8| px.chunks(3).any(|p| p == [r, g, b]);
+                assert!(has(31, 119, 180), "stable colour missing");
+                assert!(has(214, 39, 40), "unstable colour missing");
+            }
+        }
+    }
+
+    let junk = dir.path().join("junk.mcap");
+    std::fs::write(&junk, b"not a recording").expect("write");
+    let out = Command::new(exe)
+        .arg("info")
+        .arg(&junk)
+        .output()
+        .expect("run");
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("junk.mcap") && stderr.contains("not an MCAP file"),
+        "{stderr}"
+    );
+
+    let out = Command::new(exe)
+        .arg("stability")
+        .arg(&path)
+        .output()
+        .expect("run");
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "not available has its own exit code"
+    );
+}

@@ -1,0 +1,281 @@
+//! Write → read round trips of the MCAP sink against the in-memory sink, the re-derived
+//! quantities against the closed-form synthetic values, and the sink's checks.
+
+use std::collections::BTreeMap;
+
+use mcap::MessageStream;
+use prost_reflect::{DescriptorPool, DynamicMessage};
+use tmrotor::record::derive;
+use tmrotor::record::synthetic::{self, SyntheticOptions};
+use tmrotor::record::{
+    McapOptions, McapSink, MemorySink, RecordError, RunStatus, Sink, read_recording, record_run,
+};
+
+fn write_both(options: &SyntheticOptions, path: &std::path::Path) -> MemorySink {
+    let data = synthetic::generate(options);
+    let mut mem = MemorySink::new();
+    let mut file = McapSink::create(path, McapOptions::default()).expect("create");
+    for sink in [&mut mem as &mut dyn Sink, &mut file as &mut dyn Sink] {
+        sink.begin_run(&data.run).expect("begin");
+        let mut bifs = data.bifurcations.iter().peekable();
+        for p in &data.points {
+            sink.write_point(p).expect("point");
+            while let Some(b) = bifs.next_if(|b| b.after_point + 1 == p.index) {
+                sink.write_bifurcation(b).expect("bifurcation");
+            }
+        }
+        sink.finish(RunStatus::Completed).expect("finish");
+    }
+    mem
+}
+
+#[test]
+fn thermal_run_reads_back_identical() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("run.mcap");
+    let mem = write_both(&SyntheticOptions::default(), &path);
+    let rec = read_recording(&path).expect("read");
+    assert!(rec.complete, "notes: {:?}", rec.notes);
+    assert_eq!(rec.status, Some(RunStatus::Completed));
+    assert_eq!(Some(&rec.run), mem.run.as_ref());
+    assert_eq!(rec.points.len(), mem.points.len());
+    assert!(rec.points.len() > 30);
+    assert_eq!(rec.points, mem.points);
+    assert_eq!(rec.bifurcations, mem.bifurcations);
+    assert_eq!(rec.bifurcations.len(), 2);
+    let counts: BTreeMap<_, _> = rec
+        .topics
+        .iter()
+        .map(|t| (t.topic.as_str(), t.messages))
+        .collect();
+    let n = mem.points.len() as u64;
+    for topic in [
+        "/summary",
+        "/harmonics",
+        "/orbits",
+        "/temperatures",
+        "/clearance",
+        "/bearing_loads",
+        "/thermal_forces",
+        "/floquet",
+        "/scene",
+    ] {
+        assert_eq!(counts.get(topic), Some(&n), "{topic}");
+    }
+    assert_eq!(counts.get("/bifurcations"), Some(&2));
+    assert_eq!(counts.get("/run_info"), Some(&1));
+    // start + 2 bifurcations + end
+    assert_eq!(counts.get("/log"), Some(&4));
+    assert!(rec.attachments.contains(&"synthetic.toml".to_string()));
+    assert_eq!(
+        rec.metadata["tmrotor.settings"]["hb.order"], "1",
+        "settings metadata"
+    );
+}
+
+#[test]
+fn mechanical_run_has_no_thermal_topics_and_reads_back_identical() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("mech.mcap");
+    let options = SyntheticOptions {
+        thermal: false,
+        stability: false,
+        points_per_side: 5,
+        ..Default::default()
+    };
+    let mem = write_both(&options, &path);
+    let rec = read_recording(&path).expect("read");
+    assert!(rec.complete);
+    assert_eq!(rec.points, mem.points);
+    assert!(rec.points.iter().all(|p| p.stable.is_none()));
+    let topics: Vec<&str> = rec.topics.iter().map(|t| t.topic.as_str()).collect();
+    for absent in [
+        "/temperatures",
+        "/clearance",
+        "/bearing_loads",
+        "/thermal_forces",
+        "/floquet",
+        "/bifurcations",
+    ] {
+        assert!(
+            !topics.contains(&absent),
+            "{absent} should not be published"
+        );
+    }
+}
+
+#[test]
+fn rederived_orbits_and_amplitudes_equal_recorded_closed_form_values() {
+    let data = synthetic::generate(&SyntheticOptions::default());
+    for p in &data.points {
+        let samples = p.orbits[0].x_m.len();
+        let orbits =
+            derive::orbits(&data.run, &p.coeffs_mech, p.omega_rad_s, samples).expect("orbits");
+        let scale = p.amplitude_rms_m[0];
+        for (got, want) in orbits[0].x_m.iter().zip(&p.orbits[0].x_m) {
+            assert!((got - want).abs() <= 1e-12 * scale, "x: {got} vs {want}");
+        }
+        for (got, want) in orbits[0].y_m.iter().zip(&p.orbits[0].y_m) {
+            assert!((got - want).abs() <= 1e-12 * scale, "y: {got} vs {want}");
+        }
+        // Eq. 35 by Parseval vs the closed form sqrt(a² + c²) …
+        let amp = derive::amplitude_rms(&data.run, &p.coeffs_mech).expect("amplitude");
+        assert!((amp[0] - p.amplitude_rms_m[0]).abs() <= 1e-12 * scale);
+        // … and vs the discrete mean over the recorded orbit samples (exact for
+        // trigonometric polynomials of degree < samples/2).
+        let o = &p.orbits[0];
+        let n = o.x_m.len() as f64;
+        let (mx, my) = (o.x_m.iter().sum::<f64>() / n, o.y_m.iter().sum::<f64>() / n);
+        let ms = o
+            .x_m
+            .iter()
+            .zip(&o.y_m)
+            .map(|(x, y)| (x - mx).powi(2) + (y - my).powi(2))
+            .sum::<f64>()
+            / n;
+        assert!((ms.sqrt() - amp[0]).abs() <= 1e-10 * scale);
+        // Temperature: mean exact, extremes within the sampling of a cos(ωt/2) term.
+        let t = derive::temperature_stats(&data.run, &p.coeffs_therm, p.omega_rad_s, 2000)
+            .expect("temperatures");
+        let want = p.temperatures[0];
+        assert_eq!(t[0].mean_c, want.mean_c);
+        assert!((t[0].max_c - want.max_c).abs() < 1e-6);
+        assert!((t[0].min_c - want.min_c).abs() < 1e-3);
+    }
+}
+
+#[test]
+fn log_time_increases_strictly_along_the_branch_and_every_message_decodes_with_its_embedded_schema()
+{
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("run.mcap");
+    write_both(&SyntheticOptions::default(), &path);
+    let bytes = std::fs::read(&path).expect("read");
+    let mut last_summary_time = None;
+    let mut last_summary_index = None;
+    let mut decoded = 0;
+    for msg in MessageStream::new(&bytes).expect("stream") {
+        let msg = msg.expect("message");
+        let schema = msg.channel.schema.as_ref().expect("schema");
+        assert_eq!(schema.encoding, "protobuf");
+        assert_eq!(msg.channel.message_encoding, "protobuf");
+        let pool = DescriptorPool::decode(schema.data.as_ref()).expect("descriptor set");
+        let desc = pool
+            .get_message_by_name(&schema.name)
+            .expect("message in set");
+        let dynamic = DynamicMessage::decode(desc, msg.data.as_ref()).expect("decodes");
+        decoded += 1;
+        if msg.channel.topic == "/summary" {
+            let index = dynamic
+                .get_field_by_name("index")
+                .and_then(|v| v.as_u64())
+                .expect("index");
+            if let (Some(t), Some(i)) = (last_summary_time, last_summary_index) {
+                assert!(msg.log_time > t && index > i);
+            }
+            last_summary_time = Some(msg.log_time);
+            last_summary_index = Some(index);
+        }
+    }
+    assert!(decoded > 300);
+    let summary = mcap::Summary::read(&bytes)
+        .expect("summary")
+        .expect("present");
+    assert!(!summary.chunk_indexes.is_empty());
+    assert!(
+        summary
+            .chunk_indexes
+            .iter()
+            .all(|c| c.compression == "zstd"),
+        "chunks must be zstd-compressed"
+    );
+    assert!(summary.stats.is_some());
+}
+
+#[test]
+fn sink_rejects_misuse_with_reasons() {
+    let data = synthetic::generate(&SyntheticOptions {
+        points_per_side: 3,
+        ..Default::default()
+    });
+    let mut sink = MemorySink::new();
+    assert!(matches!(
+        sink.write_point(&data.points[0]),
+        Err(RecordError::NotStarted(_))
+    ));
+    sink.begin_run(&data.run).expect("begin");
+    sink.write_point(&data.points[1]).expect("point");
+    assert!(matches!(
+        sink.write_point(&data.points[0]),
+        Err(RecordError::NonIncreasingIndex {
+            index: 0,
+            previous: 1
+        })
+    ));
+    let mut bad = data.points[2].clone();
+    bad.coeffs_mech.pop();
+    let err = sink.write_point(&bad).expect_err("size mismatch");
+    assert!(err.to_string().contains("coeffs_mech"), "{err}");
+    sink.finish(RunStatus::Completed).expect("finish");
+    assert!(matches!(
+        sink.write_point(&data.points[2]),
+        Err(RecordError::Finished)
+    ));
+}
+
+#[derive(Debug)]
+struct SweepError(String);
+impl std::fmt::Display for SweepError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+impl From<RecordError> for SweepError {
+    fn from(e: RecordError) -> Self {
+        Self(e.to_string())
+    }
+}
+
+#[test]
+fn a_failing_run_is_still_finished_with_its_reason() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("failed.mcap");
+    let data = synthetic::generate(&SyntheticOptions {
+        points_per_side: 4,
+        ..Default::default()
+    });
+    let mut sink = McapSink::create(&path, McapOptions::default()).expect("create");
+    let result: Result<(), SweepError> = record_run(&mut sink, &data.run, |s| {
+        s.write_point(&data.points[0])?;
+        s.write_point(&data.points[1])?;
+        Err(SweepError("Newton diverged at ω = 451 rad/s".into()))
+    });
+    assert!(result.is_err());
+    drop(sink);
+    let rec = read_recording(&path).expect("read");
+    assert!(rec.complete);
+    assert_eq!(rec.points.len(), 2);
+    assert_eq!(
+        rec.status,
+        Some(RunStatus::Failed("Newton diverged at ω = 451 rad/s".into()))
+    );
+}
+
+#[test]
+fn a_dropped_sink_finishes_the_file() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("dropped.mcap");
+    let data = synthetic::generate(&SyntheticOptions {
+        points_per_side: 4,
+        ..Default::default()
+    });
+    {
+        let mut sink = McapSink::create(&path, McapOptions::default()).expect("create");
+        sink.begin_run(&data.run).expect("begin");
+        sink.write_point(&data.points[0]).expect("point");
+    }
+    let rec = read_recording(&path).expect("read");
+    assert!(rec.complete);
+    assert!(matches!(rec.status, Some(RunStatus::Failed(_))));
+    assert_eq!(rec.points.len(), 1);
+}

@@ -1,0 +1,139 @@
+//! Period-doubling reference (`tmrotor::systems::period_doubling`): the forced double-well
+//! Duffing oscillator `ẍ + 0.3ẋ − x + x³ = γ cos(1.2 t)`. The first period doubling of the
+//! one-well orbit is located from the Floquet multipliers (a real multiplier through −1),
+//! checked against the literature bracket 0.20 < γ < 0.28, against SIP, and against the
+//! time integrator's stroboscopic samples (period 1 below, period 2 above).
+
+use tmrotor::integrate::{
+    Dopri5Options, FlowSensitivity, ShootingOptions, poincare_samples, shoot_periodic, steady_state,
+};
+use tmrotor::stability::{BifurcationKind, FloquetResult, Sip, StabilityMethod, classify_crossing};
+use tmrotor::systems::period_doubling::{DoubleWellDuffing, GAMMA_BRACKET, OMEGA};
+
+fn period() -> f64 {
+    2.0 * std::f64::consts::PI / OMEGA
+}
+
+/// Period-1 orbit at `gamma` by shooting from `start`.
+fn orbit_at(gamma: f64, start: &[f64]) -> FlowSensitivity {
+    shoot_periodic(
+        &DoubleWellDuffing::reference(gamma),
+        OMEGA,
+        start,
+        period(),
+        &ShootingOptions::default(),
+    )
+    .expect("shooting converges on the period-1 orbit")
+}
+
+/// Smallest real part among the multipliers of the shooting monodromy.
+fn most_negative(orbit: &FlowSensitivity) -> f64 {
+    orbit
+        .phi
+        .eigenvalues()
+        .expect("eigenvalues")
+        .iter()
+        .map(|m| if m.im.abs() < 1e-9 { m.re } else { 0.0 })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Locates the period doubling: continuation in γ from 0.20 in steps of 0.005, then
+/// bisection on `μ_min + 1` to 1e-6. Returns (γ*, orbit start at γ*).
+fn locate() -> (f64, Vec<f64>) {
+    let settled = steady_state(
+        &DoubleWellDuffing::reference(0.20),
+        OMEGA,
+        &[1.0, 0.0],
+        period(),
+        300,
+    )
+    .expect("settles");
+    let mut y = orbit_at(0.20, &settled.samples[0]).y;
+    let mut lo = 0.20;
+    let mut hi = None;
+    let mut g = 0.20;
+    while g < 0.30 {
+        g += 0.005;
+        let o = orbit_at(g, &y);
+        if most_negative(&o) < -1.0 {
+            hi = Some(g);
+            break;
+        }
+        lo = g;
+        y = o.y;
+    }
+    let mut hi = hi.expect("a multiplier reaches −1 below γ = 0.30");
+    while hi - lo > 1e-6 {
+        let mid = 0.5 * (lo + hi);
+        let o = orbit_at(mid, &y);
+        if most_negative(&o) < -1.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+            y = o.y;
+        }
+    }
+    (0.5 * (lo + hi), y)
+}
+
+fn sip_at(gamma: f64, start: &[f64]) -> FloquetResult {
+    let sys = DoubleWellDuffing::reference(gamma);
+    let o = orbit_at(gamma, start);
+    let orbit = steady_state(&sys, OMEGA, &o.y, period(), 0)
+        .expect("samples")
+        .orbit();
+    Sip::default().multipliers(&sys, &orbit).expect("SIP")
+}
+
+/// Largest distance between stroboscopic samples `lag` periods apart.
+fn spread(samples: &[Vec<f64>], lag: usize) -> f64 {
+    samples
+        .windows(lag + 1)
+        .map(|w| (w[0][0] - w[lag][0]).hypot(w[0][1] - w[lag][1]))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn period_doubling_is_located_and_confirmed_by_time_integration() {
+    let (gamma_pd, y_pd) = locate();
+    println!("period doubling at γ* = {gamma_pd:.6}");
+    assert!(gamma_pd > GAMMA_BRACKET.0 && gamma_pd < GAMMA_BRACKET.1);
+
+    // SIP on both sides: stable below, one real multiplier below −1 above, and the
+    // crossing classifies as period doubling.
+    let dg = 0.002;
+    let below = sip_at(gamma_pd - dg, &y_pd);
+    let above = sip_at(gamma_pd + dg, &y_pd);
+    println!(
+        "SIP below {:?}\nSIP above {:?}",
+        below.multipliers, above.multipliers
+    );
+    assert!(below.stable && !above.stable);
+    assert_eq!(
+        classify_crossing(&below, &above),
+        Some(BifurcationKind::PeriodDoubling)
+    );
+
+    // Time integration from (near) the period-1 orbit: period 1 below γ*, period 2 above.
+    let opts = Dopri5Options::default();
+    for (gamma, expect_period_two) in [(gamma_pd - 0.005, false), (gamma_pd + 0.005, true)] {
+        let start = [y_pd[0] + 1e-3, y_pd[1]];
+        let samples = poincare_samples(
+            &DoubleWellDuffing::reference(gamma),
+            OMEGA,
+            &start,
+            period(),
+            1500,
+            8,
+            &opts,
+        )
+        .expect("integrates");
+        let (s1, s2) = (spread(&samples, 1), spread(&samples, 2));
+        println!("γ = {gamma:.4}: |P(k+1) − P(k)| ≤ {s1:.3e}, |P(k+2) − P(k)| ≤ {s2:.3e}");
+        if expect_period_two {
+            assert!(s1 > 1e-2 && s2 < 1e-6, "period 2 expected");
+        } else {
+            assert!(s1 < 1e-6, "period 1 expected");
+        }
+    }
+}
