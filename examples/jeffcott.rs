@@ -12,6 +12,7 @@
 
 use tmrotor::continuation::{Continuation, ContinuationOptions, csv::branch_csv};
 use tmrotor::hb::HarmonicBalance;
+use tmrotor::stability::Sip;
 use tmrotor::systems::jeffcott::Jeffcott;
 
 fn main() -> anyhow::Result<()> {
@@ -26,8 +27,9 @@ fn main() -> anyhow::Result<()> {
     let (w0, w1) = Jeffcott::OMEGA_RANGE;
     let mut opts = ContinuationOptions::new(w0, w1);
     opts.initial_guess = Some(system.start_guess(&basis, w0));
-    // Floquet stability is not wired in here yet: the `stable` column stays empty.
-    let mut cont = Continuation::new(hb, opts, None)?;
+    // Floquet multipliers by the paper's SIP product (Eqs. 30–33) with default settings
+    let sip = Sip::default();
+    let mut cont = Continuation::new(hb, opts, Some(&sip))?;
     let branch = cont.run(|_| {})?;
     eprintln!(
         "{} points, {} rejected steps, finished: {:?}",
