@@ -1,10 +1,12 @@
 //! Frequency response of the Duffing oscillator `ẍ + 0.05ẋ + x + 0.1x³ = 0.18 cos Ωt`,
-//! Ω from 0.5 to 1.6, as CSV on stdout (see `tmrotor::continuation::csv` for the columns).
+//! Ω from 0.5 to 1.6, as CSV on stdout (see `tmrotor::continuation::csv` for the columns;
+//! amplitude = max |x| over one period).
 //!
 //! `cargo run --release --example duffing > duffing.csv`
 
 use tmrotor::continuation::{Continuation, ContinuationOptions, csv::branch_csv};
 use tmrotor::hb::{Basis, HarmonicBalance};
+use tmrotor::stability::Sip;
 use tmrotor::systems::duffing::Duffing;
 
 fn main() -> anyhow::Result<()> {
@@ -14,8 +16,13 @@ fn main() -> anyhow::Result<()> {
     let hb = HarmonicBalance::new(&system, &basis, None)?;
     let (w0, w1) = Duffing::OMEGA_RANGE;
     let opts = ContinuationOptions::new(w0, w1);
-    // Floquet stability is not wired in here yet: the `stable` column stays empty.
-    let mut cont = Continuation::new(hb, opts, None)?;
+    // Floquet multipliers by the paper's SIP product (Eqs. 30–33), Richardson-extrapolated
+    // (safe for small low-frequency systems, see `tmrotor::stability::sip`)
+    let sip = Sip {
+        extrapolate: true,
+        ..Sip::default()
+    };
+    let mut cont = Continuation::new(hb, opts, Some(&sip))?;
     let branch = cont.run(|_| {})?;
     eprintln!(
         "{} points, {} rejected steps, finished: {:?}",

@@ -130,3 +130,25 @@ fn neimark_sacker_points_are_located_and_quasi_periodic_past_them() {
     assert!(spread_before < 1e-4 * amp);
     assert!(spread_after > 1e-2 * amp);
 }
+
+#[test]
+fn sip_stability_in_the_continuation_locates_the_same_bifurcations() {
+    // the library's SIP product (paper Eqs. 30–33) against the RK4 variational reference
+    let reference = trace();
+    let sys = Absorber::default();
+    let basis = Basis::integer(7).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let sip = tmrotor::stability::Sip {
+        extrapolate: true,
+        ..tmrotor::stability::Sip::default()
+    };
+    let mut cont =
+        Continuation::new(hb, ContinuationOptions::new(0.8, 1.4), Some(&sip)).expect("cont");
+    let branch = cont.run(|_| {}).expect("run");
+    assert_eq!(branch.bifurcations.len(), reference.bifurcations.len());
+    for (a, b) in branch.bifurcations.iter().zip(&reference.bifurcations) {
+        assert_eq!(a.bifurcation, b.bifurcation);
+        let (wa, wb) = (a.solution.omega, b.solution.omega);
+        assert!((wa - wb).abs() < 1e-5 * wb, "{wa} vs {wb}");
+    }
+}

@@ -4,10 +4,13 @@
 //!
 //! ```text
 //!   mechanical: m ẍ_i + c (2ẋ_i − ẋ_{i−1} − ẋ_{i+1}) + k (2x_i − x_{i−1} − x_{i+1}) = δ_{i0} F cos ω t
-//!               + at DoF `contact`: f = k₃ x³ (1 + β T_c) + d₃ ẋ³
+//!               + at contact a (DoF i_a): f_a = k₃ x³ (1 + β T_{j(a)}) + d₃ ẋ³
 //!   thermal:    C Ṫ_j + κ (2T_j − T_{j−1} − T_{j+1}) = δ_{j0} Q
-//!               + at node `hot`: g = η T_c² − γ ẋ_c² − ρ x_c² T_c
+//!               + at hot node b (node j_b): g_b = η T² − γ ẋ_{i(b)}² − ρ x_{i(b)}² T
 //! ```
+//!
+//! with `p` contacts and `q` hot nodes spread evenly along the chains, contact `a` coupled
+//! to hot node `a mod q` and hot node `b` to contact `b mod p`.
 //!
 //! (fixed ends, `x_{−1} = x_n = 0`, `T_{−1} = T_m = 0`). All parameters are
 //! nondimensional test values; the terms are chosen so that every partial derivative of
@@ -15,7 +18,7 @@
 
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 
-/// Chain with one nonlinear mechanical DoF and (if `n_therm > 0`) one nonlinear thermal DoF.
+/// Chain with `p` nonlinear mechanical DoFs and `q` nonlinear thermal DoFs.
 #[derive(Clone, Debug)]
 pub struct Chain {
     pub n_mech: usize,
@@ -41,6 +44,15 @@ impl Chain {
     /// node in the middle). Default values: `m = 1, k = 1, c = 0.02, k₃ = 0.5, d₃ = 0.01,
     /// β = 0.1, C = 1, κ = 0.5, η = 0.05, γ = 0.2, ρ = 0.1, F = 0.1, Q = 1`.
     pub fn new(n_mech: usize, n_therm: usize) -> Self {
+        Self::with_contacts(n_mech, n_therm, 1, usize::from(n_therm > 0))
+    }
+
+    /// Chain with `p` contacts and `q` hot nodes (`1 ≤ p ≤ n_mech`, `q ≤ n_therm`, `q = 0`
+    /// when `n_therm = 0`), placed at `(2a + 1)·n/(2p)`.
+    pub fn with_contacts(n_mech: usize, n_therm: usize, p: usize, q: usize) -> Self {
+        let spread = |n: usize, k: usize| -> Vec<usize> {
+            (0..k).map(|a| ((2 * a + 1) * n) / (2 * k)).collect()
+        };
         Self {
             n_mech,
             n_therm,
@@ -58,12 +70,8 @@ impl Chain {
             force: 0.1,
             heat_load: 1.0,
             nl: NonlinearDofs {
-                mech: vec![n_mech / 2],
-                therm: if n_therm > 0 {
-                    vec![n_therm / 2]
-                } else {
-                    vec![]
-                },
+                mech: spread(n_mech, p),
+                therm: spread(n_therm, q),
             },
         }
     }
@@ -117,20 +125,27 @@ impl System for Chain {
         temp: &[f64],
         out: &mut NonlinearEval,
     ) {
-        let (x, v) = (x[0], v[0]);
-        let tc = temp.first().copied().unwrap_or(0.0);
-        let soft = 1.0 + self.thermal_softening * tc;
-        out.f[0] = self.cubic * x.powi(3) * soft + self.cubic_damping * v.powi(3);
-        out.df_dx[0] = 3.0 * self.cubic * x * x * soft;
-        out.df_dv[0] = 3.0 * self.cubic_damping * v * v;
-        if self.n_therm > 0 {
-            out.df_dt[0] = self.cubic * x.powi(3) * self.thermal_softening;
-            out.g[0] = self.heat_quadratic * tc * tc
-                - self.heat_friction * v * v
-                - self.heat_coupling * x * x * tc;
-            out.dg_dx[0] = -2.0 * self.heat_coupling * x * tc;
-            out.dg_dv[0] = -2.0 * self.heat_friction * v;
-            out.dg_dt[0] = 2.0 * self.heat_quadratic * tc - self.heat_coupling * x * x;
+        out.clear();
+        let (p, q) = (x.len(), temp.len());
+        for a in 0..p {
+            let tc = if q > 0 { temp[a % q] } else { 0.0 };
+            let soft = 1.0 + self.thermal_softening * tc;
+            out.f[a] = self.cubic * x[a].powi(3) * soft + self.cubic_damping * v[a].powi(3);
+            out.df_dx[a * p + a] = 3.0 * self.cubic * x[a] * x[a] * soft;
+            out.df_dv[a * p + a] = 3.0 * self.cubic_damping * v[a] * v[a];
+            if q > 0 {
+                out.df_dt[a * q + a % q] = self.cubic * x[a].powi(3) * self.thermal_softening;
+            }
+        }
+        for (b, &tc) in temp.iter().enumerate() {
+            let i = b % p;
+            out.g[b] = self.heat_quadratic * tc * tc
+                - self.heat_friction * v[i] * v[i]
+                - self.heat_coupling * x[i] * x[i] * tc;
+            out.dg_dx[b * p + i] = -2.0 * self.heat_coupling * x[i] * tc;
+            out.dg_dv[b * p + i] = -2.0 * self.heat_friction * v[i];
+            out.dg_dt[b * q + b] =
+                2.0 * self.heat_quadratic * tc - self.heat_coupling * x[i] * x[i];
         }
     }
 
