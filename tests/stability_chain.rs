@@ -53,9 +53,9 @@ impl System for Chain {
         out: &mut NonlinearEval,
     ) {
         out.clear();
-        for k in 0..2 {
-            out.f[k] = 0.5 * x[k].powi(3);
-            out.df_dx[k * 2 + k] = 1.5 * x[k] * x[k];
+        for (k, &xk) in x.iter().enumerate() {
+            out.f[k] = 0.5 * xk.powi(3);
+            out.df_dx[k * 2 + k] = 1.5 * xk * xk;
         }
     }
     fn forcing(&self, _omega: f64, _t: f64, out: &mut [f64]) {
