@@ -28,10 +28,12 @@
 //! thermal block rather than by distance to +1 (which would also catch a mechanical
 //! multiplier at a fold).
 
+pub mod locate;
 pub mod sip;
 pub mod thermal;
 pub mod variational;
 
+pub use locate::{Crossing, bisect_crossing};
 pub use sip::{Sip, SipMonodromy};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::Variational;
