@@ -206,7 +206,7 @@ fn coupled_multipliers_agree_and_thermal_ones_split_off() {
         .thermal
         .iter()
         .zip(&split.thermal)
-        .map(|(a, b)| ((a - b).norm() / (1.0 - b.re)))
+        .map(|(a, b)| (a - b).norm() / (1.0 - b.re))
         .fold(0.0, f64::max);
     println!("thermal multipliers, SIP vs variational, relative to 1 − μ: {worst:.2e}");
     assert!(worst < 1e-6);
