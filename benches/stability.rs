@@ -10,6 +10,9 @@
 //! intervals; a stiffer model raises `N_k` in proportion to `P·ρ`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
+use tmrotor::integrate::StateSpace;
 use tmrotor::stability::{Sip, StabilityMethod, Variational};
 use tmrotor::system::{
     DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, PeriodicOrbit, System,
@@ -134,6 +137,11 @@ fn floquet(c: &mut Criterion) {
     group.bench_function("sip_extrapolated", |b| {
         b.iter(|| extrapolated.multipliers(&sys, &orbit).expect("SIP"))
     });
+    // The same plain product with a dense state matrix per interval (what the factored
+    // form avoids): B_k formed, then N_i dense d×d products per interval.
+    group.bench_function("sip_dense_state_matrix_reference", |b| {
+        b.iter(|| dense_sip(&sys, &orbit, mono.intervals, sip.series_order))
+    });
     let var = Variational {
         rtol: 1e-6,
         atol: 1e-9,
@@ -142,6 +150,43 @@ fn floquet(c: &mut Criterion) {
         b.iter(|| var.multipliers(&sys, &orbit).expect("variational"))
     });
     group.finish();
+}
+
+/// Plain SIP with dense matrices (midpoint derivatives; for cost comparison only).
+fn dense_sip(sys: &Chain, orbit: &Motion, intervals: usize, order: usize) -> Mat<f64> {
+    let space = StateSpace::new(sys, orbit.omega()).expect("state space");
+    let mut ws = space.workspace();
+    let d = space.dim();
+    let delta = orbit.period() / intervals as f64;
+    let (mut x, mut v, mut temp) = (vec![0.0; N], vec![0.0; N], vec![0.0; M]);
+    let mut prod = Mat::<f64>::identity(d, d);
+    let mut w = Mat::<f64>::zeros(d, d);
+    let mut bw = Mat::<f64>::zeros(d, d);
+    for k in 0..intervals {
+        let t = (k as f64 + 0.5) * delta;
+        orbit.state_at(t, &mut x, &mut v, &mut temp);
+        space.eval_nonlinear_at(t, &x, &v, &temp, &mut ws);
+        let derivs = ws.eval.clone();
+        let bk = space.linearization_dense(&derivs, &mut ws);
+        w.copy_from(&prod);
+        for i in (1..=order).rev() {
+            matmul(
+                bw.as_mut(),
+                Accum::Replace,
+                bk.as_ref(),
+                w.as_ref(),
+                delta / i as f64,
+                Par::Seq,
+            );
+            for col in 0..d {
+                for r in 0..d {
+                    w[(r, col)] = prod[(r, col)] + bw[(r, col)];
+                }
+            }
+        }
+        std::mem::swap(&mut prod, &mut w);
+    }
+    prod
 }
 
 criterion_group!(benches, floquet);

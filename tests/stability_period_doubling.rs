@@ -7,7 +7,9 @@
 use tmrotor::integrate::{
     Dopri5Options, FlowSensitivity, ShootingOptions, poincare_samples, shoot_periodic, steady_state,
 };
-use tmrotor::stability::{BifurcationKind, FloquetResult, Sip, StabilityMethod, classify_crossing};
+use tmrotor::stability::{
+    BifurcationKind, FloquetResult, Sip, StabilityMethod, bisect_crossing, classify_crossing,
+};
 use tmrotor::systems::period_doubling::{DoubleWellDuffing, GAMMA_BRACKET, OMEGA};
 
 fn period() -> f64 {
@@ -136,4 +138,67 @@ fn period_doubling_is_located_and_confirmed_by_time_integration() {
             assert!(s1 < 1e-6, "period 1 expected");
         }
     }
+}
+
+fn sip_with(sip: &Sip, gamma: f64, start: &[f64]) -> FloquetResult {
+    let sys = DoubleWellDuffing::reference(gamma);
+    let o = orbit_at(gamma, start);
+    let orbit = steady_state(&sys, OMEGA, &o.y, period(), 0)
+        .expect("samples")
+        .orbit();
+    sip.multipliers(&sys, &orbit).expect("SIP")
+}
+
+#[test]
+fn sip_bisection_locates_the_same_period_doubling() {
+    // Reference: γ* from the shooting (variational) multipliers. Bisection on the SIP
+    // stable flag finds the crossing shifted by (SIP error of the multiplier near −1) /
+    // (dμ/dγ); the shift must be explained by that error and vanish with a more accurate
+    // SIP (extrapolated, 512 intervals: O(Δ⁴)).
+    let (gamma_ref, y_ref) = locate();
+    let slope = {
+        let (a, b) = (
+            most_negative(&orbit_at(gamma_ref - 1e-3, &y_ref)),
+            most_negative(&orbit_at(gamma_ref + 1e-3, &y_ref)),
+        );
+        (b - a) / 2e-3
+    };
+    let mu_ref = most_negative(&orbit_at(gamma_ref, &y_ref));
+    let mu_sip = sip_with(&Sip::default(), gamma_ref, &y_ref)
+        .multipliers
+        .iter()
+        .map(|m| m.re)
+        .fold(f64::INFINITY, f64::min);
+    // SIP reaches −1 where the exact multiplier is −1 − (μ_sip − μ_ref).
+    let predicted_shift = -(mu_sip - mu_ref) / slope;
+    let accurate = Sip {
+        intervals: 512,
+        extrapolate: true,
+        ..Sip::default()
+    };
+    let mut found = vec![];
+    for sip in [Sip::default(), accurate] {
+        let crossing = bisect_crossing(
+            |g| Ok(sip_with(&sip, g, &y_ref)),
+            gamma_ref - 0.01,
+            gamma_ref + 0.01,
+            1e-8,
+        )
+        .expect("bracket holds a crossing");
+        assert_eq!(crossing.kind, Some(BifurcationKind::PeriodDoubling));
+        found.push(crossing.parameter());
+    }
+    println!(
+        "γ* reference {gamma_ref:.8}; SIP default {:.8} (μ error {:.2e}, dμ/dγ {slope:.2}, predicted shift {predicted_shift:.2e}); SIP extrapolated {:.8}",
+        found[0],
+        mu_sip - mu_ref,
+        found[1]
+    );
+    let shift = found[0] - gamma_ref;
+    assert!(
+        (shift - predicted_shift).abs() < 0.1 * predicted_shift.abs() + 2e-6,
+        "shift {shift:.3e} vs predicted {predicted_shift:.3e}"
+    );
+    // The reference itself is bisected to 1e-6.
+    assert!((found[1] - gamma_ref).abs() < 2e-6);
 }

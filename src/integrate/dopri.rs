@@ -122,6 +122,8 @@ pub struct Dopri5 {
     h: Option<f64>,
     /// Time at which `k[0]` holds `f(t, y)` for the state left by the last call.
     fsal_t: Option<f64>,
+    /// That state, so a call from a different state at the same time re-evaluates.
+    fsal_y: Vec<f64>,
     pub stats: Dopri5Stats,
 }
 
@@ -135,6 +137,7 @@ impl Dopri5 {
             ynew: vec![0.0; dim],
             h: None,
             fsal_t: None,
+            fsal_y: vec![0.0; dim],
             stats: Dopri5Stats::default(),
         }
     }
@@ -193,7 +196,7 @@ impl Dopri5 {
             .unwrap_or(0.01 * span)
             .min(o.h_max)
             .min(span);
-        if self.fsal_t != Some(t0) {
+        if self.fsal_t != Some(t0) || self.fsal_y != y {
             f(t0, y, &mut self.k[0]);
             self.stats.rhs_evals += 1;
         }
@@ -251,10 +254,12 @@ impl Dopri5 {
         }
         self.h = Some(h);
         self.fsal_t = Some(t1);
+        self.fsal_y.copy_from_slice(y);
         Ok(())
     }
 
-    /// Forgets the step size and FSAL stage (call before integrating a new problem).
+    /// Forgets the step size and FSAL stage (call before integrating a different
+    /// right-hand side; a new start state is detected automatically).
     pub fn reset(&mut self) {
         self.h = None;
         self.fsal_t = None;

@@ -49,6 +49,8 @@ pub struct StateSpace<'a> {
     minv_k: Mat<f64>,
     /// `M⁻¹C` (n × n).
     minv_c: Mat<f64>,
+    /// `[M⁻¹K, M⁻¹C]` side by side (n × 2n): one product with the rows `[x; v]`.
+    minv_kc: Mat<f64>,
     /// Columns of `M⁻¹` at the nonlinear mechanical DoFs (n × p).
     minv_p: Mat<f64>,
     /// `C_T⁻¹K_T` (m × m).
@@ -131,6 +133,13 @@ impl<'a> StateSpace<'a> {
         let minv_k = &minv * to_faer(&lin.stiffness);
         let minv_c = &minv * to_faer(&lin.damping);
         let minv_p = Mat::from_fn(n, dofs.mech.len(), |i, j| minv[(i, dofs.mech[j])]);
+        let minv_kc = Mat::from_fn(n, 2 * n, |i, j| {
+            if j < n {
+                minv_k[(i, j)]
+            } else {
+                minv_c[(i, j - n)]
+            }
+        });
         let cap = to_faer(&lin.thermal_capacity);
         let ctinv = solve(&cap, Mat::identity(m, m), "thermal_capacity")?;
         let ctinv_kt = &ctinv * to_faer(&lin.thermal_conductance);
@@ -149,6 +158,7 @@ impl<'a> StateSpace<'a> {
             minv,
             minv_k,
             minv_c,
+            minv_kc,
             minv_p,
             ctinv_kt,
             ctinv_q,
@@ -331,24 +341,16 @@ impl<'a> StateSpace<'a> {
                 Par::Seq,
             );
         }
-        let (wx, wrest) = w.split_at_row(n);
-        let (wv, wt) = wrest.split_at_row(n);
+        let (wxv, wt) = w.split_at_row(2 * n);
+        let wv = wxv.subrows(n, n);
         let (mut ox, orest) = out.split_at_row_mut(n);
         let (mut ov, mut ot) = orest.split_at_row_mut(n);
         ox.copy_from(wv);
         matmul(
             ov.as_mut(),
             Accum::Replace,
-            self.minv_k.as_ref(),
-            wx,
-            -1.0,
-            Par::Seq,
-        );
-        matmul(
-            ov.as_mut(),
-            Accum::Add,
-            self.minv_c.as_ref(),
-            wv,
+            self.minv_kc.as_ref(),
+            wxv,
             -1.0,
             Par::Seq,
         );

@@ -11,7 +11,7 @@
 //!
 //! | method | what | default settings | accuracy (measured) |
 //! |---|---|---|---|
-//! | [`Sip`] | paper Eqs. 30–33: product of truncated exponential series of interval means | 256 intervals (more when `P·ρ(B)` needs them), order 4, 3 Gauss points | `O(Δ²)`; 2e-7…4e-4 on the reference oscillators at 256 intervals, exponent 0 of the Hill problem to 1e-8 |
+//! | [`Sip`] | paper Eqs. 30–33: product of truncated exponential series of interval means | 256 intervals (more when `P·ρ(B)` needs them), order 4, 3 Gauss points | `O(Δ²)`; 2e-7…6e-4 on the reference oscillators at 256 intervals (largest on strongly nonlinear orbits), exponent 0 of the Hill problem to 1e-8; opt-in extrapolation `O(Δ⁴)` |
 //! | [`Variational`] | `Φ̇ = B(t)Φ` over one period with Dormand–Prince 5(4) | `rtol` 1e-10, `atol` 1e-12 | ~1e-11 against shooting |
 //!
 //! Both build `B(t)` from [`crate::integrate::StateSpace`]: mechanical block
@@ -28,10 +28,12 @@
 //! thermal block rather than by distance to +1 (which would also catch a mechanical
 //! multiplier at a fold).
 
+pub mod locate;
 pub mod sip;
 pub mod thermal;
 pub mod variational;
 
+pub use locate::{Crossing, bisect_crossing};
 pub use sip::{Sip, SipMonodromy};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::Variational;
