@@ -33,6 +33,7 @@ pub mod linear;
 pub mod model;
 pub mod record;
 pub mod stability;
+pub mod sweep;
 pub mod system;
 pub mod systems;
 pub mod thermal;

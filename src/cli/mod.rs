@@ -4,6 +4,7 @@
 pub mod campbell;
 pub mod model;
 pub mod modes;
+pub mod sweep;
 
 use clap::{Parser, Subcommand};
 
@@ -20,7 +21,7 @@ pub struct Cli {
 pub enum Command {
     /// Run one continuation sweep (default: the built-in dual rotor, q_l = 2 L/min, 25 °C,
     /// ω ∈ [300, 700] rad/s, order 3) and write an MCAP recording.
-    Sweep,
+    Sweep(sweep::SweepArgs),
     /// Check a model file, or print the built-in one.
     #[command(subcommand)]
     Model(model::ModelCommand),
@@ -33,7 +34,14 @@ pub enum Command {
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        None | Some(Command::Sweep) => anyhow::bail!("sweep: not available yet"),
+        None => {
+            let args = Cli::parse_from(["tmrotor", "sweep"]);
+            match args.command {
+                Some(Command::Sweep(a)) => sweep::run(&a, &mut std::io::stdout().lock()),
+                _ => anyhow::bail!("internal: default sweep arguments did not parse"),
+            }
+        }
+        Some(Command::Sweep(args)) => sweep::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Model(cmd)) => model::run(&cmd, &mut std::io::stdout().lock()),
         Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),

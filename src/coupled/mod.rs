@@ -291,6 +291,11 @@ impl CoupledRotor {
         self.bearings.iter().map(|b| b.id.as_str()).collect()
     }
 
+    /// Initial radial clearances `δ0` (m) in bearing order.
+    pub fn initial_clearances_m(&self) -> Vec<f64> {
+        self.bearings.iter().map(|b| b.hertz.clearance_m).collect()
+    }
+
     /// Ambient temperature (°C).
     pub fn ambient_temp_c(&self) -> f64 {
         self.ambient_temp_c

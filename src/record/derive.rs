@@ -270,21 +270,47 @@ pub struct Rederivers {
     pub unavailable_reason: String,
 }
 
-/// Builds the re-derivation seams for a recording from its embedded model file.
+/// Builds the re-derivation seams for a recording from its embedded model file and
+/// settings (through [`crate::sweep::CoupledRederive`]).
 ///
-/// This is the single place where model kinds are wired to replay. No model kind is wired
-/// yet, so both seams are `None` and the reason says so.
+/// This is the single place where model kinds are wired to replay.
 pub fn rederivers_for(run: &RunInfo) -> Rederivers {
-    Rederivers {
-        model: None,
-        stability: None,
-        unavailable_reason: format!(
-            "this build of replay cannot rebuild the model {:?} (embedded, {} bytes) for \
-             re-derivation yet; only quantities stored in the recording or derived from \
-             its harmonic coefficients are available",
-            run.model_name,
-            run.model_text.len()
-        ),
+    match crate::sweep::CoupledRederive::from_run(run) {
+        Ok(r) => {
+            let r = std::sync::Arc::new(r);
+            Rederivers {
+                model: Some(Box::new(SharedRederive(r.clone()))),
+                stability: Some(Box::new(SharedRederive(r))),
+                unavailable_reason: String::new(),
+            }
+        }
+        Err(e) => Rederivers {
+            model: None,
+            stability: None,
+            unavailable_reason: format!(
+                "the model {:?} embedded in the recording ({} bytes) could not be rebuilt: {e}",
+                run.model_name,
+                run.model_text.len()
+            ),
+        },
+    }
+}
+
+struct SharedRederive(std::sync::Arc<crate::sweep::CoupledRederive>);
+
+impl ModelRederive for SharedRederive {
+    fn bearings(
+        &self,
+        point: &PointRecord,
+        samples: usize,
+    ) -> Result<RederivedBearings, DeriveError> {
+        self.0.bearings(point, samples)
+    }
+}
+
+impl StabilityRederive for SharedRederive {
+    fn multipliers(&self, point: &PointRecord) -> Result<Vec<Complex64>, DeriveError> {
+        self.0.multipliers(point)
     }
 }
 

@@ -1,0 +1,156 @@
+//! `tmrotor sweep`: one continuation sweep written to an MCAP recording.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::record::{McapOptions, McapSink, install_interrupt_flag};
+use crate::sweep::{StudySettings, SweepProblem};
+
+/// Study parameters; every default is the paper's default study.
+#[derive(Debug, Clone, Args)]
+pub struct SweepArgs {
+    /// Model file (TOML); default: the built-in dual rotor (`tmrotor model show`).
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Study settings file (TOML, keys of `StudySettings`); flags override it.
+    #[arg(long)]
+    pub study: Option<PathBuf>,
+    /// Lubricant flow rate per bearing q_l (L/min) [default: 2].
+    #[arg(long = "flow", value_name = "L_MIN")]
+    pub flow_l_min: Option<f64>,
+    /// Lubricant cooling temperature (°C) [default: 25].
+    #[arg(long = "cooling-temp", value_name = "C")]
+    pub cooling_temp_c: Option<f64>,
+    /// Ambient temperature (°C) [default: 25].
+    #[arg(long = "ambient-temp", value_name = "C")]
+    pub ambient_temp_c: Option<f64>,
+    /// Truncation order of the harmonic basis (paper Eq. 34) [default: 3].
+    #[arg(long)]
+    pub order: Option<u32>,
+    /// Sweep range START:END in rad/s [default: 300:700].
+    #[arg(long, value_name = "START:END")]
+    pub omega: Option<String>,
+    /// Largest continuation step (scaled arclength) [default: 0.05].
+    #[arg(long)]
+    pub ds_max: Option<f64>,
+    /// Maximum number of points [default: 2000].
+    #[arg(long)]
+    pub max_points: Option<usize>,
+    /// Mechanical model only (no thermal network, clearances fixed at δ0).
+    #[arg(long)]
+    pub no_thermal: bool,
+    /// Skip Floquet stability (faster; no stable flags or bifurcations).
+    #[arg(long)]
+    pub no_stability: bool,
+    /// Output recording.
+    #[arg(short, long, default_value = "sweep.mcap")]
+    pub output: PathBuf,
+    /// No progress bar.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+impl SweepArgs {
+    /// The settings these arguments describe.
+    pub fn settings(&self) -> anyhow::Result<StudySettings> {
+        let mut s = match &self.study {
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .with_context(|| format!("reading study file {}", path.display()))?;
+                toml::from_str::<StudySettings>(&text).map_err(|e| {
+                    anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end())
+                })?
+            }
+            None => StudySettings::default(),
+        };
+        if self.model.is_some() {
+            s.model = self.model.clone();
+        }
+        if let Some(v) = self.flow_l_min {
+            s.flow_l_min = v;
+        }
+        if let Some(v) = self.cooling_temp_c {
+            s.cooling_temp_c = v;
+        }
+        if let Some(v) = self.ambient_temp_c {
+            s.ambient_temp_c = v;
+        }
+        if let Some(v) = self.order {
+            s.order = v;
+        }
+        if let Some(r) = &self.omega {
+            let (a, b) = r
+                .split_once(':')
+                .ok_or_else(|| anyhow::anyhow!("--omega {r:?}: expected START:END in rad/s"))?;
+            s.omega_start = a
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--omega {r:?}: START is not a number"))?;
+            s.omega_end = b
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--omega {r:?}: END is not a number"))?;
+        }
+        if let Some(v) = self.ds_max {
+            s.ds_max = v;
+        }
+        if let Some(v) = self.max_points {
+            s.max_points = v;
+        }
+        if self.no_thermal {
+            s.thermal = false;
+        }
+        if self.no_stability {
+            s.stability = false;
+        }
+        Ok(s)
+    }
+}
+
+/// Runs the sweep and prints a summary.
+pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
+    let settings = args.settings()?;
+    let problem = SweepProblem::new(&settings)?;
+    let mut sink = McapSink::create(&args.output, McapOptions::default())?;
+    let interrupt = install_interrupt_flag().ok();
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new(1000);
+        b.set_style(
+            ProgressStyle::with_template("{elapsed_precise} [{bar:30}] ω {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        b
+    };
+    let report = problem.run(&mut sink, interrupt, |p| {
+        bar.set_position((p.fraction * 1000.0) as u64);
+        bar.set_message(format!(
+            "{:.1} rad/s, {} points, {} bifurcations",
+            p.omega_rad_s, p.points, p.bifurcations
+        ));
+    });
+    bar.finish_and_clear();
+    let report = report.with_context(|| {
+        format!(
+            "sweep failed; the points computed so far are in {}",
+            args.output.display()
+        )
+    })?;
+    writeln!(
+        out,
+        "{} points in {:.1} s ({:?}) → {}",
+        report.points,
+        report.total_seconds,
+        report.status,
+        args.output.display()
+    )?;
+    for (w, kind) in &report.bifurcations {
+        writeln!(out, "  {kind} at ω = {w:.3} rad/s")?;
+    }
+    Ok(())
+}

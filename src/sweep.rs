@@ -1,0 +1,638 @@
+//! One continuation sweep of a coupled rotor model, from study settings to a recording.
+//!
+//! This is the driver behind `tmrotor sweep`: it builds the [`CoupledRotor`] from a model
+//! file and the study parameters, traces the branch with [`Continuation`] (Floquet
+//! stability per point with [`Sip`] unless switched off), converts every accepted point
+//! and every located bifurcation into the recording's domain types and hands them to a
+//! [`Sink`] as they come, so that an interrupted or failed sweep keeps what it computed.
+//!
+//! Defaults (the paper's default study, section 5): q_l = 2 L/min, cooling and ambient
+//! 25 °C, ω from 300 to 700 rad/s, truncation order 3 (paper Eq. 34 with λ = 6/5 from the
+//! model's rotor speed ratios).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use crate::continuation::{BranchPoint, Continuation, ContinuationOptions, StepOutcome};
+use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
+use crate::hb::{Basis, HarmonicBalance, Ratio};
+use crate::model::{Dir, Model};
+use crate::record::types::{
+    BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, PointRecord,
+    RunInfo, RunStatus, ThermalForces, ThermalNode,
+};
+use crate::record::{RecordError, Sink};
+use crate::stability::{Sip, StabilityMethod};
+
+/// Samples per period used for the recorded orbits, bearing loads and temperature ranges.
+pub const RECORD_SAMPLES: usize = 128;
+
+/// Everything a sweep needs besides the model file. Every default is the paper's default
+/// study (see the module docs).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct StudySettings {
+    /// Model file; `None` is the built-in dual rotor.
+    pub model: Option<PathBuf>,
+    /// Lubricant flow rate per bearing `q_l` (L/min).
+    pub flow_l_min: f64,
+    /// Lubricant cooling temperature `T_L∞` (°C).
+    pub cooling_temp_c: f64,
+    /// Ambient temperature `T_∞` (°C).
+    pub ambient_temp_c: f64,
+    /// Truncation order `k` of the basis (Eq. 34).
+    pub order: u32,
+    /// Sweep start and end (rad/s).
+    pub omega_start: f64,
+    pub omega_end: f64,
+    /// Largest continuation step (scaled arclength; see [`ContinuationOptions`]).
+    pub ds_max: f64,
+    /// Maximum number of points.
+    pub max_points: usize,
+    /// Solve the thermal network together with the vibration (two-way coupling).
+    pub thermal: bool,
+    /// Compute Floquet multipliers at every point (and locate bifurcations).
+    pub stability: bool,
+    /// SIP intervals per period (Eq. 33); raised automatically for stiff systems.
+    pub sip_intervals: usize,
+    /// AFT samples per period; `None` chooses from the basis.
+    pub aft_samples: Option<usize>,
+}
+
+impl Default for StudySettings {
+    fn default() -> Self {
+        Self {
+            model: None,
+            flow_l_min: 2.0,
+            cooling_temp_c: 25.0,
+            ambient_temp_c: 25.0,
+            order: 3,
+            omega_start: 300.0,
+            omega_end: 700.0,
+            ds_max: 0.05,
+            max_points: 2000,
+            thermal: true,
+            stability: true,
+            sip_intervals: Sip::default().intervals,
+            aft_samples: None,
+        }
+    }
+}
+
+/// Errors of a sweep.
+#[derive(Debug, Error)]
+pub enum SweepError {
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
+    #[error(transparent)]
+    Coupled(#[from] CoupledError),
+    #[error(transparent)]
+    Basis(#[from] crate::hb::BasisError),
+    #[error(transparent)]
+    Hb(#[from] crate::hb::HbError),
+    #[error(transparent)]
+    Continuation(#[from] crate::continuation::ContinuationError),
+    #[error(transparent)]
+    Record(#[from] RecordError),
+    #[error("recorded quantity could not be derived: {0}")]
+    Derive(String),
+    #[error("study setting {field} = {value}: {reason}")]
+    Setting {
+        field: &'static str,
+        value: String,
+        reason: &'static str,
+    },
+}
+
+/// Progress of a running sweep, reported after every step.
+#[derive(Clone, Debug, Default)]
+pub struct Progress {
+    pub points: usize,
+    pub omega_rad_s: f64,
+    pub bifurcations: usize,
+    pub rejected_steps: usize,
+    /// Fraction of the ω range covered so far (0–1; not monotone through folds).
+    pub fraction: f64,
+}
+
+/// What a finished sweep reports.
+#[derive(Clone, Debug)]
+pub struct SweepReport {
+    pub points: usize,
+    pub bifurcations: Vec<(f64, String)>,
+    pub status: RunStatus,
+    pub newton_seconds: f64,
+    pub total_seconds: f64,
+}
+
+/// A built sweep problem: model, coupled system, basis and the run description.
+pub struct SweepProblem {
+    pub settings: StudySettings,
+    pub model: Model,
+    pub system: CoupledRotor,
+    pub basis: Basis,
+    pub run: RunInfo,
+}
+
+impl SweepProblem {
+    /// Builds the problem from settings (reads the model file if one is given).
+    pub fn new(settings: &StudySettings) -> Result<Self, SweepError> {
+        let model = match &settings.model {
+            Some(path) => Model::from_file(path)?,
+            None => Model::builtin()?,
+        };
+        Self::with_model(settings, model)
+    }
+
+    /// Builds the problem for an already parsed model.
+    pub fn with_model(settings: &StudySettings, model: Model) -> Result<Self, SweepError> {
+        check_settings(settings)?;
+        let study = StudyOverrides {
+            flow_l_min: Some(settings.flow_l_min),
+            cooling_temp_c: Some(settings.cooling_temp_c),
+            ambient_temp_c: Some(settings.ambient_temp_c),
+        };
+        let system = CoupledRotor::new(
+            &model,
+            &study,
+            CouplingOptions {
+                thermal: settings.thermal,
+                frozen_clearance: false,
+            },
+        )?;
+        let lambda = speed_ratio(&model);
+        let basis = if lambda == (Ratio { num: 1, den: 1 }) {
+            Basis::integer(settings.order)?
+        } else {
+            Basis::paper(settings.order, lambda)?
+        };
+        let run = run_info(&model, &system, &basis, lambda, settings);
+        Ok(Self {
+            settings: settings.clone(),
+            model,
+            system,
+            basis,
+            run,
+        })
+    }
+
+    /// Runs the sweep, writing into `sink` as it goes, polling `interrupt` between steps
+    /// and calling `progress` after every step.
+    pub fn run(
+        &self,
+        sink: &mut dyn Sink,
+        interrupt: Option<Arc<AtomicBool>>,
+        mut progress: impl FnMut(&Progress),
+    ) -> Result<SweepReport, SweepError> {
+        let start = std::time::Instant::now();
+        let s = &self.settings;
+        let hb = HarmonicBalance::new(&self.system, &self.basis, s.aft_samples)?;
+        let mut opts = ContinuationOptions::new(s.omega_start, s.omega_end);
+        opts.ds_max = s.ds_max;
+        opts.ds_initial = opts.ds_initial.min(s.ds_max);
+        opts.max_points = s.max_points;
+        opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
+        let sip = Sip {
+            intervals: s.sip_intervals,
+            ..Sip::default()
+        };
+        let stab: Option<&dyn StabilityMethod> = if s.stability { Some(&sip) } else { None };
+        let mut cont = Continuation::new(hb, opts, stab)?;
+
+        sink.begin_run(&self.run)?;
+        let mut prog = Progress::default();
+        let mut bifs = Vec::new();
+        let mut n_bif = 0u32;
+        let result: Result<RunStatus, SweepError> = (|| loop {
+            if interrupt
+                .as_ref()
+                .is_some_and(|f| f.load(Ordering::Relaxed))
+            {
+                return Ok(RunStatus::Interrupted);
+            }
+            let out = match cont.step() {
+                Ok(o) => o,
+                Err(e) => return Err(e.into()),
+            };
+            match out {
+                StepOutcome::Accepted {
+                    point,
+                    bifurcations,
+                } => {
+                    for b in &bifurcations {
+                        if let Some(kind) = b.bifurcation {
+                            n_bif += 1;
+                            let rec = BifurcationRecord {
+                                number: n_bif,
+                                kind,
+                                omega_rad_s: b.solution.omega,
+                                arc_length: b.arclength,
+                                after_point: prog.points.saturating_sub(1) as u64,
+                                amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
+                                multipliers: b
+                                    .stability
+                                    .as_ref()
+                                    .map(|f| f.multipliers.clone())
+                                    .unwrap_or_default(),
+                            };
+                            sink.write_bifurcation(&rec)?;
+                            bifs.push((b.solution.omega, kind.label().to_string()));
+                        }
+                    }
+                    let rec = self.point_record(prog.points as u64, &point)?;
+                    sink.write_point(&rec)?;
+                    prog.points += 1;
+                    prog.omega_rad_s = point.solution.omega;
+                    prog.bifurcations = bifs.len();
+                    prog.fraction = ((point.solution.omega - s.omega_start)
+                        / (s.omega_end - s.omega_start))
+                        .clamp(0.0, 1.0);
+                    progress(&prog);
+                }
+                StepOutcome::Rejected(_) => {
+                    prog.rejected_steps += 1;
+                    progress(&prog);
+                }
+                StepOutcome::Finished(_) => return Ok(RunStatus::Completed),
+            }
+        })();
+        match result {
+            Ok(status) => {
+                sink.finish(status.clone())?;
+                Ok(SweepReport {
+                    points: prog.points,
+                    bifurcations: bifs,
+                    status,
+                    newton_seconds: 0.0,
+                    total_seconds: start.elapsed().as_secs_f64(),
+                })
+            }
+            Err(e) => {
+                let _ = sink.finish(RunStatus::Failed(e.to_string()));
+                Err(e)
+            }
+        }
+    }
+
+    /// Converts one branch point into the recorded form, with bearing loads, clearances
+    /// and thermal forces evaluated through the model over one period.
+    pub fn point_record(&self, index: u64, p: &BranchPoint) -> Result<PointRecord, SweepError> {
+        let sol = &p.solution;
+        let mut rec = crate::record::derive::point_from_coefficients(
+            &self.run,
+            index,
+            sol.omega,
+            sol.mech.clone(),
+            sol.therm.clone(),
+            RECORD_SAMPLES,
+        )
+        .map_err(|e| SweepError::Derive(e.to_string()))?;
+        rec.arc_length = p.arclength;
+        rec.stable = p.stable();
+        rec.bifurcation = p.bifurcation;
+        rec.residual_mech = sol.residual.mech;
+        rec.residual_therm = sol.residual.therm;
+        rec.newton_iterations = sol.iterations as u32;
+        rec.multipliers = p
+            .stability
+            .as_ref()
+            .map(|f| f.multipliers.clone())
+            .unwrap_or_default();
+        let derived = bearing_quantities(&self.system, sol, RECORD_SAMPLES);
+        rec.bearing_loads = derived.loads;
+        rec.clearances = derived.clearances;
+        rec.thermal_forces = derived.thermal_forces;
+        Ok(rec)
+    }
+}
+
+/// Bearing loads, clearances and thermal forces over one period of a solution.
+pub fn bearing_quantities(
+    system: &CoupledRotor,
+    sol: &crate::hb::HbSolution,
+    samples: usize,
+) -> crate::record::derive::RederivedBearings {
+    use crate::system::PeriodicOrbit;
+    let n = system.assembly().n_dof;
+    let nt = sol.n_therm();
+    let period = sol.period();
+    let nb = system.bearing_ids().len();
+    let mut loads = vec![
+        BearingLoad {
+            mean_n: 0.0,
+            radial_n: Vec::with_capacity(samples),
+        };
+        nb
+    ];
+    let mut clear = vec![ClearanceVariation::default(); nb];
+    let mut forces = vec![ThermalForces::default(); nb];
+    let (mut x, mut v, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; nt]);
+    let inv = 1.0 / samples as f64;
+    for j in 0..samples {
+        let time = period * j as f64 * inv;
+        sol.state_at(time, &mut x, &mut v, &mut t);
+        let states = system.bearing_states(sol.omega, time, &x, &t);
+        for (k, st) in states.iter().enumerate() {
+            loads[k].radial_n.push(st.fb_n);
+            loads[k].mean_n += st.fb_n * inv;
+            clear[k].delta_v_m += st.delta_v_m * inv;
+            clear[k].ub_m += st.u_b_m * inv;
+            clear[k].ui_m += st.u_i_m * inv;
+            clear[k].uo_m += st.u_o_m * inv;
+        }
+        for (k, out) in system
+            .thermal_outputs(sol.omega, time, &x, &t)
+            .iter()
+            .enumerate()
+            .take(nb)
+        {
+            forces[k].bearing_w += out.f_bear_b_w * inv;
+            forces[k].lubricant_w += out.f_lub_l_w * inv;
+            forces[k].generation_w += out.q_g_w * inv;
+            forces[k].dissipation_w += out.q_d_w * inv;
+        }
+    }
+    let initial = system.initial_clearances_m();
+    for (c, d0) in clear.iter_mut().zip(initial) {
+        c.effective_m = d0 + c.delta_v_m;
+    }
+    crate::record::derive::RederivedBearings {
+        loads,
+        clearances: clear,
+        thermal_forces: if system.network().is_some() {
+            forces
+        } else {
+            Vec::new()
+        },
+    }
+}
+
+fn amplitudes(run: &RunInfo, mech: &[f64]) -> Vec<f64> {
+    crate::record::derive::amplitude_rms(run, mech).unwrap_or_default()
+}
+
+fn check_settings(s: &StudySettings) -> Result<(), SweepError> {
+    let bad = |field: &'static str, value: String, reason: &'static str| {
+        Err(SweepError::Setting {
+            field,
+            value,
+            reason,
+        })
+    };
+    if !(s.omega_start.is_finite() && s.omega_start > 0.0) {
+        return bad(
+            "omega_start",
+            s.omega_start.to_string(),
+            "must be positive (rad/s)",
+        );
+    }
+    if !(s.omega_end.is_finite() && s.omega_end > 0.0 && s.omega_end != s.omega_start) {
+        return bad(
+            "omega_end",
+            s.omega_end.to_string(),
+            "must be positive and differ from omega_start",
+        );
+    }
+    if s.order == 0 || s.order > 12 {
+        return bad("order", s.order.to_string(), "must be between 1 and 12");
+    }
+    if !(s.ds_max.is_finite() && s.ds_max > 0.0) {
+        return bad("ds_max", s.ds_max.to_string(), "must be positive");
+    }
+    if s.max_points == 0 {
+        return bad("max_points", "0".into(), "must be at least 1");
+    }
+    if s.sip_intervals < 8 {
+        return bad(
+            "sip_intervals",
+            s.sip_intervals.to_string(),
+            "must be at least 8",
+        );
+    }
+    Ok(())
+}
+
+/// λ: the speed ratio of the second rotor (1 for a single rotor). Ratios are rational by
+/// model validation.
+fn speed_ratio(model: &Model) -> Ratio {
+    model
+        .speed_ratios()
+        .iter()
+        .copied()
+        .find(|r| *r != Ratio { num: 1, den: 1 })
+        .unwrap_or(Ratio { num: 1, den: 1 })
+}
+
+/// Axial position of every node: cumulative element lengths along each rotor, later rotors
+/// shifted so that an inter-shaft bearing's two nodes line up.
+fn axial_positions(model: &Model) -> Vec<f64> {
+    let ids = model.node_ids();
+    let mut pos: Vec<Option<f64>> = vec![None; ids.len()];
+    let idx = |id: u32| model.node_index(id);
+    for rotor in &model.spec.rotors {
+        let Some(&first) = rotor.nodes.first() else {
+            continue;
+        };
+        // offset from an inter-shaft bearing to an already placed node
+        let mut offset = 0.0;
+        let mut local: std::collections::BTreeMap<u32, f64> = Default::default();
+        local.insert(first, 0.0);
+        // walk shafts repeatedly (elements may be listed in any order)
+        for _ in 0..rotor.nodes.len() {
+            for sh in &model.spec.shafts {
+                if sh.nodes.len() != 2 {
+                    continue;
+                }
+                let (a, b) = (sh.nodes[0], sh.nodes[1]);
+                if let (Some(&pa), None) = (local.get(&a), local.get(&b)) {
+                    local.insert(b, pa + sh.length_m);
+                } else if let (None, Some(&pb)) = (local.get(&a), local.get(&b)) {
+                    local.insert(a, pb - sh.length_m);
+                }
+            }
+        }
+        for b in &model.spec.bearings {
+            if let Some(o) = b.outer_node {
+                for (mine, other) in [(o, b.inner_node), (b.inner_node, o)] {
+                    if let (Some(&lm), Some(io)) = (local.get(&mine), idx(other)) {
+                        if let Some(po) = pos[io] {
+                            offset = po - lm;
+                        }
+                    }
+                }
+            }
+        }
+        for (id, p) in local {
+            if let Some(i) = idx(id) {
+                pos[i] = Some(p + offset);
+            }
+        }
+    }
+    pos.into_iter().map(|p| p.unwrap_or(0.0)).collect()
+}
+
+fn run_info(
+    model: &Model,
+    system: &CoupledRotor,
+    basis: &Basis,
+    lambda: Ratio,
+    settings: &StudySettings,
+) -> RunInfo {
+    let axial = axial_positions(model);
+    let nodes = model
+        .node_ids()
+        .iter()
+        .enumerate()
+        .map(|(i, &id)| DynamicNode {
+            id,
+            name: format!("node {id}"),
+            dof_x: model.dof(id, Dir::X).unwrap_or(0),
+            dof_y: model.dof(id, Dir::Y).unwrap_or(0),
+            axial_position_m: axial[i],
+            rotor: model.spec.rotors[model.rotor_of(i)].id.clone(),
+        })
+        .collect();
+    let thermal_nodes = system
+        .network()
+        .map(|net| {
+            net.names()
+                .iter()
+                .enumerate()
+                .map(|(p, name)| ThermalNode {
+                    id: (p + 1) as u32,
+                    name: name.clone(),
+                    dof: p,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let bearings = system
+        .bearing_ids()
+        .iter()
+        .zip(system.initial_clearances_m())
+        .map(|(name, d0)| BearingInfo {
+            name: name.to_string(),
+            initial_clearance_m: d0,
+        })
+        .collect();
+    let settings_toml = toml::to_string(settings).unwrap_or_default();
+    let mut kv = vec![
+        ("flow_l_min".to_string(), settings.flow_l_min.to_string()),
+        (
+            "cooling_temp_c".to_string(),
+            settings.cooling_temp_c.to_string(),
+        ),
+        (
+            "ambient_temp_c".to_string(),
+            settings.ambient_temp_c.to_string(),
+        ),
+        ("order".to_string(), settings.order.to_string()),
+        ("omega_start".to_string(), settings.omega_start.to_string()),
+        ("omega_end".to_string(), settings.omega_end.to_string()),
+        ("thermal".to_string(), settings.thermal.to_string()),
+        ("stability".to_string(), settings.stability.to_string()),
+        (
+            "sip_intervals".to_string(),
+            settings.sip_intervals.to_string(),
+        ),
+    ];
+    kv.push((
+        "model".to_string(),
+        settings
+            .model
+            .as_ref()
+            .map_or("built-in".to_string(), |p| p.display().to_string()),
+    ));
+    let model_text = match &settings.model {
+        Some(path) => std::fs::read_to_string(path).unwrap_or_default(),
+        None => crate::model::BUILTIN_TOML.to_string(),
+    };
+    RunInfo {
+        tool_name: "tmrotor".to_string(),
+        tool_version: env!("CARGO_PKG_VERSION").to_string(),
+        model_name: model.spec.name.clone(),
+        model_text,
+        settings: kv,
+        settings_toml,
+        harmonics: basis.harmonics().to_vec(),
+        lambda,
+        n_mech: system.assembly().n_dof,
+        n_therm: crate::system::System::n_therm(system),
+        nodes,
+        thermal_nodes,
+        bearings,
+    }
+}
+
+/// Re-derivation of bearing quantities and stability for `replay`, from a recording's
+/// embedded model text and settings.
+pub struct CoupledRederive {
+    problem: SweepProblem,
+}
+
+impl CoupledRederive {
+    /// Rebuilds the sweep problem from a recording's run description.
+    pub fn from_run(run: &RunInfo) -> Result<Self, SweepError> {
+        let mut settings: StudySettings =
+            toml::from_str(&run.settings_toml).map_err(|e| SweepError::Setting {
+                field: "settings_toml",
+                value: "(embedded)".into(),
+                reason: if e.message().is_empty() {
+                    "unreadable"
+                } else {
+                    "embedded settings are not readable by this version"
+                },
+            })?;
+        let model = Model::from_str(&run.model_text, &run.model_name)?;
+        settings.model = None;
+        Ok(Self {
+            problem: SweepProblem::with_model(&settings, model)?,
+        })
+    }
+
+    fn solution(&self, point: &PointRecord) -> crate::hb::HbSolution {
+        crate::hb::HbSolution {
+            omega: point.omega_rad_s,
+            basis: self.problem.basis.clone(),
+            mech: point.coeffs_mech.clone(),
+            therm: point.coeffs_therm.clone(),
+            residual: Default::default(),
+            relative_residual: Default::default(),
+            iterations: point.newton_iterations as usize,
+        }
+    }
+}
+
+impl crate::record::derive::ModelRederive for CoupledRederive {
+    fn bearings(
+        &self,
+        point: &PointRecord,
+        samples: usize,
+    ) -> Result<crate::record::derive::RederivedBearings, crate::record::derive::DeriveError> {
+        Ok(bearing_quantities(
+            &self.problem.system,
+            &self.solution(point),
+            samples,
+        ))
+    }
+}
+
+impl crate::record::derive::StabilityRederive for CoupledRederive {
+    fn multipliers(
+        &self,
+        point: &PointRecord,
+    ) -> Result<Vec<Complex64>, crate::record::derive::DeriveError> {
+        let sip = Sip {
+            intervals: self.problem.settings.sip_intervals,
+            ..Sip::default()
+        };
+        sip.multipliers(&self.problem.system, &self.solution(point))
+            .map(|f| f.multipliers)
+            .map_err(|e| crate::record::derive::DeriveError::Model(e.to_string()))
+    }
+}
