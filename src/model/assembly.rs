@@ -53,6 +53,8 @@ pub struct RotorGyro {
 pub struct Unbalance {
     /// Disk id.
     pub disk_id: String,
+    /// Node id of the disk.
+    pub node: u32,
     /// Global DoFs of the disk node's x and y.
     pub dof_x: usize,
     pub dof_y: usize,
@@ -242,6 +244,7 @@ impl Assembly {
             if d.eccentricity_m > 0.0 {
                 unbalances.push(Unbalance {
                     disk_id: d.id.clone(),
+                    node: d.node,
                     dof_x: dof(a, Dir::X),
                     dof_y: dof(a, Dir::Y),
                     mass_eccentricity_kg_m: d.mass_kg * d.eccentricity_m,

@@ -11,7 +11,7 @@
 //! and an optional `[thermal]` table that this layer keeps opaque
 //! ([`Model::thermal`]) for the thermal network. The format is documented key by key at
 //! the top of the built-in file `models/dual_rotor.toml` (print it with
-//! `tmrotor model show`); the serde structures are in [`file`].
+//! `tmrotor model show`); the serde structures are in [`mod@file`].
 //!
 //! Loading ([`Model::from_file`], [`Model::from_str`], [`Model::builtin`]) never panics:
 //! every problem is a [`ModelError`] naming the file, the field path

@@ -99,7 +99,7 @@ impl Model {
                 kind,
             }
         })?;
-        Validator::new(name).run(spec, text)
+        Validator::new(name).run(spec)
     }
 
     /// Node ids in DoF order (ascending id).
@@ -285,7 +285,7 @@ impl<'a> Validator<'a> {
         }
     }
 
-    fn run(self, spec: ModelFile, _text: &str) -> VResult<Model> {
+    fn run(self, spec: ModelFile) -> VResult<Model> {
         // Gravity.
         self.non_negative("gravity.acceleration_m_s2", spec.gravity.acceleration_m_s2)?;
 
