@@ -126,8 +126,58 @@ pub struct SweepReport {
     pub points: usize,
     pub bifurcations: Vec<(f64, String)>,
     pub status: RunStatus,
-    pub newton_seconds: f64,
     pub total_seconds: f64,
+    /// Why stability was not assessed, when it was switched off during the sweep.
+    pub stability_note: Option<String>,
+}
+
+/// A stability method that stops trying after a *setting* error (a system too stiff for
+/// the method is too stiff at every point): the first reason is kept for the report and
+/// every later point is left unassessed at no cost, instead of failing the same way a
+/// thousand times.
+struct GivingUp<M> {
+    inner: M,
+    reason: std::sync::Mutex<Option<String>>,
+}
+
+impl<M> GivingUp<M> {
+    fn new(inner: M) -> Self {
+        Self {
+            inner,
+            reason: std::sync::Mutex::new(None),
+        }
+    }
+
+    fn reason(&self) -> Option<String> {
+        self.reason.lock().ok().and_then(|r| r.clone())
+    }
+}
+
+impl<M: StabilityMethod> StabilityMethod for GivingUp<M> {
+    fn multipliers(
+        &self,
+        system: &dyn crate::system::System,
+        orbit: &dyn crate::system::PeriodicOrbit,
+    ) -> Result<crate::stability::FloquetResult, crate::stability::StabilityError> {
+        if let Some(r) = self.reason() {
+            return Err(crate::stability::StabilityError::Setting {
+                field: "stability",
+                value: "off".into(),
+                reason: if r.is_empty() {
+                    "disabled"
+                } else {
+                    "disabled earlier in this sweep"
+                },
+            });
+        }
+        let out = self.inner.multipliers(system, orbit);
+        if let Err(e @ crate::stability::StabilityError::Setting { .. }) = &out {
+            if let Ok(mut g) = self.reason.lock() {
+                *g = Some(e.to_string());
+            }
+        }
+        out
+    }
 }
 
 /// A built sweep problem: model, coupled system, basis and the run description.
@@ -197,10 +247,10 @@ impl SweepProblem {
         opts.ds_initial = opts.ds_initial.min(s.ds_max);
         opts.max_points = s.max_points;
         opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
-        let sip = Sip {
+        let sip = GivingUp::new(Sip {
             intervals: s.sip_intervals,
             ..Sip::default()
-        };
+        });
         let stab: Option<&dyn StabilityMethod> = if s.stability { Some(&sip) } else { None };
         let mut cont = Continuation::new(hb, opts, stab)?;
 
@@ -268,8 +318,8 @@ impl SweepProblem {
                     points: prog.points,
                     bifurcations: bifs,
                     status,
-                    newton_seconds: 0.0,
                     total_seconds: start.elapsed().as_secs_f64(),
+                    stability_note: None,
                 })
             }
             Err(e) => {
@@ -277,6 +327,10 @@ impl SweepProblem {
                 Err(e)
             }
         }
+        .map(|mut r| {
+            r.stability_note = sip.reason();
+            r
+        })
     }
 
     /// Converts one branch point into the recorded form, with bearing loads, clearances

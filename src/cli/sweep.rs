@@ -149,6 +149,9 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         report.status,
         args.output.display()
     )?;
+    if let Some(note) = &report.stability_note {
+        writeln!(out, "  stability not assessed: {note}")?;
+    }
     for (w, kind) in &report.bifurcations {
         writeln!(out, "  {kind} at ω = {w:.3} rad/s")?;
     }

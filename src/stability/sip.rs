@@ -80,6 +80,11 @@ pub struct Sip {
     pub extrapolate: bool,
 }
 
+/// Upper limit on the SIP interval count chosen from `Δ·ρ(B) ≤ max_step_norm`: beyond it
+/// the product would take minutes and gigabytes per point, so the method reports the
+/// stiffness instead.
+pub const MAX_INTERVALS: usize = 200_000;
+
 impl Default for Sip {
     fn default() -> Self {
         Self {
@@ -299,11 +304,20 @@ impl Sip {
         } else {
             0.0
         };
-        let mut intervals = if needed.is_finite() && needed < 1e9 {
-            self.intervals.max(needed as usize)
-        } else {
+        if !needed.is_finite() {
             return Err(StabilityError::NonFinite { omega });
-        };
+        }
+        if needed > MAX_INTERVALS as f64 {
+            return Err(StabilityError::Setting {
+                field: "sip.intervals",
+                value: format!("{needed:.3e}"),
+                reason: "needed for Δ·ρ(B) ≤ max_step_norm exceeds the limit of 200000 \
+                         intervals: the system is too stiff for the explicit SIP product \
+                         (fast, heavily damped finite-element modes); reduce the model's \
+                         highest frequencies or use the variational method",
+            });
+        }
+        let mut intervals = self.intervals.max(needed as usize);
         let extrapolate = self.extrapolate && !want_det;
         if extrapolate {
             intervals += intervals % 2;
