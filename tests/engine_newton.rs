@@ -132,7 +132,7 @@ fn continuation_steps_finish_on_the_bound_and_csv_lists_every_point() {
         .expect("run");
     assert_eq!(branch.points.len(), accepted);
     assert_eq!(observed, accepted);
-    let csv = branch_csv(&branch, 0);
+    let csv = branch_csv(&branch, 0).expect("csv");
     let mut lines = csv.lines();
     assert!(
         lines
@@ -163,4 +163,18 @@ fn settings_are_validated_with_field_names() {
         .expect("equal bounds rejected");
     assert!(err.to_string().contains("omega_end"), "{err}");
     assert!(HarmonicBalance::new(&sys, &basis, Some(6)).is_err());
+}
+
+#[test]
+fn csv_rejects_a_dof_the_system_does_not_have() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(1).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.5, 0.6);
+    opts.max_points = 3;
+    let branch = Continuation::new(hb, opts, None)
+        .expect("continuation")
+        .run(|_| {})
+        .expect("run");
+    assert!(branch_csv(&branch, 1).is_err());
 }
