@@ -30,6 +30,6 @@ fn main() -> anyhow::Result<()> {
         branch.rejected_steps,
         branch.finish
     );
-    print!("{}", branch_csv(&branch, 0));
+    print!("{}", branch_csv(&branch, 0)?);
     Ok(())
 }

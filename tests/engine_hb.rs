@@ -143,3 +143,9 @@ fn condensed_solve_equals_full_solve_with_thermal_linear_dofs() {
     solve_both(&Chain::new(9, 6), &basis, 0.7, false);
     solve_both(&Chain::new(9, 6), &basis, 0.7, true);
 }
+
+#[test]
+fn jacobian_matches_finite_differences_several_contacts_and_hot_nodes() {
+    let basis = Basis::paper(1, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    check_jacobian(&Chain::with_contacts(7, 5, 3, 2), &basis, 1.3, 0.4);
+}

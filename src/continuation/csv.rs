@@ -10,11 +10,20 @@
 
 use std::fmt::Write;
 
-use super::{Branch, BranchPoint};
+use super::{Branch, BranchPoint, ContinuationError};
 
 /// CSV of `branch` with amplitudes of mechanical DoF `dof` (0-based); the first line is a
-/// `#` comment explaining the columns.
-pub fn branch_csv(branch: &Branch, dof: usize) -> String {
+/// `#` comment explaining the columns. Errors when `dof` is not a mechanical DoF.
+pub fn branch_csv(branch: &Branch, dof: usize) -> Result<String, ContinuationError> {
+    if let Some(p) = branch.points.first()
+        && dof >= p.solution.n_mech()
+    {
+        return Err(ContinuationError::Setting {
+            field: "amplitude DoF",
+            value: dof as f64,
+            reason: "not a mechanical DoF of the system",
+        });
+    }
     let mut rows: Vec<&BranchPoint> = branch.points.iter().chain(&branch.bifurcations).collect();
     rows.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
     let mut s = String::new();
@@ -46,5 +55,5 @@ pub fn branch_csv(branch: &Branch, dof: usize) -> String {
             sol.residual.therm
         );
     }
-    s
+    Ok(s)
 }

@@ -24,6 +24,7 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
+use rayon::prelude::*;
 use thiserror::Error;
 
 use super::residual::{HarmonicBalance, JacobianParts, fields};
@@ -207,74 +208,73 @@ impl LinearSolver {
                 nh + hs
             }
         };
-        // stored per (field, harmonic) block for the back substitution: L dofs, s, W, y_b, y_c
+        // one block per (field, harmonic slot): the linear-DoF solves are independent and
+        // run in parallel; their contributions are added to the condensed system in order.
         struct Block {
             lin: Vec<usize>,
+            nl: Vec<usize>,
             hs: usize,
             parts: usize,
-            w: Mat<f64>,
-            yb: Mat<f64>,
-            yc: Option<Mat<f64>>,
-            nl: Vec<usize>,
+            /// `Z_NN − Z_NL W` (sn × sn), row/col local (part·|N| + t)
+            schur: Mat<f64>,
+            /// `Z_NL [y_b, y_c]` (sn × 1 or 2)
+            rhs_corr: Mat<f64>,
+            /// `[W, y_b, y_c]` (sl × ncol)
+            sol: Option<Mat<f64>>,
         }
-        let mut blocks: Vec<Block> = Vec::new();
-        for fld in fields(&parts.linear, hb.n_mech(), hb.n_therm()) {
-            if fld.n == 0 {
-                continue;
+        let flds = fields(&parts.linear, hb.n_mech(), hb.n_therm());
+        let mut jobs = Vec::new();
+        for (fi, fld) in flds.iter().enumerate() {
+            if fld.n > 0 {
+                jobs.extend((0..=nh).map(|hs| (fi, hs)));
             }
+        }
+        let build = |&(fi, hs): &(usize, usize)| -> Result<Block, SolveError> {
+            let fld = &flds[fi];
             let nl: Vec<usize> = (0..fld.n)
                 .filter(|&i| pos[fld.offset + i] != usize::MAX)
                 .collect();
             let lin: Vec<usize> = (0..fld.n)
                 .filter(|&i| pos[fld.offset + i] == usize::MAX)
                 .collect();
-            for hs in 0..=nh {
-                let w = if hs == 0 {
-                    0.0
-                } else {
-                    basis.harmonics()[hs - 1].value() * omega
-                };
-                let np = if hs == 0 { 1 } else { 2 };
-                let z = |i: usize, j: usize, pr: usize, pc: usize| {
-                    z_entry(fld.stiffness, fld.damping, fld.mass, w, i, j, pr, pc)
-                };
-                let (nn, nl_len) = (lin.len(), nl.len());
-                // condensed row/col index of local nl slot (t, part)
-                let crow = |t: usize, part: usize| pos[fld.offset + nl[t]] * nc + coeff(hs, part);
-                // Z_NN
-                for pr in 0..np {
-                    for (ti, &i) in nl.iter().enumerate() {
-                        for pc in 0..np {
-                            for (tj, &j) in nl.iter().enumerate() {
-                                a[(crow(ti, pr), crow(tj, pc))] += z(i, j, pr, pc);
-                            }
+            let w = if hs == 0 {
+                0.0
+            } else {
+                basis.harmonics()[hs - 1].value() * omega
+            };
+            let np = if hs == 0 { 1 } else { 2 };
+            let z = |i: usize, j: usize, pr: usize, pc: usize| {
+                z_entry(fld.stiffness, fld.damping, fld.mass, w, i, j, pr, pc)
+            };
+            let (nn, nl_len) = (lin.len(), nl.len());
+            let (sl, sn) = (np * nn, np * nl_len);
+            let mut schur = Mat::<f64>::zeros(sn, sn);
+            for pr in 0..np {
+                for (ti, &i) in nl.iter().enumerate() {
+                    for pc in 0..np {
+                        for (tj, &j) in nl.iter().enumerate() {
+                            schur[(pr * nl_len + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
                         }
                     }
                 }
-                if nn == 0 {
-                    continue;
-                }
-                let sl = np * nn;
-                let sn = np * nl_len;
+            }
+            let ncol = sn + 1 + usize::from(has_border);
+            let mut rhs_corr = Mat::<f64>::zeros(sn, ncol - sn);
+            let mut sol = None;
+            if nn > 0 {
                 let mut zll = Mat::<f64>::zeros(sl, sl);
-                for pr in 0..np {
-                    for (ti, &i) in lin.iter().enumerate() {
-                        for pc in 0..np {
-                            for (tj, &j) in lin.iter().enumerate() {
-                                zll[(pr * nn + ti, pc * nn + tj)] = z(i, j, pr, pc);
-                            }
-                        }
-                    }
-                }
-                // right-hand sides: Z_LN columns, b_L, c_L
-                let ncol = sn + 1 + usize::from(has_border);
                 let mut rhs = Mat::<f64>::zeros(sl, ncol);
+                let mut znl = Mat::<f64>::zeros(sn, sl);
                 for pr in 0..np {
                     for (ti, &i) in lin.iter().enumerate() {
                         let gi = (fld.offset + i) * nc + coeff(hs, pr);
                         for pc in 0..np {
+                            for (tj, &j) in lin.iter().enumerate() {
+                                zll[(pr * nn + ti, pc * nn + tj)] = z(i, j, pr, pc);
+                            }
                             for (tj, &j) in nl.iter().enumerate() {
                                 rhs[(pr * nn + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
+                                znl[(pc * nl_len + tj, pr * nn + ti)] = z(j, i, pc, pr);
                             }
                         }
                         rhs[(pr * nn + ti, sn)] = b[gi];
@@ -283,64 +283,69 @@ impl LinearSolver {
                         }
                     }
                 }
-                let sol = solve_dense(&zll, &rhs, "linear-DoF block", omega)?;
-                // Z_NL (sn × sl)
-                let mut znl = Mat::<f64>::zeros(sn, sl);
-                for pr in 0..np {
-                    for (ti, &i) in nl.iter().enumerate() {
-                        for pc in 0..np {
-                            for (tj, &j) in lin.iter().enumerate() {
-                                znl[(pr * nl_len + ti, pc * nn + tj)] = z(i, j, pr, pc);
-                            }
-                        }
+                let x = solve_dense(&zll, &rhs, "linear-DoF block", omega)?;
+                let prod = &znl * &x; // sn × ncol
+                for r in 0..sn {
+                    for c in 0..sn {
+                        schur[(r, c)] -= prod[(r, c)];
+                    }
+                    for c in sn..ncol {
+                        rhs_corr[(r, c - sn)] = prod[(r, c)];
                     }
                 }
-                let prod = &znl * &sol; // sn × ncol
+                sol = Some(x);
+            }
+            Ok(Block {
+                lin: lin.iter().map(|&i| fld.offset + i).collect(),
+                nl: nl.iter().map(|&i| fld.offset + i).collect(),
+                hs,
+                parts: np,
+                schur,
+                rhs_corr,
+                sol,
+            })
+        };
+        let blocks: Vec<Block> = if hb.n_unknowns() >= 256 {
+            jobs.par_iter().map(build).collect::<Result<_, _>>()?
+        } else {
+            jobs.iter().map(build).collect::<Result<_, _>>()?
+        };
+        for bl in &blocks {
+            let (nl_len, np, hs) = (bl.nl.len(), bl.parts, bl.hs);
+            let sn = np * nl_len;
+            let crow = |t: usize, part: usize| pos[bl.nl[t]] * nc + coeff(hs, part);
+            for pr in 0..np {
+                for ti in 0..nl_len {
+                    let (r, ar) = (pr * nl_len + ti, crow(ti, pr));
+                    for pc in 0..np {
+                        for tj in 0..nl_len {
+                            a[(ar, crow(tj, pc))] += bl.schur[(r, pc * nl_len + tj)];
+                        }
+                    }
+                    s[(ar, 0)] -= bl.rhs_corr[(r, 0)];
+                    if has_border {
+                        a[(ar, pn)] -= bl.rhs_corr[(r, 1)];
+                    }
+                }
+            }
+            if let (Some(bd), Some(sol)) = (border, &bl.sol) {
+                let nn = bl.lin.len();
                 for pr in 0..np {
-                    for ti in 0..nl_len {
-                        let r = pr * nl_len + ti;
-                        let ar = crow(ti, pr);
+                    for (ti, &gi) in bl.lin.iter().enumerate() {
+                        let rl = bd.row[gi * nc + coeff(hs, pr)];
+                        if rl == 0.0 {
+                            continue;
+                        }
+                        let li = pr * nn + ti;
                         for pc in 0..np {
                             for tj in 0..nl_len {
-                                a[(ar, crow(tj, pc))] -= prod[(r, pc * nl_len + tj)];
+                                a[(pn, crow(tj, pc))] -= rl * sol[(li, pc * nl_len + tj)];
                             }
                         }
-                        s[(ar, 0)] -= prod[(r, sn)];
-                        if has_border {
-                            a[(ar, pn)] -= prod[(r, sn + 1)];
-                        }
+                        s[(pn, 0)] -= rl * sol[(li, sn)];
+                        a[(pn, pn)] -= rl * sol[(li, sn + 1)];
                     }
                 }
-                if let Some(bd) = border {
-                    for pr in 0..np {
-                        for (ti, &i) in lin.iter().enumerate() {
-                            let rl = bd.row[(fld.offset + i) * nc + coeff(hs, pr)];
-                            if rl == 0.0 {
-                                continue;
-                            }
-                            let li = pr * nn + ti;
-                            for pc in 0..np {
-                                for tj in 0..nl_len {
-                                    a[(pn, crow(tj, pc))] -= rl * sol[(li, pc * nl_len + tj)];
-                                }
-                            }
-                            s[(pn, 0)] -= rl * sol[(li, sn)];
-                            a[(pn, pn)] -= rl * sol[(li, sn + 1)];
-                        }
-                    }
-                }
-                let w_mat = sol.subcols(0, sn).to_owned();
-                let yb = sol.subcols(sn, 1).to_owned();
-                let yc = has_border.then(|| sol.subcols(sn + 1, 1).to_owned());
-                blocks.push(Block {
-                    lin: lin.iter().map(|&i| fld.offset + i).collect(),
-                    hs,
-                    parts: np,
-                    w: w_mat,
-                    yb,
-                    yc,
-                    nl: nl.iter().map(|&i| fld.offset + i).collect(),
-                });
             }
         }
         let xs = if m > 0 {
@@ -356,17 +361,19 @@ impl LinearSolver {
             }
         }
         for bl in &blocks {
+            let Some(sol) = &bl.sol else { continue };
             let (nn, nl_len) = (bl.lin.len(), bl.nl.len());
+            let sn = bl.parts * nl_len;
             for pr in 0..bl.parts {
                 for (ti, &gi) in bl.lin.iter().enumerate() {
                     let li = pr * nn + ti;
-                    let mut v = bl.yb[(li, 0)];
-                    if let Some(yc) = &bl.yc {
-                        v -= yc[(li, 0)] * mu;
+                    let mut v = sol[(li, sn)];
+                    if has_border {
+                        v -= sol[(li, sn + 1)] * mu;
                     }
                     for pc in 0..bl.parts {
                         for (tj, &gj) in bl.nl.iter().enumerate() {
-                            v -= bl.w[(li, pc * nl_len + tj)] * x[gj * nc + coeff(bl.hs, pc)];
+                            v -= sol[(li, pc * nl_len + tj)] * x[gj * nc + coeff(bl.hs, pc)];
                         }
                     }
                     x[gi * nc + coeff(bl.hs, pr)] = v;

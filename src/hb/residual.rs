@@ -212,6 +212,34 @@ impl<'a> HarmonicBalance<'a> {
         Ok(())
     }
 
+    /// Checks the sizes of the system's linear matrices against `n_mech`, `n_therm`.
+    fn check_linear(&self, lin: &LinearPart) -> Result<(), HbError> {
+        for (what, m, n) in [
+            ("mass matrix", &lin.mass, self.n_mech),
+            ("damping matrix", &lin.damping, self.n_mech),
+            ("stiffness matrix", &lin.stiffness, self.n_mech),
+            (
+                "thermal capacity matrix",
+                &lin.thermal_capacity,
+                self.n_therm,
+            ),
+            (
+                "thermal conductance matrix",
+                &lin.thermal_conductance,
+                self.n_therm,
+            ),
+        ] {
+            if m.n != n || m.data.len() != n * n {
+                return Err(HbError::Dimension {
+                    what,
+                    expected: n,
+                    got: m.n,
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// 2-norms of the mechanical and thermal parts of `r`.
     pub fn norms(&self, r: &[f64]) -> ResidualNorms {
         let m = self.n_mech_unknowns();
@@ -374,6 +402,7 @@ impl<'a> HarmonicBalance<'a> {
             *o = -l;
         }
         let lin = self.system.linear(omega);
+        self.check_linear(&lin)?;
         self.add_linear(&lin, omega, coeffs, out);
         if p + q > 0 {
             let evals = self.evaluate(coeffs, omega);

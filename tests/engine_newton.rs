@@ -1,0 +1,180 @@
+//! Newton (modified IHB) on a thermo-mechanical problem, failure reporting, and the
+//! continuation driver's step outcomes and CSV output.
+
+use tmrotor::continuation::{
+    Continuation, ContinuationOptions, FinishReason, StepOutcome, csv::branch_csv,
+};
+use tmrotor::hb::newton::{NewtonError, NewtonOptions, solve_fixed};
+use tmrotor::hb::{Basis, HarmonicBalance, HbSolution, Ratio};
+use tmrotor::system::PeriodicOrbit;
+use tmrotor::systems::chain::Chain;
+use tmrotor::systems::duffing::Duffing;
+
+#[test]
+fn thermo_mechanical_newton_condensed_equals_full_and_meets_both_tolerances() {
+    let sys = Chain::with_contacts(10, 8, 2, 2);
+    let basis = Basis::paper(2, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let zero = vec![0.0; hb.n_unknowns()];
+    let tight = NewtonOptions {
+        tol_therm: 1e-10,
+        ..NewtonOptions::default()
+    };
+    let (a1, s1) = solve_fixed(&hb, 0.9, &zero, &tight).expect("condensed");
+    let (a2, _) = solve_fixed(
+        &hb,
+        0.9,
+        &zero,
+        &NewtonOptions {
+            condense: false,
+            ..tight
+        },
+    )
+    .expect("full");
+    assert!(s1.relative.mech <= 1e-8 && s1.relative.therm <= 1e-10);
+    let scale = a1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (u, v) in a1.iter().zip(&a2) {
+        assert!((u - v).abs() < 1e-9 * scale);
+    }
+    // the thermal part is non-trivial: the hot nodes sit above the linear-conduction solution
+    let sol = HbSolution::from_unknowns(0.9, &basis, 10, &a1, &s1);
+    assert!(sol.therm_coeffs(0)[0] > 0.0);
+    // the paper's loose thermal tolerance (1e-3) stops earlier or at the same iteration
+    let (_, s3) = solve_fixed(&hb, 0.9, &zero, &NewtonOptions::default()).expect("default");
+    assert!(s3.iterations <= s1.iterations);
+    assert!(s3.relative.therm <= 1e-3);
+}
+
+#[test]
+fn newton_failure_reports_iterations_and_residuals() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(3).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let opts = NewtonOptions {
+        max_iterations: 1,
+        ..NewtonOptions::default()
+    };
+    // a far start on the resonant branch cannot converge in one iteration
+    let mut a = vec![0.0; 7];
+    a[1] = 50.0;
+    match solve_fixed(&hb, 1.2, &a, &opts) {
+        Err(NewtonError::Diverged {
+            iterations,
+            residual_mech,
+            ..
+        }) => {
+            assert_eq!(iterations, 1);
+            assert!(residual_mech > 1e-8);
+        }
+        Err(NewtonError::NoDescent { residual_mech, .. }) => assert!(residual_mech > 1e-8),
+        other => panic!("unexpected {other:?}"),
+    }
+}
+
+#[test]
+fn rms_amplitude_is_eq35_and_max_abs_matches_dense_sampling() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(5).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let (a, st) = solve_fixed(&hb, 1.0, &[0.0; 11], &NewtonOptions::default()).expect("newton");
+    let sol = HbSolution::from_unknowns(1.0, &basis, 1, &a, &st);
+    // Eq. 35 by quadrature over 20000 samples
+    let n = 20_000;
+    let p = sol.period();
+    let xs: Vec<f64> = (0..n)
+        .map(|j| basis.eval(&a, 1.0, p * j as f64 / n as f64).0)
+        .collect();
+    let mean = xs.iter().sum::<f64>() / n as f64;
+    let rms = (xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt();
+    let max = xs.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    assert!((sol.rms_amplitude(0, None) - rms).abs() < 1e-12 * rms);
+    assert!((sol.max_abs(0) - max).abs() < 1e-7 * max);
+}
+
+#[test]
+fn continuation_steps_finish_on_the_bound_and_csv_lists_every_point() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(3).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    // backwards sweep, from 1.6 down to 0.5
+    let mut opts = ContinuationOptions::new(1.6, 0.5);
+    opts.ds_max = 0.2;
+    let mut cont = Continuation::new(hb, opts, None).expect("continuation");
+    let mut accepted = 0;
+    let mut last_omega = f64::NAN;
+    loop {
+        match cont.step().expect("step") {
+            StepOutcome::Accepted { point, .. } => {
+                accepted += 1;
+                last_omega = point.solution.omega;
+            }
+            StepOutcome::Rejected(_) => {}
+            StepOutcome::Finished(f) => {
+                assert_eq!(f, FinishReason::Bound { omega: 0.5 });
+                break;
+            }
+        }
+    }
+    assert_eq!(last_omega, 0.5);
+    // a finished driver stays finished
+    assert!(matches!(
+        cont.step().expect("step"),
+        StepOutcome::Finished(_)
+    ));
+    // run() on a fresh driver gives the same number of points; the CSV has one row each
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(1.6, 0.5);
+    opts.ds_max = 0.2;
+    let mut observed = 0;
+    let branch = Continuation::new(hb, opts, None)
+        .expect("continuation")
+        .run(|o| observed += usize::from(matches!(o, StepOutcome::Accepted { .. })))
+        .expect("run");
+    assert_eq!(branch.points.len(), accepted);
+    assert_eq!(observed, accepted);
+    let csv = branch_csv(&branch, 0).expect("csv");
+    let mut lines = csv.lines();
+    assert!(
+        lines
+            .next()
+            .expect("comment")
+            .starts_with("# amplitude = max |x(t)|")
+    );
+    assert!(
+        lines
+            .next()
+            .expect("header")
+            .starts_with("omega,amplitude,stable,bifurcation")
+    );
+    assert_eq!(lines.count(), accepted);
+    // no stability method: the stable column is empty, not guessed
+    for row in csv.lines().skip(2) {
+        assert_eq!(row.split(',').nth(2), Some(""));
+    }
+}
+
+#[test]
+fn settings_are_validated_with_field_names() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(3).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let err = Continuation::new(hb, ContinuationOptions::new(1.0, 1.0), None)
+        .err()
+        .expect("equal bounds rejected");
+    assert!(err.to_string().contains("omega_end"), "{err}");
+    assert!(HarmonicBalance::new(&sys, &basis, Some(6)).is_err());
+}
+
+#[test]
+fn csv_rejects_a_dof_the_system_does_not_have() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(1).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.5, 0.6);
+    opts.max_points = 3;
+    let branch = Continuation::new(hb, opts, None)
+        .expect("continuation")
+        .run(|_| {})
+        .expect("run");
+    assert!(branch_csv(&branch, 1).is_err());
+}
