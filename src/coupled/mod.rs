@@ -26,6 +26,9 @@
 //! [`CouplingOptions::frozen_clearance`] the thermal network is solved but the clearance is
 //! kept at `δ0` (one-way coupling), which must reproduce the mechanical-only vibration.
 
+// Index loops mirror the matrix notation of the chain rule below.
+#![allow(clippy::needless_range_loop)]
+
 use std::sync::Mutex;
 
 use thiserror::Error;
@@ -123,6 +126,10 @@ pub struct BearingState {
     pub delta_v_m: f64,
 }
 
+/// Per-thread work buffers of [`CoupledRotor::eval_nonlinear`]: `∂F_b/∂(x, T)` rows,
+/// bearing loads, thermal evaluation.
+type Scratch = (Vec<f64>, Vec<BearingLoad>, ThermalEval);
+
 /// The coupled rotor–bearing–thermal system. See the module docs.
 pub struct CoupledRotor {
     assembly: Assembly,
@@ -131,7 +138,7 @@ pub struct CoupledRotor {
     nl: NonlinearDofs,
     ambient_temp_c: f64,
     frozen_clearance: bool,
-    scratch: Mutex<Vec<(Vec<f64>, Vec<BearingLoad>, ThermalEval)>>,
+    scratch: Mutex<Vec<Scratch>>,
 }
 
 impl std::fmt::Debug for CoupledRotor {
@@ -223,7 +230,7 @@ impl CoupledRotor {
                     let t = names.iter().position(|n| *n == b.id).ok_or_else(|| {
                         mismatch(
                             model,
-                            &format!("thermal.bearings"),
+                            "thermal.bearings",
                             format!(
                                 "no thermal bearing named {:?} (mechanical bearing {field})",
                                 b.id

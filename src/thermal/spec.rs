@@ -13,8 +13,6 @@ use super::ThermalError;
 use crate::bearing::ContactLaw;
 use serde::Deserialize;
 
-/// The built-in `[thermal]` table of the paper's dual rotor (contents of the table).
-
 /// Viscosity law (Eq. 12).
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
