@@ -24,6 +24,7 @@
 //! the time integrator used as an independent reference in [`integrate`].
 
 pub mod bearing;
+pub mod campaign;
 pub mod cli;
 pub mod continuation;
 pub mod coupled;

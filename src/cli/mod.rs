@@ -1,6 +1,7 @@
 //! The `tmrotor` command line: one file per subcommand, each with `run(args)`.
 //! `src/main.rs` only parses and maps errors to exit codes.
 
+pub mod campaign;
 pub mod campbell;
 pub mod model;
 pub mod modes;
@@ -22,6 +23,9 @@ pub enum Command {
     /// Run one continuation sweep (default: the built-in dual rotor, q_l = 2 L/min, 25 °C,
     /// ω ∈ [300, 700] rad/s, order 3) and write an MCAP recording.
     Sweep(sweep::SweepArgs),
+    /// Run a campaign of sweeps (TOML file) in parallel, one recording per run plus a
+    /// manifest; resumable, shardable (`--shard I/N`, then `campaign merge DIR`).
+    Campaign(campaign::CampaignArgs),
     /// Check a model file, or print the built-in one.
     #[command(subcommand)]
     Model(model::ModelCommand),
@@ -42,6 +46,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
             }
         }
         Some(Command::Sweep(args)) => sweep::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Campaign(args)) => campaign::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Model(cmd)) => model::run(&cmd, &mut std::io::stdout().lock()),
         Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),

@@ -1,0 +1,366 @@
+//! Sweep campaigns: several studies from one TOML file, run in parallel, one recording per
+//! run plus a manifest.
+//!
+//! ```toml
+//! output_dir = "campaign-out"        # relative to the campaign file
+//! [defaults]                         # StudySettings keys applied to every run
+//! order = 3
+//! [[runs]]
+//! name = "q20"
+//! flow_l_min = 20.0
+//! [[runs]]
+//! name = "q2-50C"
+//! flow_l_min = 2.0
+//! cooling_temp_c = 50.0
+//! ```
+//!
+//! * runs execute in parallel on a rayon pool (`threads`, default: all cores); each run's
+//!   sweep is itself sequential, so a campaign keeps every core busy;
+//! * `manifest.toml` in the output directory lists every run: settings, status, points,
+//!   wall time, the recording's file name and SHA-256; it is rewritten after each run;
+//! * resumable: a run whose recording exists with the checksum the manifest recorded and a
+//!   `completed` status is skipped; anything else (missing, interrupted, failed, changed)
+//!   is run again;
+//! * `shard = (i, n)` runs only the runs whose position `p` satisfies `p mod n = i`
+//!   (deterministic, so a cluster scheduler can split a campaign into `n` jobs), writing
+//!   `manifest-shard-i-of-n.toml`; [`merge_manifests`] joins the shard manifests.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::Mutex;
+use std::sync::atomic::AtomicBool;
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use thiserror::Error;
+
+use crate::record::{McapOptions, McapSink};
+use crate::sweep::{Progress, StudySettings, SweepProblem};
+
+/// A campaign file.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignFile {
+    /// Output directory, relative to the campaign file (default: `<file stem>-out`).
+    pub output_dir: Option<PathBuf>,
+    /// Settings shared by all runs (keys of [`StudySettings`]).
+    #[serde(default)]
+    pub defaults: toml::Table,
+    /// The runs: a unique `name` plus any [`StudySettings`] keys.
+    pub runs: Vec<toml::Table>,
+}
+
+/// One run of a campaign, resolved.
+#[derive(Clone, Debug)]
+pub struct CampaignRun {
+    pub name: String,
+    pub settings: StudySettings,
+}
+
+/// Errors of a campaign.
+#[derive(Debug, Error)]
+pub enum CampaignError {
+    #[error("{file}: {reason}")]
+    File { file: String, reason: String },
+    #[error("{file}: runs[{index}]: {reason}")]
+    Run {
+        file: String,
+        index: usize,
+        reason: String,
+    },
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+}
+
+/// One line of the manifest.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ManifestEntry {
+    pub name: String,
+    /// `completed`, `interrupted`, `failed: …`, or `pending`.
+    pub status: String,
+    pub points: usize,
+    pub seconds: f64,
+    pub recording: String,
+    pub sha256: String,
+    pub bifurcations: Vec<String>,
+    pub settings: toml::Table,
+}
+
+/// The manifest file.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    pub campaign: String,
+    pub tool_version: String,
+    #[serde(default)]
+    pub runs: Vec<ManifestEntry>,
+}
+
+/// Reads and resolves a campaign file.
+pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), CampaignError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|source| CampaignError::Io {
+        path: file.clone(),
+        source,
+    })?;
+    let spec: CampaignFile = toml::from_str(&text).map_err(|e| CampaignError::File {
+        file: file.clone(),
+        reason: e.to_string().trim_end().to_string(),
+    })?;
+    if spec.runs.is_empty() {
+        return Err(CampaignError::File {
+            file,
+            reason: "no [[runs]]".into(),
+        });
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut runs = Vec::new();
+    for (index, table) in spec.runs.iter().enumerate() {
+        let mut merged = spec.defaults.clone();
+        let mut name = None;
+        for (k, v) in table {
+            if k == "name" {
+                name = v.as_str().map(str::to_string);
+            } else {
+                merged.insert(k.clone(), v.clone());
+            }
+        }
+        let name = name.ok_or_else(|| CampaignError::Run {
+            file: file.clone(),
+            index,
+            reason: "missing `name` (a string)".into(),
+        })?;
+        if name.is_empty()
+            || name.contains(['/', '\\'])
+            || runs.iter().any(|r: &CampaignRun| r.name == name)
+        {
+            return Err(CampaignError::Run {
+                file: file.clone(),
+                index,
+                reason: format!(
+                    "name {name:?} must be unique, non-empty and contain no path separator"
+                ),
+            });
+        }
+        let mut settings: StudySettings =
+            toml::Value::Table(merged)
+                .try_into()
+                .map_err(|e: toml::de::Error| CampaignError::Run {
+                    file: file.clone(),
+                    index,
+                    reason: e.to_string().trim_end().to_string(),
+                })?;
+        if let Some(m) = &settings.model {
+            if m.is_relative() {
+                settings.model = Some(base.join(m));
+            }
+        }
+        runs.push(CampaignRun { name, settings });
+    }
+    let out = match &spec.output_dir {
+        Some(d) if d.is_relative() => base.join(d),
+        Some(d) => d.clone(),
+        None => base.join(format!(
+            "{}-out",
+            path.file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("campaign")
+        )),
+    };
+    Ok((spec, runs, out))
+}
+
+/// SHA-256 of a file, hex.
+pub fn sha256_file(path: &Path) -> Result<String, std::io::Error> {
+    let bytes = std::fs::read(path)?;
+    let digest = Sha256::digest(&bytes);
+    Ok(digest.iter().map(|b| format!("{b:02x}")).collect())
+}
+
+fn read_manifest(path: &Path) -> Option<Manifest> {
+    toml::from_str(&std::fs::read_to_string(path).ok()?).ok()
+}
+
+fn write_manifest(path: &Path, m: &Manifest) -> Result<(), CampaignError> {
+    let text = toml::to_string(m).map_err(|e| CampaignError::File {
+        file: path.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    let tmp = path.with_extension("toml.tmp");
+    std::fs::write(&tmp, text)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|source| CampaignError::Io {
+            path: path.display().to_string(),
+            source,
+        })
+}
+
+/// Manifest file name for a shard (`manifest.toml` without sharding).
+pub fn manifest_name(shard: Option<(usize, usize)>) -> String {
+    match shard {
+        Some((i, n)) => format!("manifest-shard-{i}-of-{n}.toml"),
+        None => "manifest.toml".into(),
+    }
+}
+
+/// Runs a campaign. `progress(run name, progress)` is called from worker threads.
+pub fn run(
+    campaign_path: &Path,
+    threads: Option<usize>,
+    shard: Option<(usize, usize)>,
+    interrupt: Option<Arc<AtomicBool>>,
+    progress: &(dyn Fn(&str, &Progress) + Sync),
+) -> Result<Manifest, CampaignError> {
+    let (_, runs, out) = load(campaign_path)?;
+    std::fs::create_dir_all(&out).map_err(|source| CampaignError::Io {
+        path: out.display().to_string(),
+        source,
+    })?;
+    let manifest_path = out.join(manifest_name(shard));
+    let previous = read_manifest(&manifest_path).unwrap_or_default();
+    let selected: Vec<CampaignRun> = runs
+        .into_iter()
+        .enumerate()
+        .filter(|(p, _)| shard.is_none_or(|(i, n)| p % n == i))
+        .map(|(_, r)| r)
+        .collect();
+    let manifest = Mutex::new(Manifest {
+        campaign: campaign_path.display().to_string(),
+        tool_version: env!("CARGO_PKG_VERSION").to_string(),
+        runs: selected
+            .iter()
+            .map(|r| ManifestEntry {
+                name: r.name.clone(),
+                status: "pending".into(),
+                recording: format!("{}.mcap", r.name),
+                settings: toml::Table::try_from(&r.settings).unwrap_or_default(),
+                ..Default::default()
+            })
+            .collect(),
+    });
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| CampaignError::File {
+            file: campaign_path.display().to_string(),
+            reason: format!("thread pool: {e}"),
+        })?;
+    pool.install(|| {
+        use rayon::prelude::*;
+        selected.par_iter().enumerate().for_each(|(k, r)| {
+            let rec_path = out.join(format!("{}.mcap", r.name));
+            let settings_table = toml::Table::try_from(&r.settings).unwrap_or_default();
+            // Resume: skip a completed run whose recording is unchanged.
+            if let Some(prev) = previous.runs.iter().find(|e| e.name == r.name) {
+                if prev.status == "completed"
+                    && prev.settings == settings_table
+                    && sha256_file(&rec_path).ok().as_deref() == Some(prev.sha256.as_str())
+                {
+                    if let Ok(mut m) = manifest.lock() {
+                        m.runs[k] = prev.clone();
+                    }
+                    return;
+                }
+            }
+            let entry = run_one(r, &rec_path, interrupt.clone(), progress);
+            if let Ok(mut m) = manifest.lock() {
+                m.runs[k] = ManifestEntry {
+                    settings: settings_table,
+                    ..entry
+                };
+                let _ = write_manifest(&manifest_path, &m);
+            }
+        });
+    });
+    let m = manifest.into_inner().unwrap_or_default();
+    write_manifest(&manifest_path, &m)?;
+    Ok(m)
+}
+
+fn run_one(
+    r: &CampaignRun,
+    rec_path: &Path,
+    interrupt: Option<Arc<AtomicBool>>,
+    progress: &(dyn Fn(&str, &Progress) + Sync),
+) -> ManifestEntry {
+    let start = std::time::Instant::now();
+    let mut entry = ManifestEntry {
+        name: r.name.clone(),
+        recording: rec_path
+            .file_name()
+            .and_then(|s| s.to_str())
+            .unwrap_or_default()
+            .to_string(),
+        ..Default::default()
+    };
+    let result = SweepProblem::new(&r.settings)
+        .map_err(|e| e.to_string())
+        .and_then(|problem| {
+            let mut sink =
+                McapSink::create(rec_path, McapOptions::default()).map_err(|e| e.to_string())?;
+            problem
+                .run(&mut sink, interrupt, |p| progress(&r.name, p))
+                .map_err(|e| e.to_string())
+        });
+    entry.seconds = start.elapsed().as_secs_f64();
+    match result {
+        Ok(report) => {
+            entry.points = report.points;
+            entry.status = match report.status {
+                crate::record::RunStatus::Completed => "completed".into(),
+                crate::record::RunStatus::Interrupted => "interrupted".into(),
+                other => format!("{other:?}").to_lowercase(),
+            };
+            entry.bifurcations = report
+                .bifurcations
+                .iter()
+                .map(|(w, k)| format!("{k} at {w:.3} rad/s"))
+                .collect();
+        }
+        Err(e) => entry.status = format!("failed: {e}"),
+    }
+    entry.sha256 = sha256_file(rec_path).unwrap_or_default();
+    entry
+}
+
+/// Joins shard manifests (`manifest-shard-*-of-*.toml` in `dir`) into `manifest.toml`,
+/// in run-name order; a run present in several shards keeps the completed entry.
+pub fn merge_manifests(dir: &Path) -> Result<Manifest, CampaignError> {
+    let rd = std::fs::read_dir(dir).map_err(|source| CampaignError::Io {
+        path: dir.display().to_string(),
+        source,
+    })?;
+    let mut merged = Manifest::default();
+    let mut found = 0;
+    for entry in rd.flatten() {
+        let name = entry.file_name().to_string_lossy().to_string();
+        if !(name.starts_with("manifest-shard-") && name.ends_with(".toml")) {
+            continue;
+        }
+        let m = read_manifest(&entry.path()).ok_or_else(|| CampaignError::File {
+            file: entry.path().display().to_string(),
+            reason: "not a readable manifest".into(),
+        })?;
+        found += 1;
+        merged.campaign = m.campaign.clone();
+        merged.tool_version = m.tool_version.clone();
+        for run in m.runs {
+            match merged.runs.iter_mut().find(|e| e.name == run.name) {
+                Some(e) if e.status != "completed" => *e = run,
+                Some(_) => {}
+                None => merged.runs.push(run),
+            }
+        }
+    }
+    if found == 0 {
+        return Err(CampaignError::File {
+            file: dir.display().to_string(),
+            reason: "no manifest-shard-*-of-*.toml files".into(),
+        });
+    }
+    merged.runs.sort_by(|a, b| a.name.cmp(&b.name));
+    write_manifest(&dir.join("manifest.toml"), &merged)?;
+    Ok(merged)
+}
