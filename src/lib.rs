@@ -19,6 +19,10 @@
 //!                  sink ─► MCAP file (protobuf messages on topics)                  [record]
 //! ```
 //!
+//! The driver that runs one sweep from study settings into a sink is [`sweep`]; several
+//! sweeps in parallel with a manifest are a [`campaign`]. The binaries (`tmrotor`, see
+//! [`cli`], and `replay`) are thin layers over these.
+//!
 //! Linear analyses of the assembled rotor (modes, Campbell diagram) live in [`linear`];
 //! reference problems with known answers (Duffing, absorber, Jeffcott) in [`systems`];
 //! the time integrator used as an independent reference in [`integrate`].
