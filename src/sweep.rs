@@ -400,7 +400,7 @@ pub fn bearing_quantities(
             clear[k].uo_m += st.u_o_m * inv;
         }
         for (k, out) in system
-            .thermal_outputs(sol.omega, time, &x, &t)
+            .thermal_outputs_from_states(sol.omega, &states, &t)
             .iter()
             .enumerate()
             .take(nb)

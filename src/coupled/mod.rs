@@ -321,7 +321,9 @@ impl CoupledRotor {
         self.bearings
             .iter()
             .map(|b| {
-                let (dv, u) = self.clearance_variation(b, &ts);
+                let cv = self.expansion(b, &ts);
+                let dv = self.acting_delta_v(cv.as_ref());
+                let u = cv.map_or([0.0; 3], |(_, c)| [c.u_b, c.u_i, c.u_o]);
                 let (dx, dy) = relative(b, &xs);
                 let cage = cage_angle(b, omega, t);
                 let force = b.hertz.force(dx, dy, dv, cage);
@@ -347,11 +349,20 @@ impl CoupledRotor {
         x: &[f64],
         temp: &[f64],
     ) -> Vec<BearingThermalOutputs> {
+        self.thermal_outputs_from_states(omega, &self.bearing_states(omega, t, x, temp), temp)
+    }
+
+    /// As [`Self::thermal_outputs`], from bearing states already evaluated at that time.
+    pub fn thermal_outputs_from_states(
+        &self,
+        omega: f64,
+        states: &[BearingState],
+        temp: &[f64],
+    ) -> Vec<BearingThermalOutputs> {
         let Some(net) = &self.network else {
             return Vec::new();
         };
-        let loads = self.loads_from_states(&self.bearing_states(omega, t, x, temp));
-        net.bearing_outputs(omega, temp, &loads)
+        net.bearing_outputs(omega, temp, &self.loads_from_states(states))
     }
 
     fn loads_from_states(&self, states: &[BearingState]) -> Vec<BearingLoad> {
@@ -368,25 +379,30 @@ impl CoupledRotor {
         loads
     }
 
-    /// `δv` and `(u_b, u_i, u_o)` of bearing `b` from the nonlinear-node temperatures.
-    fn clearance_variation(&self, b: &CoupledBearing, ts: &[f64]) -> (f64, [f64; 3]) {
-        match (&b.thermal, &b.expansion) {
-            (Some((_, loc)), Some(geom)) => {
-                let cv = geom.evaluate(
-                    ts[loc[0]],
-                    ts[loc[1]],
-                    ts[loc[2]],
-                    ts[loc[3]],
-                    self.ambient_temp_c,
-                );
-                let dv = if self.frozen_clearance {
-                    0.0
-                } else {
-                    cv.delta_v
-                };
-                (dv, [cv.u_b, cv.u_i, cv.u_o])
-            }
-            _ => (0.0, [0.0; 3]),
+    /// Thermal expansions of bearing `b` (Eqs. 1–2) from the nonlinear-node temperatures
+    /// `ts`, with the positions of the four temperatures in `ts`; `None` when the bearing
+    /// is not thermally coupled.
+    fn expansion(
+        &self,
+        b: &CoupledBearing,
+        ts: &[f64],
+    ) -> Option<([usize; 4], crate::bearing::ClearanceVariation)> {
+        let ((_, loc), geom) = (b.thermal.as_ref()?, b.expansion.as_ref()?);
+        let cv = geom.evaluate(
+            ts[loc[0]],
+            ts[loc[1]],
+            ts[loc[2]],
+            ts[loc[3]],
+            self.ambient_temp_c,
+        );
+        Some((*loc, cv))
+    }
+
+    /// Clearance variation acting on the force: `δv`, or 0 when the clearance is frozen.
+    fn acting_delta_v(&self, cv: Option<&([usize; 4], crate::bearing::ClearanceVariation)>) -> f64 {
+        match cv {
+            Some((_, cv)) if !self.frozen_clearance => cv.delta_v,
+            _ => 0.0,
         }
     }
 }
@@ -504,7 +520,8 @@ impl System for CoupledRotor {
 
         for b in &self.bearings {
             let (dx, dy) = relative(b, x);
-            let (dv, _) = self.clearance_variation(b, temp);
+            let cv = self.expansion(b, temp);
+            let dv = self.acting_delta_v(cv.as_ref());
             let force = b.hertz.force(dx, dy, dv, cage_angle(b, omega, t));
             let j = force.jac; // rows fx, fy, fb; columns dx, dy, δv
             // Mechanical force and its displacement derivatives.
@@ -527,17 +544,8 @@ impl System for CoupledRotor {
                 }
             }
             // Thermal clearance: ∂F/∂T = ∂F/∂δv · ∂δv/∂T.
-            let ddv = match (&b.thermal, &b.expansion, self.frozen_clearance) {
-                (Some((_, loc)), Some(geom), false) => {
-                    let cv = geom.evaluate(
-                        temp[loc[0]],
-                        temp[loc[1]],
-                        temp[loc[2]],
-                        temp[loc[3]],
-                        self.ambient_temp_c,
-                    );
-                    Some((*loc, cv.d_delta_v_d_temp))
-                }
+            let ddv = match cv {
+                Some((loc, c)) if !self.frozen_clearance => Some((loc, c.d_delta_v_d_temp)),
                 _ => None,
             };
             if let Some((loc, d)) = ddv {
