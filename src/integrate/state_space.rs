@@ -286,16 +286,10 @@ impl<'a> StateSpace<'a> {
         }
     }
 
-    /// `out = B W` (or `out += alpha·B W` with `accumulate`), with `B` built from the
-    /// derivatives in `derivs` (see the module docs). `w` and `out` are `d × c`.
-    pub fn apply_linearization(
-        &self,
-        derivs: &NonlinearEval,
-        w: MatRef<'_, f64>,
-        out: MatMut<'_, f64>,
-        ws: &mut Workspace,
-    ) {
-        let (n, m) = (self.n, self.m);
+    /// `ws.mixed = D S W`: gathers the rows `x_P`, `v_P`, `T_Q` of `w` and mixes them with
+    /// the pointwise derivatives in `derivs` (see the module docs).
+    fn mix(&self, derivs: &NonlinearEval, w: MatRef<'_, f64>, ws: &mut Workspace) {
+        let n = self.n;
         let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
         let c = w.ncols();
         // D = [[df_dx, df_dv, df_dt], [dg_dx, dg_dv, dg_dt]], (p+q) × (2p+q).
@@ -341,6 +335,57 @@ impl<'a> StateSpace<'a> {
                 Par::Seq,
             );
         }
+    }
+
+    /// `out = L D S W`: only the part of `B` that the nonlinear terms contribute (the
+    /// low-rank term of the module docs), for derivatives `derivs`. `w`, `out` are `d × c`.
+    pub fn apply_nonlinear_part(
+        &self,
+        derivs: &NonlinearEval,
+        w: MatRef<'_, f64>,
+        mut out: MatMut<'_, f64>,
+        ws: &mut Workspace,
+    ) {
+        let n = self.n;
+        let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
+        self.mix(derivs, w, ws);
+        out.fill(0.0);
+        let (_, orest) = out.split_at_row_mut(n);
+        let (mut ov, mut ot) = orest.split_at_row_mut(n);
+        if p > 0 {
+            matmul(
+                ov.as_mut(),
+                Accum::Replace,
+                self.minv_p.as_ref(),
+                ws.mixed.as_ref().subrows(0, p),
+                -1.0,
+                Par::Seq,
+            );
+        }
+        if q > 0 {
+            matmul(
+                ot.as_mut(),
+                Accum::Replace,
+                self.ctinv_q.as_ref(),
+                ws.mixed.as_ref().subrows(p, q),
+                -1.0,
+                Par::Seq,
+            );
+        }
+    }
+
+    /// `out = B W` (or `out += alpha·B W` with `accumulate`), with `B` built from the
+    /// derivatives in `derivs` (see the module docs). `w` and `out` are `d × c`.
+    pub fn apply_linearization(
+        &self,
+        derivs: &NonlinearEval,
+        w: MatRef<'_, f64>,
+        out: MatMut<'_, f64>,
+        ws: &mut Workspace,
+    ) {
+        let (n, m) = (self.n, self.m);
+        let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
+        self.mix(derivs, w, ws);
         let (wxv, wt) = w.split_at_row(2 * n);
         let wv = wxv.subrows(n, n);
         let (mut ox, orest) = out.split_at_row_mut(n);

@@ -28,12 +28,18 @@
 //! thermal block rather than by distance to +1 (which would also catch a mechanical
 //! multiplier at a fold).
 
+pub mod exp_sip;
+pub mod expm;
 pub mod locate;
+pub mod reduced;
 pub mod sip;
 pub mod thermal;
 pub mod variational;
 
+pub use exp_sip::ExpSip;
+pub use expm::expm;
 pub use locate::{Crossing, bisect_crossing};
+pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::Variational;

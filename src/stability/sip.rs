@@ -114,7 +114,7 @@ pub struct SipMonodromy {
 }
 
 /// Gauss–Legendre nodes on [−1, 1] and weights, for 1..=5 points.
-fn gauss_legendre(n: usize) -> Option<(&'static [f64], &'static [f64])> {
+pub(crate) fn gauss_legendre(n: usize) -> Option<(&'static [f64], &'static [f64])> {
     const X1: [f64; 1] = [0.0];
     const W1: [f64; 1] = [2.0];
     const X2: [f64; 2] = [-0.577_350_269_189_625_8, 0.577_350_269_189_625_8];
@@ -158,7 +158,7 @@ fn gauss_legendre(n: usize) -> Option<(&'static [f64], &'static [f64])> {
 }
 
 /// Accumulates `out += w · src` over every derivative buffer.
-fn axpy_derivs(out: &mut NonlinearEval, w: f64, src: &NonlinearEval) {
+pub(crate) fn axpy_derivs(out: &mut NonlinearEval, w: f64, src: &NonlinearEval) {
     for (o, s) in [
         (&mut out.df_dx, &src.df_dx),
         (&mut out.df_dv, &src.df_dv),
@@ -187,16 +187,54 @@ fn inf_norm_product(s: MatRef<'_, f64>, d: &[f64], c: usize) -> f64 {
     inf_norm((s * dm).as_ref())
 }
 
+/// Eq. 32: interval means of the time-varying part (the pointwise derivatives) over
+/// `intervals` intervals of length `delta`, by Gauss–Legendre with `nodes`/`weights` on
+/// [−1, 1] (sequential: the orbit need not be shareable between threads; this is the cheap
+/// part).
+pub(crate) fn interval_means(
+    space: &StateSpace<'_>,
+    sampler: &mut OrbitSampler<'_>,
+    delta: f64,
+    intervals: usize,
+    nodes: &[f64],
+    weights: &[f64],
+    ws: &mut Workspace,
+) -> Vec<NonlinearEval> {
+    let mut means = Vec::with_capacity(intervals);
+    for k in 0..intervals {
+        let mut mean = ws.eval.clone();
+        mean.clear();
+        let t_start = k as f64 * delta;
+        for (&xi, &wi) in nodes.iter().zip(weights) {
+            let t = t_start + 0.5 * delta * (1.0 + xi);
+            sampler.eval(space, t, ws);
+            axpy_derivs(&mut mean, 0.5 * wi, &ws.eval);
+        }
+        means.push(mean);
+    }
+    means
+}
+
 /// Evaluates the orbit and the nonlinear derivatives at `t` into `ws.eval`.
-struct OrbitSampler<'o> {
+pub(crate) struct OrbitSampler<'o> {
     orbit: &'o dyn PeriodicOrbit,
     x: Vec<f64>,
     v: Vec<f64>,
     temp: Vec<f64>,
 }
 
-impl OrbitSampler<'_> {
-    fn eval(&mut self, space: &StateSpace<'_>, t: f64, ws: &mut Workspace) {
+impl<'o> OrbitSampler<'o> {
+    /// Buffers sized for `space`.
+    pub(crate) fn new(orbit: &'o dyn PeriodicOrbit, space: &StateSpace<'_>) -> Self {
+        Self {
+            orbit,
+            x: vec![0.0; space.n_mech()],
+            v: vec![0.0; space.n_mech()],
+            temp: vec![0.0; space.n_therm()],
+        }
+    }
+
+    pub(crate) fn eval(&mut self, space: &StateSpace<'_>, t: f64, ws: &mut Workspace) {
         self.orbit
             .state_at(t, &mut self.x, &mut self.v, &mut self.temp);
         space.eval_nonlinear_at(t, &self.x, &self.v, &self.temp, ws);
@@ -291,12 +329,7 @@ impl Sip {
         })?;
         let d = space.dim();
         let mut ws = space.workspace();
-        let mut sampler = OrbitSampler {
-            orbit,
-            x: vec![0.0; space.n_mech()],
-            v: vec![0.0; space.n_mech()],
-            temp: vec![0.0; space.n_therm()],
-        };
+        let mut sampler = OrbitSampler::new(orbit, &space);
 
         let rho = self.rho_bound(&space, &mut sampler, period, &mut ws);
         let needed = if self.max_step_norm.is_finite() {
@@ -324,20 +357,15 @@ impl Sip {
         }
         let delta = period / intervals as f64;
 
-        // Eq. 32: interval means of the time-varying part by Gauss–Legendre (sequential:
-        // the orbit need not be shareable between threads; this is the cheap part).
-        let mut means = Vec::with_capacity(intervals);
-        for k in 0..intervals {
-            let mut mean = ws.eval.clone();
-            mean.clear();
-            let t_start = k as f64 * delta;
-            for (&xi, &wi) in nodes.iter().zip(weights) {
-                let t = t_start + 0.5 * delta * (1.0 + xi);
-                sampler.eval(&space, t, &mut ws);
-                axpy_derivs(&mut mean, 0.5 * wi, &ws.eval);
-            }
-            means.push(mean);
-        }
+        let means = interval_means(
+            &space,
+            &mut sampler,
+            delta,
+            intervals,
+            nodes,
+            weights,
+            &mut ws,
+        );
 
         let mut log_abs_det = None;
         let prod = if want_det {
@@ -495,7 +523,7 @@ impl Sip {
     }
 }
 
-fn log_abs_det_of(a: MatRef<'_, f64>) -> f64 {
+pub(crate) fn log_abs_det_of(a: MatRef<'_, f64>) -> f64 {
     let d = a.nrows();
     if d == 0 {
         return 0.0;
