@@ -45,6 +45,17 @@ pub struct SweepArgs {
     /// Skip Floquet stability (faster; no stable flags or bifurcations).
     #[arg(long)]
     pub no_stability: bool,
+    /// Floquet method: exp-sip (exponential-split SIP, default) or sip (the paper's
+    /// explicit product, Eq. 33; refuses stiff models).
+    #[arg(long, value_name = "METHOD", value_parser = ["exp-sip", "sip"])]
+    pub stability_method: Option<String>,
+    /// SIP intervals per period [default: 256].
+    #[arg(long, value_name = "N")]
+    pub sip_intervals: Option<usize>,
+    /// Cut-off (rad/s) of the Craig–Bampton reduction used for stability; 0 = full model
+    /// [default: 20000].
+    #[arg(long, value_name = "RAD_S")]
+    pub reduction_cutoff: Option<f64>,
     /// Output recording.
     #[arg(short, long, default_value = "sweep.mcap")]
     pub output: PathBuf,
@@ -105,6 +116,18 @@ impl SweepArgs {
         }
         if self.no_stability {
             s.stability = false;
+        }
+        if let Some(m) = &self.stability_method {
+            s.stability_method = match m.as_str() {
+                "sip" => crate::sweep::StabilityChoice::Sip,
+                _ => crate::sweep::StabilityChoice::ExpSip,
+            };
+        }
+        if let Some(v) = self.sip_intervals {
+            s.sip_intervals = v;
+        }
+        if let Some(v) = self.reduction_cutoff {
+            s.reduction_cutoff_rad_s = v;
         }
         Ok(s)
     }
