@@ -799,8 +799,10 @@ impl crate::record::derive::StabilityRederive for CoupledRederive {
         point: &PointRecord,
     ) -> Result<Vec<Complex64>, crate::record::derive::DeriveError> {
         let s = &self.problem.settings;
-        let derive_err = |e: StabilityError| crate::record::derive::DeriveError::Model(e.to_string());
-        let method = stability_method(s, &self.problem.system, s.omega_start).map_err(derive_err)?;
+        let derive_err =
+            |e: StabilityError| crate::record::derive::DeriveError::Model(e.to_string());
+        let method =
+            stability_method(s, &self.problem.system, s.omega_start).map_err(derive_err)?;
         method
             .multipliers(&self.problem.system, &self.solution(point))
             .map(|f| f.multipliers)
