@@ -55,6 +55,12 @@ pub struct StudySettings {
     pub omega_start: f64,
     pub omega_end: f64,
     /// Largest continuation step (scaled arclength; see [`ContinuationOptions`]).
+    ///
+    /// Default 0.15. Why: on the default study, 0.05, 0.10 and 0.15 give the same
+    /// ω-turning points (to 0.1 rad/s, the 0.05 run adds one pair of tiny zigzags) and the
+    /// same node-8 peaks (to 0.2 rad/s and 0.01 µm), with 958, 460 and 314 points; the
+    /// step control shortens the step where the branch bends, so the cap mostly sets
+    /// the spacing on the flat parts.
     pub ds_max: f64,
     /// Maximum number of points.
     pub max_points: usize,
@@ -85,7 +91,7 @@ impl Default for StudySettings {
             order: 3,
             omega_start: 300.0,
             omega_end: 700.0,
-            ds_max: 0.05,
+            ds_max: 0.15,
             max_points: 2000,
             thermal: true,
             stability: true,

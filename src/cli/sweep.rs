@@ -33,7 +33,7 @@ pub struct SweepArgs {
     /// Sweep range START:END in rad/s [default: 300:700].
     #[arg(long, value_name = "START:END")]
     pub omega: Option<String>,
-    /// Largest continuation step (scaled arclength) [default: 0.05].
+    /// Largest continuation step (scaled arclength) [default: 0.15].
     #[arg(long)]
     pub ds_max: Option<f64>,
     /// Maximum number of points [default: 2000].
