@@ -37,6 +37,7 @@ pub mod integrate;
 pub mod linear;
 pub mod model;
 pub mod record;
+pub mod report;
 pub mod stability;
 pub mod sweep;
 pub mod system;

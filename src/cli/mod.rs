@@ -5,6 +5,7 @@ pub mod campaign;
 pub mod campbell;
 pub mod model;
 pub mod modes;
+pub mod report;
 pub mod sweep;
 
 use clap::{Parser, Subcommand};
@@ -33,6 +34,9 @@ pub enum Command {
     Modes(modes::ModesArgs),
     /// Campbell diagram and critical speeds (1× LP, 1× HP) over a speed range.
     Campbell(campbell::CampbellArgs),
+    /// The reproduction report (markdown) of a campaign directory: the paper's findings
+    /// against the recordings.
+    Report(report::ReportArgs),
 }
 
 /// Runs the parsed command line.
@@ -50,5 +54,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Model(cmd)) => model::run(&cmd, &mut std::io::stdout().lock()),
         Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Report(args)) => report::run(&args, &mut std::io::stdout().lock()),
     }
 }
