@@ -32,6 +32,7 @@ pub mod campaign;
 pub mod cli;
 pub mod continuation;
 pub mod coupled;
+pub mod figure;
 pub mod hb;
 pub mod integrate;
 pub mod linear;
