@@ -94,8 +94,8 @@ pub const PALETTE: [RGBColor; 10] = [
     RGBColor(23, 190, 207),
 ];
 
-/// Light grey of reference lines.
-pub const REFERENCE: RGBColor = RGBColor(150, 150, 150);
+/// Dark grey of reference lines.
+pub const REFERENCE: RGBColor = RGBColor(70, 70, 70);
 
 /// `colour` mixed with white: `amount` 0 keeps it, 1 gives white.
 pub fn lighter(colour: RGBColor, amount: f64) -> RGBColor {
@@ -155,7 +155,7 @@ pub struct Chart {
     pub y_desc: String,
     pub series: Vec<Series>,
     pub markers: Vec<Marker>,
-    /// Horizontal reference lines (thin, grey, dashed).
+    /// Horizontal reference lines (thin, dark grey, dashed).
     pub hlines: Vec<f64>,
     /// Axis ranges; `None`: the data's range plus 5 %.
     pub x_range: Option<(f64, f64)>,
@@ -285,8 +285,8 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
     for &h in &chart.hlines {
         ctx.draw_series(DashedLineSeries::new(
             [(x0, h), (x1, h)],
+            10,
             6,
-            4,
             REFERENCE.stroke_width(1),
         ))?;
     }

@@ -264,7 +264,35 @@ fn campaign_plot_errors_name_the_file_and_reason() {
         msg.contains("q2.mcap") && msg.contains("run q2") && msg.contains("cannot read"),
         "{msg}"
     );
-    // …or damaged.
+    // A run the manifest lists as not started has no recording yet: it stays in the
+    // legend, nothing drawn.
+    let manifest_path = out.join("manifest.toml");
+    let text = std::fs::read_to_string(&manifest_path).expect("manifest");
+    let mut manifest: campaign::Manifest = toml::from_str(&text).expect("parse");
+    manifest.runs[1].status = "pending".into();
+    std::fs::write(&manifest_path, toml::to_string(&manifest).expect("toml")).expect("write");
+    let done = plot_campaign(&out, &figs, &options()).expect("pending run");
+    assert_eq!(
+        done.legends[1],
+        "q2: flow 2 L/min, cooling 25 °C (incomplete: no recording)"
+    );
+    assert!(
+        done.notes
+            .iter()
+            .any(|n| n.contains("run q2 has no recording"))
+    );
+    // Only q2's legend sample is orange, no curve.
+    let (_, _, px) = png_pixels(&figs.join("amplitude_node8.png"));
+    let count =
+        |c: plotters::style::RGBColor| px.chunks(3).filter(|p| *p == [c.0, c.1, c.2]).count();
+    assert!(count(PALETTE[0]) > 500, "q20 drawn");
+    assert!(
+        (1..200).contains(&count(PALETTE[1])),
+        "q2 in the legend only"
+    );
+    std::fs::remove_dir_all(&figs).expect("clean");
+
+    // A damaged recording is an error whatever the status.
     std::fs::write(&rec, b"this is not MCAP").expect("write");
     let msg = err(plot_campaign(&out, &figs, &options()).expect_err("corrupt recording"));
     assert!(
@@ -343,5 +371,59 @@ fn campaign_command_writes_figures_unless_told_not_to() {
     assert!(
         stderr.contains("nowhere/manifest.toml") && stderr.contains("No such file"),
         "{stderr}"
+    );
+}
+
+/// Synthetic recordings (closed-form 2-DoF rotor with a fold pair, stability recorded) in
+/// a hand-written manifest: unstable parts are drawn dashed and lighter, figures whose data
+/// the runs lack are skipped with a note.
+#[test]
+fn campaign_plot_draws_unstable_parts_differently() {
+    use tmrotor::record::synthetic::{self, SyntheticOptions};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut manifest = campaign::Manifest::default();
+    for (name, points, flow) in [("a", 10, 20.0), ("b", 14, 2.0)] {
+        let options = SyntheticOptions {
+            points_per_side: points,
+            ..Default::default()
+        };
+        let rec = dir.path().join(format!("{name}.mcap"));
+        synthetic::write_mcap(&rec, &options, true).expect("write");
+        let mut settings = toml::Table::new();
+        settings.insert("flow_l_min".into(), toml::Value::Float(flow));
+        settings.insert("cooling_temp_c".into(), toml::Value::Float(25.0));
+        manifest.runs.push(campaign::ManifestEntry {
+            name: name.into(),
+            status: "completed".into(),
+            recording: format!("{name}.mcap"),
+            sha256: sha256_file(&rec).expect("sha"),
+            settings,
+            ..Default::default()
+        });
+    }
+    std::fs::write(
+        dir.path().join("manifest.toml"),
+        toml::to_string(&manifest).expect("toml"),
+    )
+    .expect("write manifest");
+    let figs = dir.path().join("figs");
+    let done = plot_campaign(dir.path(), &figs, &FigureOptions::default()).expect("plot");
+    // No node 8 in these recordings: the first recorded node is drawn.
+    assert_eq!(
+        done.written[0].file_name().expect("name"),
+        "amplitude_node1.png"
+    );
+    let (_, _, px) = png_pixels(&done.written[0]);
+    for (k, c) in PALETTE[..2].iter().enumerate() {
+        assert!(has_colour(&px, *c), "run {k}: stable part");
+        let light = tmrotor::figure::lighter(*c, 0.35);
+        assert!(has_colour(&px, light), "run {k}: unstable part, lighter");
+    }
+    assert!(
+        done.notes
+            .iter()
+            .any(|n| n.contains("rolling_element_temperatures.png not written")),
+        "{:?}",
+        done.notes
     );
 }

@@ -7,7 +7,7 @@
 //! |---|---|---|
 //! | `amplitude_node8.png` | RMS amplitude (Eq. 35) of dynamic node 8 against ω, one colour per run | Figs. 8a, 9a, 10a, 21a |
 //! | `clearance_variation.png` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
-//! | `effective_clearance.png` | effective clearance δe = δ0 + δv against ω, δ0 as a grey line | section 5.1 (δe of 2#, 4# above 5 δ0) |
+//! | `effective_clearance.png` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
 //! | `rolling_element_temperatures.png` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
 //! | `node_temperatures.png` | mean temperature of every thermal node against ω, a panel per run | Figs. 14a, 14b |
 //! | `temperature_extremes.png` | highest and lowest mean node temperature against ω | Figs. 14a, 14b, 22a |
@@ -18,7 +18,10 @@
 //! in the run's colour and labelled SN / PD / NS with their number along the branch.
 //! Legends give each run's name, lubricant flow rate and cooling temperature; a run that
 //! did not complete (manifest status, or a recording cut short) is drawn as far as it goes
-//! and marked "(incomplete)".
+//! and marked "(incomplete)". A run the manifest lists as `pending` or `failed: …` whose
+//! recording does not exist (not started, or failed before recording) stays in the legend
+//! marked "(incomplete: no recording)"; any other missing or unreadable recording is an
+//! error naming the file.
 //!
 //! Thermal nodes are found by the names the thermal network gives them (`"1# rolling
 //! elements"`, `"1# inner ring"`, `"1# outer ring"`, `"1# lubricant"`, `"1# housing
@@ -35,7 +38,7 @@ use crate::figure::{
     self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
     draw_chart, draw_legend, legend_height, lighter, render_png, tick,
 };
-use crate::record::read_recording;
+use crate::record::{ReadError, read_recording};
 use crate::stability::BifurcationKind;
 
 /// What [`plot_campaign`] draws.
@@ -158,6 +161,33 @@ fn setting(entry: &ManifestEntry, rec_settings: &[(String, String)], key: &str) 
         })
 }
 
+/// Legend label of a run from its settings (manifest first, then the recording's).
+fn run_label(entry: &ManifestEntry, rec_settings: &[(String, String)]) -> String {
+    let thermal_on = entry
+        .settings
+        .get("thermal")
+        .and_then(toml::Value::as_bool)
+        .or_else(|| {
+            rec_settings
+                .iter()
+                .find(|(k, _)| k == "thermal")
+                .map(|(_, v)| v != "false")
+        })
+        .unwrap_or(true);
+    let flow = setting(entry, rec_settings, "flow_l_min");
+    let cooling = setting(entry, rec_settings, "cooling_temp_c");
+    match (thermal_on, flow, cooling) {
+        (false, _, _) => format!("{}: no thermal coupling", entry.name),
+        (true, Some(q), Some(t)) => format!(
+            "{}: flow {} L/min, cooling {} °C",
+            entry.name,
+            tick(&q),
+            tick(&t)
+        ),
+        _ => entry.name.clone(),
+    }
+}
+
 fn load_run(
     dir: &Path,
     entry: &ManifestEntry,
@@ -169,11 +199,41 @@ fn load_run(
         entry.recording.clone()
     };
     let path = dir.join(&file);
-    let rec = read_recording(&path).map_err(|error| CampaignError::Recording {
-        run: entry.name.clone(),
-        status: entry.status.clone(),
-        error,
-    })?;
+    let colour = PALETTE[k % PALETTE.len()];
+    let rec = match read_recording(&path) {
+        Ok(rec) => rec,
+        // A run that has not started, or failed before it could record, has no file:
+        // it stays in the legend with nothing drawn.
+        Err(ReadError::Io { source, .. })
+            if source.kind() == std::io::ErrorKind::NotFound
+                && (entry.status == "pending" || entry.status.starts_with("failed")) =>
+        {
+            let note = format!(
+                "run {} has no recording yet ({} missing, manifest status {:?}): \
+                 listed in the legends with nothing drawn",
+                entry.name,
+                path.display(),
+                entry.status
+            );
+            let data = RunData {
+                legend: format!("{} (incomplete: no recording)", run_label(entry, &[])),
+                colour,
+                node_ids: Vec::new(),
+                bearings: Vec::new(),
+                thermal: Vec::new(),
+                points: Vec::new(),
+                bifurcations: Vec::new(),
+            };
+            return Ok((data, vec![note]));
+        }
+        Err(error) => {
+            return Err(CampaignError::Recording {
+                run: entry.name.clone(),
+                status: entry.status.clone(),
+                error,
+            });
+        }
+    };
     let mut notes = Vec::new();
     let incomplete = entry.status != "completed" || !rec.complete;
     if incomplete {
@@ -194,37 +254,14 @@ fn load_run(
             path.display()
         ));
     }
-    let thermal_on = entry
-        .settings
-        .get("thermal")
-        .and_then(toml::Value::as_bool)
-        .or_else(|| {
-            rec.run
-                .settings
-                .iter()
-                .find(|(k, _)| k == "thermal")
-                .map(|(_, v)| v != "false")
-        })
-        .unwrap_or(true);
-    let flow = setting(entry, &rec.run.settings, "flow_l_min");
-    let cooling = setting(entry, &rec.run.settings, "cooling_temp_c");
-    let mut legend = match (thermal_on, flow, cooling) {
-        (false, _, _) => format!("{}: no thermal coupling", entry.name),
-        (true, Some(q), Some(t)) => format!(
-            "{}: flow {} L/min, cooling {} °C",
-            entry.name,
-            tick(&q),
-            tick(&t)
-        ),
-        _ => entry.name.clone(),
-    };
+    let mut legend = run_label(entry, &rec.run.settings);
     if incomplete {
         legend.push_str(" (incomplete)");
     }
     let run = &rec.run;
     let data = RunData {
         legend,
-        colour: PALETTE[k % PALETTE.len()],
+        colour,
         node_ids: run.nodes.iter().map(|n| n.id).collect(),
         bearings: run
             .bearings
@@ -309,6 +346,13 @@ fn run_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
             text: r.legend.clone(),
         })
         .collect();
+    entries.extend(style_legend(runs, with_markers));
+    entries
+}
+
+/// Legend entries saying how stability and bifurcations are drawn.
+fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
+    let mut entries = Vec::new();
     let points = || runs.iter().flat_map(|r| &r.points);
     let grey = RGBColor(90, 90, 90);
     if points().any(|p| p.stable == Some(false)) {
@@ -411,8 +455,9 @@ const OMEGA: &str = "ω (rad/s)";
 /// (see the module docs) into `out`, which is created if missing.
 ///
 /// Errors: an unreadable or invalid manifest, an unreadable or damaged recording (a file
-/// cut short is read as far as it goes, not an error), a requested node no run recorded,
-/// a figure that cannot be written; each names the file.
+/// cut short is read as far as it goes, and a run not started yet has none: neither is an
+/// error), a requested node no run recorded, a figure that cannot be written; each names
+/// the file.
 pub fn plot_campaign(
     dir: &Path,
     out: &Path,
@@ -522,13 +567,13 @@ pub fn plot_campaign(
         for (file, title, y_desc, effective) in [
             (
                 "clearance_variation.png",
-                "Radial clearance (RC) variation δv of each bearing (Eq. 4; δv > 0: the clearance grows)",
+                "Radial clearance (RC) variation δv of each bearing (δv > 0: the clearance grows)",
                 "δv (µm)",
                 false,
             ),
             (
                 "effective_clearance.png",
-                "Effective radial clearance δe = δ0 + δv of each bearing (grey dashed: initial clearance δ0)",
+                "Effective radial clearance δe = δ0 + δv of each bearing (dashed: initial clearance δ0)",
                 "δe (µm)",
                 true,
             ),
@@ -550,7 +595,8 @@ pub fn plot_campaign(
                 }
                 panels.push(chart);
             }
-            share_y(&mut panels);
+            // Each panel keeps its own y-range: the bearings' variations differ by an
+            // order of magnitude, and the runs are compared within a bearing.
             let path = out.join(file);
             write_figure(&path, size, title, &panels, &run_legend(&runs, false), text)?;
             result.written.push(path);
@@ -637,7 +683,7 @@ pub fn plot_campaign(
             runs.iter().map(|r| r.thermal.len()).max().unwrap_or(0)
         ),
         &panels,
-        &run_legend(&runs, false),
+        &style_legend(&runs, false),
         text,
     )?;
     result.written.push(path);
