@@ -20,8 +20,10 @@
 //! ```
 //!
 //! The driver that runs one sweep from study settings into a sink is [`sweep`]; several
-//! sweeps in parallel with a manifest are a [`campaign`]. The binaries (`tmrotor`, see
-//! [`cli`], and `replay`) are thin layers over these.
+//! sweeps in parallel with a manifest are a [`campaign`], whose runs
+//! [`campaign::figures`] overlays in PNG figures drawn with the helpers of [`figure`]
+//! (shared with `replay plot`). The binaries (`tmrotor`, see [`cli`], and `replay`) are
+//! thin layers over these.
 //!
 //! Linear analyses of the assembled rotor (modes, Campbell diagram) live in [`linear`];
 //! reference problems with known answers (Duffing, absorber, Jeffcott) in [`systems`];
@@ -32,6 +34,7 @@ pub mod campaign;
 pub mod cli;
 pub mod continuation;
 pub mod coupled;
+pub mod figure;
 pub mod hb;
 pub mod integrate;
 pub mod linear;

@@ -90,3 +90,341 @@ fn campaign_file_errors_name_the_run() {
             .contains("unique")
     );
 }
+
+// ---------------------------------------------------------------------------------------
+// Figures: `campaign plot DIR` overlays the runs.
+
+use std::process::Command;
+
+use tmrotor::campaign::CampaignError;
+use tmrotor::campaign::figures::{FigureOptions, plot_campaign};
+use tmrotor::figure::PALETTE;
+
+/// Two short coupled runs (thermal network on, so temperatures and clearances are
+/// recorded), order 1, no stability.
+fn write_thermal_campaign(dir: &Path) -> std::path::PathBuf {
+    let path = dir.join("t.toml");
+    std::fs::write(
+        &path,
+        r#"
+output_dir = "out"
+[defaults]
+order = 1
+omega_start = 400.0
+omega_end = 440.0
+max_points = 12
+stability = false
+[[runs]]
+name = "q20"
+flow_l_min = 20.0
+[[runs]]
+name = "q2"
+flow_l_min = 2.0
+"#,
+    )
+    .expect("write campaign");
+    path
+}
+
+const FIGURES: [&str; 7] = [
+    "amplitude_node8.png",
+    "clearance_variation.png",
+    "effective_clearance.png",
+    "rolling_element_temperatures.png",
+    "node_temperatures.png",
+    "temperature_extremes.png",
+    "bearing_temperatures_omega402.png",
+];
+
+fn png_pixels(path: &Path) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(path).expect("png"),
+    ));
+    let mut reader = decoder.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    (info.width, info.height, buf)
+}
+
+fn has_colour(px: &[u8], c: plotters::style::RGBColor) -> bool {
+    px.chunks(3).any(|p| p == [c.0, c.1, c.2])
+}
+
+fn options() -> FigureOptions {
+    FigureOptions {
+        omega_rad_s: 402.0,
+        ..FigureOptions::default()
+    }
+}
+
+#[test]
+fn campaign_plot_overlays_the_runs_and_marks_incomplete_ones() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_thermal_campaign(dir.path());
+    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let m = campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
+    assert!(
+        m.runs
+            .iter()
+            .all(|r| r.status == "completed" && r.points >= 3)
+    );
+    let out = dir.path().join("out");
+    let figs = out.join("figs");
+
+    let done = plot_campaign(&out, &figs, &options()).expect("plot");
+    let written: Vec<String> = done
+        .written
+        .iter()
+        .map(|p| p.file_name().expect("name").to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(written, FIGURES);
+    assert_eq!(
+        done.legends,
+        [
+            "q20: flow 20 L/min, cooling 25 °C",
+            "q2: flow 2 L/min, cooling 25 °C"
+        ]
+    );
+    for name in FIGURES {
+        let (w, h, px) = png_pixels(&figs.join(name));
+        assert_eq!((w, h), (1200, 800), "{name}");
+        let ink = px.chunks(3).filter(|p| *p != [255, 255, 255]).count();
+        // Curves alone (no font: no text, no grid) cover about 1 %.
+        assert!(
+            ink > 1200 * 800 / 200,
+            "{name}: only {ink} non-white pixels"
+        );
+        // Both runs are drawn, each in its own colour.
+        assert!(has_colour(&px, PALETTE[0]), "{name}: run q20 missing");
+        assert!(has_colour(&px, PALETTE[1]), "{name}: run q2 missing");
+    }
+
+    // A run cut short (a killed process) is plotted as far as it goes and marked.
+    let cut = out.join("q2.mcap");
+    let bytes = std::fs::read(&cut).expect("read");
+    std::fs::write(&cut, &bytes[..bytes.len() * 3 / 5]).expect("truncate");
+    let readable = tmrotor::record::read_recording(&cut).expect("cut file reads");
+    assert!(!readable.complete && readable.points.len() >= 2);
+    let done = plot_campaign(&out, &figs, &options()).expect("plot with a cut run");
+    assert_eq!(done.legends[0], "q20: flow 20 L/min, cooling 25 °C");
+    assert_eq!(
+        done.legends[1],
+        "q2: flow 2 L/min, cooling 25 °C (incomplete)"
+    );
+    assert!(
+        done.notes
+            .iter()
+            .any(|n| n.contains("run q2 is incomplete") && n.contains("cut short")),
+        "{:?}",
+        done.notes
+    );
+    let (_, _, px) = png_pixels(&figs.join("amplitude_node8.png"));
+    assert!(has_colour(&px, PALETTE[1]), "the cut run is still drawn");
+
+    // A node that was not recorded is an error naming it.
+    let bad = FigureOptions {
+        nodes: vec![99],
+        ..options()
+    };
+    let msg = plot_campaign(&out, &figs, &bad)
+        .expect_err("node 99")
+        .to_string();
+    assert!(
+        msg.contains("node 99") && msg.contains("manifest.toml"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn campaign_plot_errors_name_the_file_and_reason() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_thermal_campaign(dir.path());
+    let out = dir.path().join("out");
+    let figs = dir.path().join("figs");
+    let err = |e: CampaignError| e.to_string();
+
+    // No manifest yet.
+    std::fs::create_dir_all(&out).expect("mkdir");
+    let msg = err(plot_campaign(&out, &figs, &options()).expect_err("no manifest"));
+    assert!(
+        msg.contains("manifest.toml") && msg.contains("cannot read the campaign manifest"),
+        "{msg}"
+    );
+    // A manifest that is not one.
+    std::fs::write(out.join("manifest.toml"), "runs = 3\n").expect("write");
+    let msg = err(plot_campaign(&out, &figs, &options()).expect_err("bad manifest"));
+    assert!(
+        msg.contains("manifest.toml") && msg.contains("not a campaign manifest"),
+        "{msg}"
+    );
+
+    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
+    // A recording that is missing…
+    let rec = out.join("q2.mcap");
+    std::fs::remove_file(&rec).expect("remove");
+    let msg = err(plot_campaign(&out, &figs, &options()).expect_err("missing recording"));
+    assert!(
+        msg.contains("q2.mcap") && msg.contains("run q2") && msg.contains("cannot read"),
+        "{msg}"
+    );
+    // A run the manifest lists as not started has no recording yet: it stays in the
+    // legend, nothing drawn.
+    let manifest_path = out.join("manifest.toml");
+    let text = std::fs::read_to_string(&manifest_path).expect("manifest");
+    let mut manifest: campaign::Manifest = toml::from_str(&text).expect("parse");
+    manifest.runs[1].status = "pending".into();
+    std::fs::write(&manifest_path, toml::to_string(&manifest).expect("toml")).expect("write");
+    let done = plot_campaign(&out, &figs, &options()).expect("pending run");
+    assert_eq!(
+        done.legends[1],
+        "q2: flow 2 L/min, cooling 25 °C (incomplete: no recording)"
+    );
+    assert!(
+        done.notes
+            .iter()
+            .any(|n| n.contains("run q2 has no recording"))
+    );
+    // At most q2's legend sample is orange (none without a font), no curve.
+    let (_, _, px) = png_pixels(&figs.join("amplitude_node8.png"));
+    let count =
+        |c: plotters::style::RGBColor| px.chunks(3).filter(|p| *p == [c.0, c.1, c.2]).count();
+    assert!(count(PALETTE[0]) > 500, "q20 drawn");
+    assert!(count(PALETTE[1]) < 200, "q2 in the legend only");
+    std::fs::remove_dir_all(&figs).expect("clean");
+
+    // A damaged recording is an error whatever the status.
+    std::fs::write(&rec, b"this is not MCAP").expect("write");
+    let msg = err(plot_campaign(&out, &figs, &options()).expect_err("corrupt recording"));
+    assert!(
+        msg.contains("q2.mcap") && msg.contains("not an MCAP file"),
+        "{msg}"
+    );
+    assert!(!figs.join("amplitude_node8.png").exists());
+}
+
+#[test]
+fn campaign_command_writes_figures_unless_told_not_to() {
+    let exe = env!("CARGO_BIN_EXE_tmrotor");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_thermal_campaign(dir.path());
+    let out = dir.path().join("out");
+
+    let run = Command::new(exe)
+        .args(["campaign", "-q", "--no-figures"])
+        .arg(&file)
+        .output()
+        .expect("run tmrotor");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(!out.join("figures").exists());
+
+    // Resumes (both runs complete), then draws into figures/.
+    let run = Command::new(exe)
+        .args(["campaign", "-q"])
+        .arg(&file)
+        .output()
+        .expect("run tmrotor");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        stdout.contains("wrote") && stdout.contains("amplitude_node8.png"),
+        "{stdout}"
+    );
+    assert!(out.join("figures/clearance_variation.png").exists());
+
+    // `campaign plot` with its options; a missing directory is an error naming the file.
+    let figs = dir.path().join("plots");
+    let run = Command::new(exe)
+        .args(["campaign", "plot"])
+        .arg(&out)
+        .arg("--out")
+        .arg(&figs)
+        .args(["--node", "1", "--node", "8", "--omega", "410"])
+        .output()
+        .expect("run tmrotor");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    for name in [
+        "amplitude_node1.png",
+        "amplitude_node8.png",
+        "bearing_temperatures_omega410.png",
+    ] {
+        assert_eq!(png_pixels(&figs.join(name)).0, 1200, "{name}");
+    }
+    let run = Command::new(exe)
+        .args(["campaign", "plot"])
+        .arg(dir.path().join("nowhere"))
+        .output()
+        .expect("run tmrotor");
+    assert_eq!(run.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        stderr.contains("nowhere/manifest.toml") && stderr.contains("No such file"),
+        "{stderr}"
+    );
+}
+
+/// Synthetic recordings (closed-form 2-DoF rotor with a fold pair, stability recorded) in
+/// a hand-written manifest: unstable parts are drawn dashed and lighter, figures whose data
+/// the runs lack are skipped with a note.
+#[test]
+fn campaign_plot_draws_unstable_parts_differently() {
+    use tmrotor::record::synthetic::{self, SyntheticOptions};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let mut manifest = campaign::Manifest::default();
+    for (name, points, flow) in [("a", 10, 20.0), ("b", 14, 2.0)] {
+        let options = SyntheticOptions {
+            points_per_side: points,
+            ..Default::default()
+        };
+        let rec = dir.path().join(format!("{name}.mcap"));
+        synthetic::write_mcap(&rec, &options, true).expect("write");
+        let mut settings = toml::Table::new();
+        settings.insert("flow_l_min".into(), toml::Value::Float(flow));
+        settings.insert("cooling_temp_c".into(), toml::Value::Float(25.0));
+        manifest.runs.push(campaign::ManifestEntry {
+            name: name.into(),
+            status: "completed".into(),
+            recording: format!("{name}.mcap"),
+            sha256: sha256_file(&rec).expect("sha"),
+            settings,
+            ..Default::default()
+        });
+    }
+    std::fs::write(
+        dir.path().join("manifest.toml"),
+        toml::to_string(&manifest).expect("toml"),
+    )
+    .expect("write manifest");
+    let figs = dir.path().join("figs");
+    let done = plot_campaign(dir.path(), &figs, &FigureOptions::default()).expect("plot");
+    // No node 8 in these recordings: the first recorded node is drawn.
+    assert_eq!(
+        done.written[0].file_name().expect("name"),
+        "amplitude_node1.png"
+    );
+    let (_, _, px) = png_pixels(&done.written[0]);
+    for (k, c) in PALETTE[..2].iter().enumerate() {
+        assert!(has_colour(&px, *c), "run {k}: stable part");
+        let light = tmrotor::figure::lighter(*c, 0.35);
+        assert!(has_colour(&px, light), "run {k}: unstable part, lighter");
+    }
+    assert!(
+        done.notes
+            .iter()
+            .any(|n| n.contains("rolling_element_temperatures.png not written")),
+        "{:?}",
+        done.notes
+    );
+}

@@ -1,4 +1,5 @@
-//! `tmrotor campaign`: several sweeps from one file, in parallel, with a manifest.
+//! `tmrotor campaign`: several sweeps from one file, in parallel, with a manifest; and
+//! `campaign plot DIR`: the runs overlaid in PNG figures ([`campaign::figures`]).
 
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -7,12 +8,13 @@ use clap::{Args, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use crate::campaign;
+use crate::campaign::figures::{CampaignFigures, FigureOptions, plot_campaign};
 use crate::record::install_interrupt_flag;
 
 #[derive(Debug, Clone, Args)]
 pub struct CampaignArgs {
     #[command(subcommand)]
-    pub merge: Option<CampaignCommand>,
+    pub command: Option<CampaignCommand>,
     /// Campaign file (TOML; see `examples/paper_campaign.toml`).
     pub file: Option<PathBuf>,
     /// Worker threads (default: all cores).
@@ -24,6 +26,10 @@ pub struct CampaignArgs {
     /// No progress bars.
     #[arg(long, short)]
     pub quiet: bool,
+    /// Do not write the figures (`figures/` in the output directory) when every run has
+    /// completed.
+    #[arg(long)]
+    pub no_figures: bool,
 }
 
 #[derive(Debug, Clone, Subcommand)]
@@ -33,6 +39,32 @@ pub enum CampaignCommand {
         /// The campaign's output directory.
         dir: PathBuf,
     },
+    /// PNG figures of all runs overlaid: amplitude of node 8, clearance variations,
+    /// temperatures (reads manifest.toml and the recordings of DIR).
+    Plot {
+        /// The campaign's output directory (holds manifest.toml).
+        dir: PathBuf,
+        /// Where the figures go (default: DIR/figures).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Dynamic node of the amplitude–frequency figure; repeat for several
+        /// (default: 8, the paper's Fig. 8a).
+        #[arg(long = "node", value_name = "ID")]
+        nodes: Vec<u32>,
+        /// ω of the bearing-position temperature chart, rad/s (nearest recorded point).
+        #[arg(long, default_value_t = 620.0)]
+        omega: f64,
+    },
+}
+
+fn report(figures: &CampaignFigures, out: &mut impl std::io::Write) -> std::io::Result<()> {
+    for note in &figures.notes {
+        writeln!(out, "note: {note}")?;
+    }
+    for path in &figures.written {
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    Ok(())
 }
 
 fn parse_shard(s: &str) -> anyhow::Result<(usize, usize)> {
@@ -54,7 +86,7 @@ fn parse_shard(s: &str) -> anyhow::Result<(usize, usize)> {
 }
 
 pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
-    if let Some(CampaignCommand::Merge { dir }) = &args.merge {
+    if let Some(CampaignCommand::Merge { dir }) = &args.command {
         let m = campaign::merge_manifests(dir)?;
         writeln!(
             out,
@@ -64,10 +96,26 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         )?;
         return Ok(());
     }
-    let file = args
-        .file
-        .as_ref()
-        .ok_or_else(|| anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`)"))?;
+    if let Some(CampaignCommand::Plot {
+        dir,
+        out: fig_dir,
+        nodes,
+        omega,
+    }) = &args.command
+    {
+        let options = FigureOptions {
+            nodes: nodes.clone(),
+            omega_rad_s: *omega,
+            ..FigureOptions::default()
+        };
+        let fig_dir = fig_dir.clone().unwrap_or_else(|| dir.join("figures"));
+        let figures = plot_campaign(dir, &fig_dir, &options)?;
+        report(&figures, out)?;
+        return Ok(());
+    }
+    let file = args.file.as_ref().ok_or_else(|| {
+        anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`)")
+    })?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     let multi = MultiProgress::new();
     if args.quiet {
@@ -109,6 +157,34 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
             "{:>12}  {:<12} {:>5} points {:>7.1} s  {}",
             r.name, r.status, r.points, r.seconds, r.recording
         )?;
+    }
+    if args.no_figures {
+        return Ok(());
+    }
+    let pending = manifest
+        .runs
+        .iter()
+        .filter(|r| r.status != "completed")
+        .count();
+    let (_, _, dir) = campaign::load(file)?;
+    if shard.is_some() {
+        writeln!(
+            out,
+            "figures: not written for a shard; after `tmrotor campaign merge {0}`, run \
+             `tmrotor campaign plot {0}`",
+            dir.display()
+        )?;
+    } else if pending > 0 {
+        writeln!(
+            out,
+            "figures: not written, {pending} run(s) not completed; `tmrotor campaign plot {}` \
+             draws what there is",
+            dir.display()
+        )?;
+    } else {
+        let figures = plot_campaign(&dir, &dir.join("figures"), &FigureOptions::default())
+            .map_err(|e| anyhow::anyhow!("the runs are recorded, but the figures failed: {e}"))?;
+        report(&figures, out)?;
     }
     Ok(())
 }

@@ -120,6 +120,15 @@ impl BifurcationKind {
             Self::NeimarkSacker => "neimark-sacker",
         }
     }
+
+    /// Abbreviation used on figures: `SN`, `PD`, `NS`.
+    pub fn abbreviation(self) -> &'static str {
+        match self {
+            Self::SaddleNode => "SN",
+            Self::PeriodDoubling => "PD",
+            Self::NeimarkSacker => "NS",
+        }
+    }
 }
 
 /// Errors of the stability layer.

@@ -1,5 +1,5 @@
-//! `replay plot FILE [--out DIR]`: PNG figures drawn with plotters into an RGB buffer and
-//! encoded with `png`.
+//! `replay plot FILE [--out DIR]`: PNG figures of one recording, drawn with the shared
+//! helpers of [`crate::figure`].
 //!
 //! * `amplitude_node<id>.png` per dynamic node: RMS amplitude (Eq. 35, µm) against ω,
 //!   stable parts blue, unstable parts red, not-assessed parts grey; bifurcations marked
@@ -7,180 +7,41 @@
 //! * `clearance.png`: RC variation δv (µm) of every bearing against ω, when recorded;
 //! * `temperatures.png`: mean temperature of every thermal node against ω, when recorded.
 //!
-//! Text needs a TrueType font, found at run time (no system font library is used): the
-//! file named by `TMROTOR_FONT`, else DejaVu Sans or Liberation Sans at their usual
-//! Debian/Fedora paths. Without one (or with `TMROTOR_FONT=none`) the figures are drawn
+//! Text needs a TrueType font ([`crate::figure::font`]); without one the figures are drawn
 //! without any text and a note says so.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::path::Path;
 
 use anyhow::Context;
 use plotters::prelude::*;
 
+use crate::figure::{Chart, Marker, PALETTE, Series, draw_chart, font, render_png};
 use crate::record::reader::Recording;
-use crate::stability::BifurcationKind;
 
 const WIDTH: u32 = 1000;
 const HEIGHT: u32 = 650;
-const FONT: &str = "sans-serif";
-
-const FONT_PATHS: [&str; 5] = [
-    "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/dejavu/DejaVuSans.ttf",
-    "/usr/share/fonts/TTF/DejaVuSans.ttf",
-    "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf",
-    "/usr/share/fonts/liberation-sans/LiberationSans-Regular.ttf",
-];
-
-static FONT_READY: OnceLock<Option<PathBuf>> = OnceLock::new();
-
-/// Registers a font once per process; returns where it came from, `None` when no usable
-/// font was found.
-pub fn font() -> Option<&'static Path> {
-    FONT_READY
-        .get_or_init(|| {
-            let candidates: Vec<PathBuf> = match std::env::var_os("TMROTOR_FONT") {
-                Some(v) if v == "none" => return None,
-                Some(v) => vec![PathBuf::from(v)],
-                None => FONT_PATHS.iter().map(PathBuf::from).collect(),
-            };
-            candidates.into_iter().find(|p| {
-                std::fs::read(p).ok().is_some_and(|bytes| {
-                    let bytes: &'static [u8] = Box::leak(bytes.into_boxed_slice());
-                    plotters::style::register_font(FONT, FontStyle::Normal, bytes).is_ok()
-                })
-            })
-        })
-        .as_deref()
-}
-
-/// A polyline of one colour.
-struct Series {
-    points: Vec<(f64, f64)>,
-    colour: RGBColor,
-    label: Option<String>,
-}
-
-struct Marker {
-    x: f64,
-    y: f64,
-    label: String,
-}
-
-fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    let (lo, hi) = values
-        .filter(|v| v.is_finite())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-    if !lo.is_finite() {
-        return (0.0, 1.0);
-    }
-    let pad = if hi > lo {
-        0.05 * (hi - lo)
-    } else {
-        0.5 * lo.abs().max(1.0)
-    };
-    (lo - pad, hi + pad)
-}
-
-fn encode_png(path: &Path, rgb: &[u8]) -> anyhow::Result<()> {
-    let file =
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), WIDTH, HEIGHT);
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut w = enc.write_header()?;
-    w.write_image_data(rgb)?;
-    w.finish()?;
-    Ok(())
-}
 
 fn draw(
     path: &Path,
     title: &str,
     x_desc: &str,
     y_desc: &str,
-    series: &[Series],
-    markers: &[Marker],
+    series: Vec<Series>,
+    markers: Vec<Marker>,
 ) -> anyhow::Result<()> {
+    let chart = Chart {
+        title: title.into(),
+        x_desc: x_desc.into(),
+        y_desc: y_desc.into(),
+        series,
+        markers,
+        legend: true,
+        ..Chart::default()
+    };
     let text = font().is_some();
-    let mut buf = vec![0u8; (WIDTH * HEIGHT * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (WIDTH, HEIGHT)).into_drawing_area();
-        root.fill(&WHITE)?;
-        let xs = series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-        let ys = series.iter().flat_map(|s| s.points.iter().map(|p| p.1));
-        let (x0, x1) = range(xs);
-        let (y0, y1) = range(ys);
-        let mut builder = ChartBuilder::on(&root);
-        builder.margin(20);
-        if text {
-            builder
-                .caption(title, (FONT, 24))
-                .x_label_area_size(45)
-                .y_label_area_size(80);
-        } else {
-            builder.x_label_area_size(10).y_label_area_size(10);
-        }
-        let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-        if text {
-            chart
-                .configure_mesh()
-                .x_desc(x_desc)
-                .y_desc(y_desc)
-                .label_style((FONT, 16))
-                .draw()?;
-        } else {
-            chart.configure_mesh().x_labels(0).y_labels(0).draw()?;
-        }
-        let mut legend = false;
-        for s in series {
-            let style = ShapeStyle::from(&s.colour).stroke_width(2);
-            let drawn = chart.draw_series(LineSeries::new(s.points.iter().copied(), style))?;
-            if let (Some(label), true) = (&s.label, text) {
-                let c = s.colour;
-                drawn
-                    .label(label.as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-                legend = true;
-            }
-        }
-        chart.draw_series(
-            markers
-                .iter()
-                .map(|m| Circle::new((m.x, m.y), 6, BLACK.stroke_width(2))),
-        )?;
-        if text {
-            chart.draw_series(markers.iter().map(|m| {
-                Text::new(
-                    m.label.clone(),
-                    (m.x, m.y),
-                    (FONT, 16).into_font().color(&BLACK),
-                )
-            }))?;
-            if legend {
-                chart
-                    .configure_series_labels()
-                    .background_style(WHITE.mix(0.8))
-                    .border_style(BLACK)
-                    .label_font((FONT, 16))
-                    .draw()?;
-            }
-        }
-        root.present()?;
-    }
-    encode_png(path, &buf)
-}
-
-fn short(kind: BifurcationKind) -> &'static str {
-    match kind {
-        BifurcationKind::SaddleNode => "SN",
-        BifurcationKind::PeriodDoubling => "PD",
-        BifurcationKind::NeimarkSacker => "NS",
-    }
+    render_png(path, (WIDTH, HEIGHT), |root| draw_chart(root, &chart, text))?;
+    Ok(())
 }
 
 const STABLE: RGBColor = RGBColor(31, 119, 180);
@@ -203,11 +64,7 @@ fn stability_segments(rec: &Recording, y: impl Fn(usize) -> f64) -> Vec<Series> 
                 Some(false) => UNSTABLE,
                 None => UNKNOWN,
             };
-            out.push(Series {
-                points: Vec::new(),
-                colour,
-                label: None,
-            });
+            out.push(Series::new(Vec::new(), colour));
             current = Some(p.stable);
         }
         if let Some(last) = out.last_mut() {
@@ -226,19 +83,6 @@ fn stability_segments(rec: &Recording, y: impl Fn(usize) -> f64) -> Vec<Series> 
     }
     out
 }
-
-const PALETTE: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
 
 /// Writes the figures into `dir` and lists them on `out`.
 pub fn run(
@@ -268,7 +112,8 @@ pub fn run(
                 Some(Marker {
                     x: b.omega_rad_s,
                     y: b.amplitude_rms_m.get(k)? * 1e6,
-                    label: format!("  {}{}", short(b.kind), b.number + 1),
+                    label: format!("{}{}", b.kind.abbreviation(), b.number + 1),
+                    colour: BLACK,
                 })
             })
             .collect();
@@ -281,8 +126,8 @@ pub fn run(
             ),
             "ω (rad/s)",
             "RMS amplitude (µm), Eq. 35",
-            &series,
-            &markers,
+            series,
+            markers,
         )?;
         written.push(path);
     }
@@ -297,12 +142,14 @@ pub fn run(
             .iter()
             .enumerate()
             .map(|(b, info)| Series {
-                points: with_clearance
-                    .iter()
-                    .map(|p| (p.omega_rad_s, p.clearances[b].delta_v_m * 1e6))
-                    .collect(),
-                colour: PALETTE[b % PALETTE.len()],
                 label: Some(format!("δv {}", info.name)),
+                ..Series::new(
+                    with_clearance
+                        .iter()
+                        .map(|p| (p.omega_rad_s, p.clearances[b].delta_v_m * 1e6))
+                        .collect(),
+                    PALETTE[b % PALETTE.len()],
+                )
             })
             .collect();
         let path = dir.join("clearance.png");
@@ -311,8 +158,8 @@ pub fn run(
             "Radial clearance variation",
             "ω (rad/s)",
             "δv (µm)",
-            &series,
-            &[],
+            series,
+            Vec::new(),
         )?;
         written.push(path);
     }
@@ -328,12 +175,14 @@ pub fn run(
             .iter()
             .enumerate()
             .map(|(t, info)| Series {
-                points: with_temps
-                    .iter()
-                    .map(|p| (p.omega_rad_s, p.temperatures[t].mean_c))
-                    .collect(),
-                colour: PALETTE[t % PALETTE.len()],
                 label: labelled.then(|| format!("node {}", info.id)),
+                ..Series::new(
+                    with_temps
+                        .iter()
+                        .map(|p| (p.omega_rad_s, p.temperatures[t].mean_c))
+                        .collect(),
+                    PALETTE[t % PALETTE.len()],
+                )
             })
             .collect();
         let path = dir.join("temperatures.png");
@@ -342,8 +191,8 @@ pub fn run(
             "Mean temperatures",
             "ω (rad/s)",
             "T (°C)",
-            &series,
-            &[],
+            series,
+            Vec::new(),
         )?;
         written.push(path);
     }

@@ -23,7 +23,11 @@
 //!   is run again;
 //! * `shard = (i, n)` runs only the runs whose position `p` satisfies `p mod n = i`
 //!   (deterministic, so a cluster scheduler can split a campaign into `n` jobs), writing
-//!   `manifest-shard-i-of-n.toml`; [`merge_manifests`] joins the shard manifests.
+//!   `manifest-shard-i-of-n.toml`; [`merge_manifests`] joins the shard manifests;
+//! * [`figures::plot_campaign`] overlays the runs' recordings in PNG figures like the
+//!   paper's (amplitude of node 8, clearances, temperatures).
+
+pub mod figures;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -34,7 +38,8 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use thiserror::Error;
 
-use crate::record::{McapOptions, McapSink};
+use crate::figure::FigureError;
+use crate::record::{McapOptions, McapSink, ReadError};
 use crate::sweep::{Progress, StudySettings, SweepProblem};
 
 /// A campaign file.
@@ -73,6 +78,15 @@ pub enum CampaignError {
         path: String,
         source: std::io::Error,
     },
+    /// A run's recording cannot be read (the error names the file).
+    #[error("run {run} (manifest status {status:?}): {error}")]
+    Recording {
+        run: String,
+        status: String,
+        error: ReadError,
+    },
+    #[error(transparent)]
+    Figure(#[from] FigureError),
 }
 
 /// One line of the manifest.

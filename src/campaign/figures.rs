@@ -1,0 +1,850 @@
+//! Figures of a campaign: the runs of an output directory overlaid on common axes, like the
+//! paper's figures (`tmrotor campaign plot DIR`, and at the end of `tmrotor campaign FILE`).
+//!
+//! [`plot_campaign`] reads `DIR/manifest.toml` and every run's recording and writes:
+//!
+//! | file | what | paper |
+//! |---|---|---|
+//! | `amplitude_node8.png` | RMS amplitude (Eq. 35) of dynamic node 8 against ω, one colour per run | Figs. 8a, 9a, 10a, 21a |
+//! | `clearance_variation.png` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
+//! | `effective_clearance.png` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
+//! | `rolling_element_temperatures.png` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
+//! | `node_temperatures.png` | mean temperature of every thermal node against ω, a panel per run | Figs. 14a, 14b |
+//! | `temperature_extremes.png` | highest and lowest mean node temperature against ω | Figs. 14a, 14b, 22a |
+//! | `bearing_temperatures_omega620.png` | rolling elements, rings, lubricant and housing of each bearing at the recorded point nearest to ω = 620 rad/s | Figs. 14d, 14e |
+//!
+//! On every curve, parts recorded as unstable are dashed and lighter; stable and
+//! not-assessed parts are solid (the legend says which applies). Bifurcations are circled
+//! in the run's colour and labelled SN / PD / NS with their number along the branch.
+//! Legends give each run's name, lubricant flow rate and cooling temperature; a run that
+//! did not complete (manifest status, or a recording cut short) is drawn as far as it goes
+//! and marked "(incomplete)". A run the manifest lists as `pending` or `failed: …` whose
+//! recording does not exist (not started, or failed before recording) stays in the legend
+//! marked "(incomplete: no recording)"; any other missing or unreadable recording is an
+//! error naming the file.
+//!
+//! Thermal nodes are found by the names the thermal network gives them (`"1# rolling
+//! elements"`, `"1# inner ring"`, `"1# outer ring"`, `"1# lubricant"`, `"1# housing
+//! seat"`), so any model file with a `[thermal]` section works; figures whose data no run
+//! recorded are skipped with a note.
+
+use std::path::{Path, PathBuf};
+
+use plotters::style::{BLACK, RGBColor};
+use rayon::prelude::*;
+
+use super::{CampaignError, Manifest, ManifestEntry, sha256_file};
+use crate::figure::{
+    self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
+    draw_chart, draw_legend, legend_height, lighter, render_png, tick,
+};
+use crate::record::{ReadError, read_recording};
+use crate::stability::BifurcationKind;
+
+/// What [`plot_campaign`] draws.
+#[derive(Clone, Debug)]
+pub struct FigureOptions {
+    /// Dynamic nodes whose amplitude–frequency curves are drawn (one file each). Empty:
+    /// node 8 (the paper's Fig. 8a) when recorded, else the first recorded node.
+    pub nodes: Vec<u32>,
+    /// ω of the bearing-position temperature chart, rad/s (default 620, the paper's
+    /// Figs. 14d–e).
+    pub omega_rad_s: f64,
+    /// How far a run's nearest recorded point may lie from [`Self::omega_rad_s`] to be
+    /// shown there, rad/s (default 10).
+    pub omega_tolerance_rad_s: f64,
+    /// Size of every figure, pixels (default 1200 × 800).
+    pub size: (u32, u32),
+}
+
+impl Default for FigureOptions {
+    fn default() -> Self {
+        Self {
+            nodes: Vec::new(),
+            omega_rad_s: 620.0,
+            omega_tolerance_rad_s: 10.0,
+            size: (1200, 800),
+        }
+    }
+}
+
+/// What [`plot_campaign`] did.
+#[derive(Clone, Debug, Default)]
+pub struct CampaignFigures {
+    /// The PNG files written, in the order of the module table.
+    pub written: Vec<PathBuf>,
+    /// Things the user should know: incomplete runs, skipped figures, missing font.
+    pub notes: Vec<String>,
+    /// The legend label of every run, in manifest order (ends with `(incomplete)` for a
+    /// run that did not complete).
+    pub legends: Vec<String>,
+}
+
+/// One recorded point, reduced to what the figures use.
+struct PointData {
+    omega_rad_s: f64,
+    stable: Option<bool>,
+    amplitude_m: Vec<f64>,
+    delta_v_m: Vec<f64>,
+    effective_m: Vec<f64>,
+    temp_c: Vec<f64>,
+}
+
+struct BifurcationData {
+    kind: BifurcationKind,
+    number: u32,
+    omega_rad_s: f64,
+    amplitude_m: Vec<f64>,
+}
+
+/// One run, reduced to what the figures use (a recording holds far more).
+struct RunData {
+    legend: String,
+    colour: RGBColor,
+    node_ids: Vec<u32>,
+    bearings: Vec<(String, f64)>,
+    thermal: Vec<(u32, String)>,
+    points: Vec<PointData>,
+    bifurcations: Vec<BifurcationData>,
+}
+
+impl RunData {
+    fn node(&self, id: u32) -> Option<usize> {
+        self.node_ids.iter().position(|&n| n == id)
+    }
+
+    fn bearing(&self, name: &str) -> Option<usize> {
+        self.bearings.iter().position(|(n, _)| n == name)
+    }
+
+    fn thermal_node(&self, name: &str) -> Option<(usize, u32)> {
+        self.thermal
+            .iter()
+            .position(|(_, n)| n == name)
+            .map(|k| (k, self.thermal[k].0))
+    }
+}
+
+/// Reads `path` as a campaign manifest; errors name the file.
+pub fn read_manifest_file(path: &Path) -> Result<Manifest, CampaignError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| CampaignError::File {
+        file: file.clone(),
+        reason: format!("cannot read the campaign manifest: {e}"),
+    })?;
+    let manifest: Manifest = toml::from_str(&text).map_err(|e| CampaignError::File {
+        file: file.clone(),
+        reason: format!(
+            "not a campaign manifest: {}",
+            e.to_string().trim_end().replace('\n', " ")
+        ),
+    })?;
+    if manifest.runs.is_empty() {
+        return Err(CampaignError::File {
+            file,
+            reason: "the manifest lists no runs".into(),
+        });
+    }
+    Ok(manifest)
+}
+
+fn setting(entry: &ManifestEntry, rec_settings: &[(String, String)], key: &str) -> Option<f64> {
+    entry
+        .settings
+        .get(key)
+        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        .or_else(|| {
+            rec_settings
+                .iter()
+                .find(|(k, _)| k == key)
+                .and_then(|(_, v)| v.parse().ok())
+        })
+}
+
+/// Legend label of a run from its settings (manifest first, then the recording's).
+fn run_label(entry: &ManifestEntry, rec_settings: &[(String, String)]) -> String {
+    let thermal_on = entry
+        .settings
+        .get("thermal")
+        .and_then(toml::Value::as_bool)
+        .or_else(|| {
+            rec_settings
+                .iter()
+                .find(|(k, _)| k == "thermal")
+                .map(|(_, v)| v != "false")
+        })
+        .unwrap_or(true);
+    let flow = setting(entry, rec_settings, "flow_l_min");
+    let cooling = setting(entry, rec_settings, "cooling_temp_c");
+    match (thermal_on, flow, cooling) {
+        (false, _, _) => format!("{}: no thermal coupling", entry.name),
+        (true, Some(q), Some(t)) => format!(
+            "{}: flow {} L/min, cooling {} °C",
+            entry.name,
+            tick(&q),
+            tick(&t)
+        ),
+        _ => entry.name.clone(),
+    }
+}
+
+fn load_run(
+    dir: &Path,
+    entry: &ManifestEntry,
+    k: usize,
+) -> Result<(RunData, Vec<String>), CampaignError> {
+    let file = if entry.recording.is_empty() {
+        format!("{}.mcap", entry.name)
+    } else {
+        entry.recording.clone()
+    };
+    let path = dir.join(&file);
+    let colour = PALETTE[k % PALETTE.len()];
+    let rec = match read_recording(&path) {
+        Ok(rec) => rec,
+        // A run that has not started, or failed before it could record, has no file:
+        // it stays in the legend with nothing drawn.
+        Err(ReadError::Io { source, .. })
+            if source.kind() == std::io::ErrorKind::NotFound
+                && (entry.status == "pending" || entry.status.starts_with("failed")) =>
+        {
+            let note = format!(
+                "run {} has no recording yet ({} missing, manifest status {:?}): \
+                 listed in the legends with nothing drawn",
+                entry.name,
+                path.display(),
+                entry.status
+            );
+            let data = RunData {
+                legend: format!("{} (incomplete: no recording)", run_label(entry, &[])),
+                colour,
+                node_ids: Vec::new(),
+                bearings: Vec::new(),
+                thermal: Vec::new(),
+                points: Vec::new(),
+                bifurcations: Vec::new(),
+            };
+            return Ok((data, vec![note]));
+        }
+        Err(error) => {
+            return Err(CampaignError::Recording {
+                run: entry.name.clone(),
+                status: entry.status.clone(),
+                error,
+            });
+        }
+    };
+    let mut notes = Vec::new();
+    let incomplete = entry.status != "completed" || !rec.complete;
+    if incomplete {
+        let mut why = vec![format!("manifest status {:?}", entry.status)];
+        why.extend(rec.notes.iter().cloned());
+        notes.push(format!(
+            "run {} is incomplete ({} points readable; {}): plotted as far as it goes",
+            entry.name,
+            rec.points.len(),
+            why.join("; ")
+        ));
+    }
+    if !entry.sha256.is_empty()
+        && sha256_file(&path).is_ok_and(|sum| !sum.eq_ignore_ascii_case(&entry.sha256))
+    {
+        notes.push(format!(
+            "{} differs from the SHA-256 in the manifest (changed since the run finished?)",
+            path.display()
+        ));
+    }
+    let mut legend = run_label(entry, &rec.run.settings);
+    if incomplete {
+        legend.push_str(" (incomplete)");
+    }
+    let run = &rec.run;
+    let data = RunData {
+        legend,
+        colour,
+        node_ids: run.nodes.iter().map(|n| n.id).collect(),
+        bearings: run
+            .bearings
+            .iter()
+            .map(|b| (b.name.clone(), b.initial_clearance_m))
+            .collect(),
+        thermal: run
+            .thermal_nodes
+            .iter()
+            .map(|t| (t.id, t.name.clone()))
+            .collect(),
+        points: rec
+            .points
+            .iter()
+            .map(|p| PointData {
+                omega_rad_s: p.omega_rad_s,
+                stable: p.stable,
+                amplitude_m: p.amplitude_rms_m.clone(),
+                delta_v_m: p.clearances.iter().map(|c| c.delta_v_m).collect(),
+                effective_m: p.clearances.iter().map(|c| c.effective_m).collect(),
+                temp_c: p.temperatures.iter().map(|t| t.mean_c).collect(),
+            })
+            .collect(),
+        bifurcations: rec
+            .bifurcations
+            .iter()
+            .map(|b| BifurcationData {
+                kind: b.kind,
+                number: b.number,
+                omega_rad_s: b.omega_rad_s,
+                amplitude_m: b.amplitude_rms_m.clone(),
+            })
+            .collect(),
+    };
+    Ok((data, notes))
+}
+
+/// Draws a run's branch as polylines in its colour: solid where stable or not assessed,
+/// dashed and lighter where recorded as unstable. Points where `y` has no value break the
+/// line.
+fn branch_series(run: &RunData, y: impl Fn(&PointData) -> Option<f64>) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    let mut previous: Option<((f64, f64), bool)> = None;
+    for p in &run.points {
+        let Some(v) = y(p).filter(|v| v.is_finite()) else {
+            previous = None;
+            continue;
+        };
+        let pt = (p.omega_rad_s, v);
+        let unstable = p.stable == Some(false);
+        match previous {
+            Some((_, u)) if u == unstable => {
+                if let Some(s) = out.last_mut() {
+                    s.points.push(pt);
+                }
+            }
+            _ => {
+                // A new segment starts at the previous point so the curve stays connected.
+                let mut points: Vec<(f64, f64)> = previous.map(|(q, _)| q).into_iter().collect();
+                points.push(pt);
+                out.push(if unstable {
+                    Series {
+                        line: LineStyle::Dashed,
+                        ..Series::new(points, lighter(run.colour, 0.35))
+                    }
+                } else {
+                    Series::new(points, run.colour)
+                });
+            }
+        }
+        previous = Some((pt, unstable));
+    }
+    out
+}
+
+/// Legend entries: one per run, then how stability and bifurcations are drawn.
+fn run_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
+    let mut entries: Vec<LegendEntry> = runs
+        .iter()
+        .map(|r| LegendEntry {
+            sample: LegendSample::Line(r.colour, LineStyle::Solid),
+            text: r.legend.clone(),
+        })
+        .collect();
+    entries.extend(style_legend(runs, with_markers));
+    entries
+}
+
+/// Legend entries saying how stability and bifurcations are drawn.
+fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
+    let mut entries = Vec::new();
+    let points = || runs.iter().flat_map(|r| &r.points);
+    let grey = RGBColor(90, 90, 90);
+    if points().any(|p| p.stable == Some(false)) {
+        let assessed_all = points().all(|p| p.stable.is_some());
+        entries.push(LegendEntry {
+            sample: LegendSample::Line(grey, LineStyle::Solid),
+            text: if assessed_all {
+                "stable".into()
+            } else {
+                "stable or not assessed".into()
+            },
+        });
+        entries.push(LegendEntry {
+            sample: LegendSample::Line(lighter(grey, 0.35), LineStyle::Dashed),
+            text: "unstable".into(),
+        });
+    } else if points().all(|p| p.stable.is_none()) {
+        entries.push(LegendEntry {
+            sample: LegendSample::None,
+            text: "stability not assessed".into(),
+        });
+    }
+    if with_markers && runs.iter().any(|r| !r.bifurcations.is_empty()) {
+        entries.push(LegendEntry {
+            sample: LegendSample::Marker(BLACK),
+            text: "bifurcation: SN saddle-node, PD period doubling, NS Neimark–Sacker".into(),
+        });
+    }
+    entries
+}
+
+/// Rows and columns for `n` panels.
+fn grid(n: usize) -> (usize, usize) {
+    match n {
+        0 | 1 => (1, 1),
+        2 => (1, 2),
+        3 | 4 => (2, 2),
+        5 | 6 => (2, 3),
+        n => (n.div_ceil(3), 3),
+    }
+}
+
+const LEGEND_PX: u32 = 15;
+
+/// A figure: a title, panels on a grid, one legend strip at the bottom.
+fn write_figure(
+    path: &Path,
+    size: (u32, u32),
+    title: &str,
+    panels: &[Chart],
+    legend: &[LegendEntry],
+    text: bool,
+) -> Result<(), CampaignError> {
+    render_png(path, size, |root| {
+        let area = if text {
+            root.titled(title, (FONT, 22))?
+        } else {
+            root.clone()
+        };
+        let (_, h) = area.dim_in_pixel();
+        let lh = legend_height(&area, legend, LEGEND_PX, text).min(h / 2);
+        let (plots, strip) = area.split_vertically(h as i32 - lh as i32);
+        let cells = plots.split_evenly(grid(panels.len()));
+        for (cell, chart) in cells.iter().zip(panels) {
+            draw_chart(cell, chart, text)?;
+        }
+        draw_legend(&strip, legend, LEGEND_PX, text)
+    })?;
+    Ok(())
+}
+
+/// Panel style: small title and fonts when several panels share a figure.
+fn panel(title: String, x_desc: &str, y_desc: &str, several: bool) -> Chart {
+    Chart {
+        title,
+        x_desc: x_desc.into(),
+        y_desc: y_desc.into(),
+        title_px: if several { 18 } else { 20 },
+        font_px: if several { 14 } else { 16 },
+        ..Chart::default()
+    }
+}
+
+/// One y-range for all panels so that they compare directly.
+fn share_y(panels: &mut [Chart]) {
+    let y = data_range(panels.iter().flat_map(|c| {
+        c.series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .chain(c.hlines.iter().copied())
+    }));
+    for c in panels {
+        c.y_range = Some(y);
+    }
+}
+
+const OMEGA: &str = "ω (rad/s)";
+
+/// Reads `dir/manifest.toml` and every run's recording and writes the campaign figures
+/// (see the module docs) into `out`, which is created if missing.
+///
+/// Errors: an unreadable or invalid manifest, an unreadable or damaged recording (a file
+/// cut short is read as far as it goes, and a run not started yet has none: neither is an
+/// error), a requested node no run recorded, a figure that cannot be written; each names
+/// the file.
+pub fn plot_campaign(
+    dir: &Path,
+    out: &Path,
+    options: &FigureOptions,
+) -> Result<CampaignFigures, CampaignError> {
+    let manifest = read_manifest_file(&dir.join("manifest.toml"))?;
+    let loaded = manifest
+        .runs
+        .par_iter()
+        .enumerate()
+        .map(|(k, e)| load_run(dir, e, k))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut result = CampaignFigures::default();
+    let mut runs = Vec::new();
+    for (run, notes) in loaded {
+        result.notes.extend(notes);
+        result.legends.push(run.legend.clone());
+        runs.push(run);
+    }
+    std::fs::create_dir_all(out).map_err(|source| CampaignError::Io {
+        path: out.display().to_string(),
+        source,
+    })?;
+    let text = figure::font().is_some();
+    if !text {
+        result.notes.push(
+            "no TrueType font found (set TMROTOR_FONT to a .ttf file): figures have no text".into(),
+        );
+    }
+    let size = options.size;
+
+    // Amplitude–frequency curves.
+    let nodes = if options.nodes.is_empty() {
+        let any = |id: u32| runs.iter().any(|r| r.node(id).is_some());
+        let first = runs.iter().find_map(|r| r.node_ids.first().copied());
+        match (any(8), first) {
+            (true, _) => vec![8],
+            (false, Some(id)) => vec![id],
+            (false, None) => Vec::new(),
+        }
+    } else {
+        options.nodes.clone()
+    };
+    for &id in &nodes {
+        if !runs.iter().any(|r| r.node(id).is_some()) {
+            let recorded = runs
+                .first()
+                .map(|r| {
+                    r.node_ids
+                        .iter()
+                        .map(u32::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                })
+                .unwrap_or_default();
+            return Err(CampaignError::File {
+                file: dir.join("manifest.toml").display().to_string(),
+                reason: format!(
+                    "dynamic node {id} is not recorded in any run (recorded nodes: {recorded})"
+                ),
+            });
+        }
+        let mut chart = panel(String::new(), OMEGA, "RMS amplitude (µm)", false);
+        for r in &runs {
+            let Some(k) = r.node(id) else { continue };
+            chart
+                .series
+                .extend(branch_series(r, |p| p.amplitude_m.get(k).map(|a| a * 1e6)));
+            chart.markers.extend(r.bifurcations.iter().filter_map(|b| {
+                Some(Marker {
+                    x: b.omega_rad_s,
+                    y: b.amplitude_m.get(k)? * 1e6,
+                    label: format!("{}{}", b.kind.abbreviation(), b.number + 1),
+                    colour: r.colour,
+                })
+            }));
+        }
+        let path = out.join(format!("amplitude_node{id}.png"));
+        write_figure(
+            &path,
+            size,
+            &format!("Amplitude–frequency response of dynamic node {id} (RMS amplitude, Eq. 35)"),
+            &[chart],
+            &run_legend(&runs, true),
+            text,
+        )?;
+        result.written.push(path);
+    }
+
+    // Clearances, a panel per bearing (the bearings of the first run that has any).
+    let bearings: Vec<(String, f64)> = runs
+        .iter()
+        .find(|r| !r.bearings.is_empty())
+        .map(|r| r.bearings.clone())
+        .unwrap_or_default();
+    let has_clearance = runs
+        .iter()
+        .any(|r| r.points.iter().any(|p| !p.delta_v_m.is_empty()));
+    if bearings.is_empty() || !has_clearance {
+        result.notes.push(
+            "no run recorded bearing clearances: clearance_variation.png and \
+             effective_clearance.png not written"
+                .into(),
+        );
+    } else {
+        let several = bearings.len() > 1;
+        for (file, title, y_desc, effective) in [
+            (
+                "clearance_variation.png",
+                "Radial clearance (RC) variation δv of each bearing (δv > 0: the clearance grows)",
+                "δv (µm)",
+                false,
+            ),
+            (
+                "effective_clearance.png",
+                "Effective radial clearance δe = δ0 + δv of each bearing (dashed: initial clearance δ0)",
+                "δe (µm)",
+                true,
+            ),
+        ] {
+            let mut panels = Vec::new();
+            for (name, d0) in &bearings {
+                let mut chart = panel(format!("bearing {name}"), OMEGA, y_desc, several);
+                chart.hlines.push(if effective { d0 * 1e6 } else { 0.0 });
+                for r in &runs {
+                    let Some(b) = r.bearing(name) else { continue };
+                    chart.series.extend(branch_series(r, |p| {
+                        let v = if effective {
+                            p.effective_m.get(b)
+                        } else {
+                            p.delta_v_m.get(b)
+                        };
+                        v.map(|v| v * 1e6)
+                    }));
+                }
+                panels.push(chart);
+            }
+            // Each panel keeps its own y-range: the bearings' variations differ by an
+            // order of magnitude, and the runs are compared within a bearing.
+            let path = out.join(file);
+            write_figure(&path, size, title, &panels, &run_legend(&runs, false), text)?;
+            result.written.push(path);
+        }
+    }
+
+    // Temperatures.
+    let has_temps = runs
+        .iter()
+        .any(|r| r.points.iter().any(|p| !p.temp_c.is_empty()));
+    if !has_temps {
+        result.notes.push(
+            "no run recorded temperatures: rolling_element_temperatures.png, \
+             temperature_extremes.png and the bearing-position chart not written"
+                .into(),
+        );
+        return Ok(result);
+    }
+    let element_panels: Vec<Chart> = bearings
+        .iter()
+        .filter_map(|(name, _)| {
+            let label = format!("{name} rolling elements");
+            let id = runs.iter().find_map(|r| r.thermal_node(&label))?.1;
+            let mut chart = panel(
+                format!("bearing {name}: rolling elements (thermal node {id})"),
+                OMEGA,
+                "mean temperature (°C)",
+                bearings.len() > 1,
+            );
+            for r in &runs {
+                let Some((t, _)) = r.thermal_node(&label) else {
+                    continue;
+                };
+                chart
+                    .series
+                    .extend(branch_series(r, |p| p.temp_c.get(t).copied()));
+            }
+            Some(chart)
+        })
+        .collect();
+    if element_panels.is_empty() {
+        result.notes.push(
+            "no thermal node is named \"<bearing> rolling elements\": \
+             rolling_element_temperatures.png not written"
+                .into(),
+        );
+    } else {
+        let mut panels = element_panels;
+        share_y(&mut panels);
+        let path = out.join("rolling_element_temperatures.png");
+        write_figure(
+            &path,
+            size,
+            "Rolling-element temperature of each bearing",
+            &panels,
+            &run_legend(&runs, false),
+            text,
+        )?;
+        result.written.push(path);
+    }
+
+    // Every node's temperature, a panel per run (Figs. 14a-b).
+    let mut panels: Vec<Chart> = runs
+        .iter()
+        .map(|r| {
+            let mut chart = panel(r.legend.clone(), OMEGA, "mean temperature (°C)", true);
+            for t in 0..r.thermal.len() {
+                chart.series.extend(
+                    branch_series(r, |p| p.temp_c.get(t).copied())
+                        .into_iter()
+                        .map(|s| Series { width: 1, ..s }),
+                );
+            }
+            chart
+        })
+        .collect();
+    share_y(&mut panels);
+    let path = out.join("node_temperatures.png");
+    write_figure(
+        &path,
+        size,
+        &format!(
+            "Mean temperature of every thermal node ({} nodes), one panel per run",
+            runs.iter().map(|r| r.thermal.len()).max().unwrap_or(0)
+        ),
+        &panels,
+        &style_legend(&runs, false),
+        text,
+    )?;
+    result.written.push(path);
+
+    let extreme = |max: bool| {
+        move |p: &PointData| {
+            let it = p.temp_c.iter().copied().filter(|t| t.is_finite());
+            if max {
+                it.reduce(f64::max)
+            } else {
+                it.reduce(f64::min)
+            }
+        }
+    };
+    let mut panels = vec![
+        panel(
+            "highest mean node temperature".into(),
+            OMEGA,
+            "T (°C)",
+            true,
+        ),
+        panel("lowest mean node temperature".into(), OMEGA, "T (°C)", true),
+    ];
+    for r in &runs {
+        panels[0].series.extend(branch_series(r, extreme(true)));
+        panels[1].series.extend(branch_series(r, extreme(false)));
+    }
+    let path = out.join("temperature_extremes.png");
+    write_figure(
+        &path,
+        size,
+        "Highest and lowest temperature over the thermal network",
+        &panels,
+        &run_legend(&runs, false),
+        text,
+    )?;
+    result.written.push(path);
+
+    bearing_positions(&runs, &bearings, out, options, text, &mut result)?;
+    Ok(result)
+}
+
+/// The dot chart of the bearing positions' temperatures at one ω (Figs. 14d–e).
+fn bearing_positions(
+    runs: &[RunData],
+    bearings: &[(String, f64)],
+    out: &Path,
+    options: &FigureOptions,
+    text: bool,
+    result: &mut CampaignFigures,
+) -> Result<(), CampaignError> {
+    const PARTS: [(&str, &str); 5] = [
+        ("rolling elements", "elements"),
+        ("inner ring", "inner ring"),
+        ("outer ring", "outer ring"),
+        ("lubricant", "lubricant"),
+        ("housing seat", "housing"),
+    ];
+    let target = options.omega_rad_s;
+    // The recorded point nearest to the target ω, per run.
+    let nearest: Vec<Option<&PointData>> = runs
+        .iter()
+        .map(|r| {
+            r.points
+                .iter()
+                .filter(|p| !p.temp_c.is_empty())
+                .min_by(|a, b| {
+                    (a.omega_rad_s - target)
+                        .abs()
+                        .total_cmp(&(b.omega_rad_s - target).abs())
+                })
+                .filter(|p| (p.omega_rad_s - target).abs() <= options.omega_tolerance_rad_s)
+        })
+        .collect();
+    let n = runs.len().max(1) as f64;
+    let spread = (0.7 / n).min(0.12);
+    let several = bearings.len() > 1;
+    let mut panels = Vec::new();
+    for (name, _) in bearings {
+        // Parts of this bearing that some run names, with their node ids.
+        let parts: Vec<(String, String)> = PARTS
+            .iter()
+            .filter_map(|(part, short)| {
+                let label = format!("{name} {part}");
+                let id = runs.iter().find_map(|r| r.thermal_node(&label))?.1;
+                Some((label, format!("{short}\nnode {id}")))
+            })
+            .collect();
+        if parts.is_empty() {
+            continue;
+        }
+        let mut chart = panel(
+            format!("bearing {name}"),
+            "",
+            "mean temperature (°C)",
+            several,
+        );
+        chart.x_range = Some((-0.5, parts.len() as f64 - 0.5));
+        chart.x_categories = parts.iter().map(|(_, c)| c.clone()).collect();
+        for (k, (r, point)) in runs.iter().zip(&nearest).enumerate() {
+            let Some(point) = point else { continue };
+            let dx = (k as f64 - (n - 1.0) / 2.0) * spread;
+            let points = parts
+                .iter()
+                .enumerate()
+                .filter_map(|(i, (label, _))| {
+                    let (t, _) = r.thermal_node(label)?;
+                    Some((i as f64 + dx, *point.temp_c.get(t)?))
+                })
+                .collect();
+            chart.series.push(Series {
+                line: LineStyle::Points,
+                width: 5,
+                ..Series::new(points, r.colour)
+            });
+        }
+        panels.push(chart);
+    }
+    let file = format!("bearing_temperatures_omega{}.png", tick(&target));
+    if panels.is_empty() {
+        result.notes.push(format!(
+            "no thermal node is named after a bearing part: {file} not written"
+        ));
+        return Ok(());
+    }
+    if nearest.iter().all(Option::is_none) {
+        result.notes.push(format!(
+            "no run has a point within {} rad/s of ω = {} rad/s: {file} not written",
+            tick(&options.omega_tolerance_rad_s),
+            tick(&target)
+        ));
+        return Ok(());
+    }
+    share_y(&mut panels);
+    let legend: Vec<LegendEntry> = runs
+        .iter()
+        .zip(&nearest)
+        .map(|(r, p)| LegendEntry {
+            sample: LegendSample::Line(r.colour, LineStyle::Points),
+            text: match p {
+                Some(p) => format!("{}, point at ω = {:.1} rad/s", r.legend, p.omega_rad_s),
+                None => format!(
+                    "{}: no point within {} rad/s",
+                    r.legend,
+                    tick(&options.omega_tolerance_rad_s)
+                ),
+            },
+        })
+        .collect();
+    let path = out.join(&file);
+    write_figure(
+        &path,
+        options.size,
+        &format!(
+            "Temperatures of the bearing positions at ω = {} rad/s (nearest recorded point of each run)",
+            tick(&target)
+        ),
+        &panels,
+        &legend,
+        text,
+    )?;
+    result.written.push(path);
+    Ok(())
+}
