@@ -33,7 +33,9 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 
 use super::expm::expm;
-use super::sip::{OrbitSampler, axpy_derivs, gauss_legendre, interval_means};
+use super::sip::{
+    OrbitSampler, axpy_derivs, by_column_blocks, gauss_legendre, interval_means, state_space_for,
+};
 use super::{FloquetResult, StabilityError, StabilityMethod, all_finite, eigenvalues_checked};
 use crate::integrate::StateSpace;
 use crate::system::{NonlinearEval, PeriodicOrbit, System};
@@ -64,9 +66,6 @@ impl Default for ExpSip {
     }
 }
 
-/// State dimension from which the product is split into column blocks run in parallel.
-const PARALLEL_MIN_DIM: usize = 48;
-
 impl ExpSip {
     /// The monodromy matrix of `orbit`.
     pub fn monodromy(
@@ -87,19 +86,7 @@ impl ExpSip {
                 value: self.gauss_points.to_string(),
                 reason: "supported: 1 to 5",
             })?;
-        let omega = orbit.omega();
-        let period = orbit.period();
-        if !(period.is_finite() && period > 0.0) {
-            return Err(StabilityError::Setting {
-                field: "orbit.period",
-                value: period.to_string(),
-                reason: "must be positive and finite",
-            });
-        }
-        let space = StateSpace::new(system, omega).map_err(|e| StabilityError::Setup {
-            omega,
-            reason: e.to_string(),
-        })?;
+        let (space, omega, period) = state_space_for(system, orbit)?;
         let d = space.dim();
         let mut ws = space.workspace();
         let mut sampler = OrbitSampler::new(orbit, &space);
@@ -121,17 +108,7 @@ impl ExpSip {
         let e_half = expm(&half).ok_or(StabilityError::NonFinite { omega })?;
         let e_full = &e_half * &e_half;
 
-        let blocks = if d >= PARALLEL_MIN_DIM {
-            rayon::current_num_threads().clamp(1, d / (PARALLEL_MIN_DIM / 2))
-        } else {
-            1
-        };
-        let width = d.div_ceil(blocks.max(1));
-        let ranges: Vec<(usize, usize)> = (0..d)
-            .step_by(width.max(1))
-            .map(|c0| (c0, (c0 + width).min(d)))
-            .collect();
-        let run_block = |&(c0, c1): &(usize, usize)| {
+        let prod = by_column_blocks(d, |c0, c1| {
             self.product_block(
                 &space,
                 &means,
@@ -141,19 +118,7 @@ impl ExpSip {
                 c0,
                 c1,
             )
-        };
-        let parts: Vec<Mat<f64>> = if ranges.len() > 1 {
-            use rayon::prelude::*;
-            ranges.par_iter().map(run_block).collect()
-        } else {
-            ranges.iter().map(run_block).collect()
-        };
-        let mut prod = Mat::<f64>::zeros(d, d);
-        for (&(c0, c1), part) in ranges.iter().zip(&parts) {
-            prod.as_mut()
-                .subcols_mut(c0, c1 - c0)
-                .copy_from(part.as_ref());
-        }
+        });
         if !all_finite(prod.as_ref()) {
             return Err(StabilityError::NonFinite { omega });
         }

@@ -314,19 +314,7 @@ impl Sip {
         want_det: bool,
     ) -> Result<SipMonodromy, StabilityError> {
         let (nodes, weights) = self.check()?;
-        let omega = orbit.omega();
-        let period = orbit.period();
-        if !(period.is_finite() && period > 0.0) {
-            return Err(StabilityError::Setting {
-                field: "orbit.period",
-                value: period.to_string(),
-                reason: "must be positive and finite",
-            });
-        }
-        let space = StateSpace::new(system, omega).map_err(|e| StabilityError::Setup {
-            omega,
-            reason: e.to_string(),
-        })?;
+        let (space, omega, period) = state_space_for(system, orbit)?;
         let d = space.dim();
         let mut ws = space.workspace();
         let mut sampler = OrbitSampler::new(orbit, &space);
@@ -384,32 +372,9 @@ impl Sip {
         } else {
             // Eq. 33 on the running product. Its columns evolve independently
             // (P ← E_k P acts column by column), so blocks of columns run in parallel.
-            let blocks = if d >= PARALLEL_MIN_DIM {
-                rayon::current_num_threads().clamp(1, d / (PARALLEL_MIN_DIM / 2))
-            } else {
-                1
-            };
-            let width = d.div_ceil(blocks);
-            let ranges: Vec<(usize, usize)> = (0..d)
-                .step_by(width)
-                .map(|c0| (c0, (c0 + width).min(d)))
-                .collect();
-            let run_block = |&(c0, c1): &(usize, usize)| {
+            by_column_blocks(d, |c0, c1| {
                 self.product_block(&space, &means, delta, extrapolate, c0, c1)
-            };
-            let parts: Vec<Mat<f64>> = if ranges.len() > 1 {
-                use rayon::prelude::*;
-                ranges.par_iter().map(run_block).collect()
-            } else {
-                ranges.iter().map(run_block).collect()
-            };
-            let mut prod = Mat::<f64>::zeros(d, d);
-            for (&(c0, c1), part) in ranges.iter().zip(&parts) {
-                prod.as_mut()
-                    .subcols_mut(c0, c1 - c0)
-                    .copy_from(part.as_ref());
-            }
-            prod
+            })
         };
         if !all_finite(prod.as_ref()) {
             return Err(StabilityError::NonFinite { omega });
@@ -447,8 +412,61 @@ impl Sip {
     }
 }
 
-/// State dimension from which SIP splits the product into column blocks run in parallel.
-const PARALLEL_MIN_DIM: usize = 64;
+/// State dimension from which a product is split into column blocks run in parallel.
+const PARALLEL_MIN_DIM: usize = 48;
+
+/// The first-order form of `system` at the orbit's `ω`, with `ω` and the period, after
+/// checking the period.
+pub(crate) fn state_space_for<'s>(
+    system: &'s dyn System,
+    orbit: &dyn PeriodicOrbit,
+) -> Result<(StateSpace<'s>, f64, f64), StabilityError> {
+    let omega = orbit.omega();
+    let period = orbit.period();
+    if !(period.is_finite() && period > 0.0) {
+        return Err(StabilityError::Setting {
+            field: "orbit.period",
+            value: period.to_string(),
+            reason: "must be positive and finite",
+        });
+    }
+    let space = StateSpace::new(system, omega).map_err(|e| StabilityError::Setup {
+        omega,
+        reason: e.to_string(),
+    })?;
+    Ok((space, omega, period))
+}
+
+/// A `d × d` product whose columns evolve independently: `block(c0, c1)` computes columns
+/// `c0..c1`; blocks run on the rayon threads when `d` is large enough.
+pub(crate) fn by_column_blocks(
+    d: usize,
+    block: impl Fn(usize, usize) -> Mat<f64> + Sync,
+) -> Mat<f64> {
+    let blocks = if d >= PARALLEL_MIN_DIM {
+        rayon::current_num_threads().clamp(1, d / (PARALLEL_MIN_DIM / 2))
+    } else {
+        1
+    };
+    let width = d.div_ceil(blocks).max(1);
+    let ranges: Vec<(usize, usize)> = (0..d)
+        .step_by(width)
+        .map(|c0| (c0, (c0 + width).min(d)))
+        .collect();
+    let parts: Vec<Mat<f64>> = if ranges.len() > 1 {
+        use rayon::prelude::*;
+        ranges.par_iter().map(|&(c0, c1)| block(c0, c1)).collect()
+    } else {
+        ranges.iter().map(|&(c0, c1)| block(c0, c1)).collect()
+    };
+    let mut prod = Mat::<f64>::zeros(d, d);
+    for (&(c0, c1), part) in ranges.iter().zip(&parts) {
+        prod.as_mut()
+            .subcols_mut(c0, c1 - c0)
+            .copy_from(part.as_ref());
+    }
+    prod
+}
 
 impl Sip {
     /// Columns `c0..c1` of the SIP product (Eq. 33), with the optional extrapolation.
