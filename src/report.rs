@@ -396,6 +396,7 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
             );
             let balls_ok =
                 (0..2).all(|k| a.elements_c[k] > a.inner_c[k] && a.inner_c[k] > a.outer_c[k]);
+            let elements_hottest = (0..2).all(|k| a.elements_c[k] > a.inner_c[k].max(a.outer_c[k]));
             let _ = writeln!(
                 s,
                 "| Ball bearings: T_b > T_i > T_o | 1#: {:.1} / {:.1} / {:.1} °C; 2#: {:.1} / {:.1} / {:.1} °C (elements / inner / outer) | {} |",
@@ -405,7 +406,13 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
                 a.elements_c[1],
                 a.inner_c[1],
                 a.outer_c[1],
-                if balls_ok { "match" } else { "differs" }
+                if balls_ok {
+                    "match"
+                } else if elements_hottest {
+                    "partial (elements hottest; the ring order differs)"
+                } else {
+                    "differs"
+                }
             );
         }
     }
@@ -476,9 +483,9 @@ The paper does not give every parameter the coupled model needs; the built-in mo
 (`models/dual_rotor.toml`) documents each open value and its source. The ones that move
 these findings most:
 
-* **Heat generation and its split** — Palmgren's load factor f_1 and the viscous factor
-  f_0 and the lubricant's reference viscosity ν0 (Eqs. 9–13) are not given; textbook values
-  are used. They set the temperature level (our 2 L/min / 50 °C run is hotter than the
+* **Heat generation and its split** — Palmgren's lubrication factor f_v and load factor
+  f_l and the lubricant's reference viscosity ν0 (Eqs. 9–13) are not given; values from
+  Harris's ranges and a turbine oil are used (not calibrated). They set the temperature level (our 2 L/min / 50 °C run is hotter than the
   paper's ≈ 72 °C) and which bearing runs hottest.
 * **Thermal expansion paths** — the clearance variation (Eqs. 1–4) takes the differences of
   element, ring and housing expansions; with the network's conductances partly estimated
@@ -489,6 +496,9 @@ these findings most:
   its Eq. 3 disagree), Rayleigh damping ζ = 0.02, the 1e8 N/m support at node 4: they set
   peak heights and how far the folds bend.
 * **Stability method** — multipliers come from a Craig–Bampton reduction of the rotor
-  (cut-off 20 000 rad/s) with the exponential-split SIP product (256 intervals); the
-  saddle-node points sit on the ω-turning points of the branch to within one step.
+  (cut-off 20 000 rad/s) with the exponential-split SIP product (256 intervals); on the
+  default sweep every located saddle-node lies within one continuation step of an
+  ω-turning point of the branch. The branch has more folds than the paper reports (the
+  resonances bend over further in this model), so it has more saddle-nodes; Neimark–Sacker
+  points appear from 2 L/min down and multiply at 1 L/min.
 ";
