@@ -2,11 +2,12 @@
 //! continuation driver's step outcomes and CSV output.
 
 use tmrotor::continuation::{
-    Continuation, ContinuationOptions, FinishReason, StepOutcome, csv::branch_csv,
+    Continuation, ContinuationOptions, FinishReason, RejectReason, StepOutcome, csv::branch_csv,
 };
 use tmrotor::hb::newton::{NewtonError, NewtonOptions, solve_fixed};
 use tmrotor::hb::{Basis, HarmonicBalance, HbSolution, Ratio};
 use tmrotor::system::PeriodicOrbit;
+use tmrotor::systems::absorber::Absorber;
 use tmrotor::systems::chain::Chain;
 use tmrotor::systems::duffing::Duffing;
 
@@ -177,4 +178,91 @@ fn csv_rejects_a_dof_the_system_does_not_have() {
         .run(|_| {})
         .expect("run");
     assert!(branch_csv(&branch, 1).is_err());
+}
+
+#[test]
+fn corrector_distance_bound_rejects_far_corrections_and_the_branch_still_passes_the_folds() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(3).expect("basis");
+    let trace = |bound: f64| {
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let mut opts = ContinuationOptions::new(0.5, 1.6);
+        opts.max_corrector_distance = bound;
+        let mut rejections = vec![];
+        let branch = Continuation::new(hb, opts, None)
+            .expect("continuation")
+            .run(|o| {
+                if let StepOutcome::Rejected(RejectReason::Distance { ds, distance }) = o {
+                    rejections.push((*ds, *distance));
+                }
+            })
+            .expect("run");
+        (branch, rejections)
+    };
+    let (loose, loose_rejections) = trace(1.0);
+    let (tight, tight_rejections) = trace(0.02);
+    assert!(loose_rejections.is_empty(), "{loose_rejections:?}");
+    assert!(!tight_rejections.is_empty());
+    for (ds, distance) in &tight_rejections {
+        assert!(*distance > 0.02 * ds, "rejected {distance} at ds {ds}");
+    }
+    // both reach the end, through both folds (ω turns back twice)
+    for branch in [&loose, &tight] {
+        assert_eq!(branch.finish, FinishReason::Bound { omega: 1.6 });
+        let turns = branch
+            .points
+            .windows(3)
+            .filter(|w| {
+                (w[1].solution.omega - w[0].solution.omega)
+                    * (w[2].solution.omega - w[1].solution.omega)
+                    < 0.0
+            })
+            .count();
+        assert_eq!(turns, 2);
+    }
+    // shorter steps where the branch bends: more points
+    assert!(tight.points.len() > loose.points.len());
+    let err = Continuation::new(
+        HarmonicBalance::new(&sys, &basis, None).expect("hb"),
+        ContinuationOptions {
+            max_corrector_distance: 0.0,
+            ..ContinuationOptions::new(0.5, 1.6)
+        },
+        None,
+    )
+    .err()
+    .expect("zero distance bound rejected");
+    assert!(err.to_string().contains("max_corrector_distance"), "{err}");
+}
+
+#[test]
+fn per_dof_scaling_changes_the_steps_not_the_solutions() {
+    // The absorber's primary mass and absorber move with different amplitudes: scaling
+    // each DoF by its own size changes the step lengths (a different number of points),
+    // not the branch (both end on the same solution).
+    let sys = Absorber::default();
+    let basis = Basis::integer(5).expect("basis");
+    let run = |per_dof: bool| {
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let mut opts = ContinuationOptions::new(0.8, 1.4);
+        opts.scale_per_dof = per_dof;
+        Continuation::new(hb, opts, None)
+            .expect("continuation")
+            .run(|_| {})
+            .expect("run")
+    };
+    let (global, per_dof) = (run(false), run(true));
+    for b in [&global, &per_dof] {
+        assert_eq!(b.finish, FinishReason::Bound { omega: 1.4 });
+    }
+    let end =
+        |b: &tmrotor::continuation::Branch| b.points.last().expect("points").solution.unknowns();
+    let (ea, eb) = (end(&global), end(&per_dof));
+    let diff = ea
+        .iter()
+        .zip(&eb)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max);
+    assert!(diff < 1e-8, "end points differ by {diff:e}");
+    assert_ne!(global.points.len(), per_dof.points.len());
 }

@@ -2,7 +2,7 @@
 //! (exponents 0 and −24 exactly, see `tmrotor::systems::hill`).
 
 use tmrotor::stability::{Sip, StabilityMethod, Variational};
-use tmrotor::systems::hill::{EXPONENTS, Hill, HillOrbit, PERIOD};
+use tmrotor::systems::hill::{EXPONENTS, Hill, HillOrbit, PERIOD, exact_monodromy};
 
 /// Multipliers sorted by modulus, descending.
 fn sorted(mut m: Vec<num_complex::Complex64>) -> Vec<num_complex::Complex64> {
@@ -123,4 +123,74 @@ fn variational_reaches_exponent_zero_and_annihilates_the_decaying_solution() {
         .multipliers(&Hill::default(), &HillOrbit)
         .expect("multipliers");
     assert!(r.stable, "exponent 0 sits on the circle within tolerance");
+}
+
+#[test]
+fn exact_monodromy_is_the_closed_form_and_matches_the_variational_one() {
+    let exact = exact_monodromy();
+    // trace = sum of the multipliers, det = their product (e^{−48π} below round-off)
+    let trace = exact[0][0] + exact[1][1];
+    let det = exact[0][0] * exact[1][1] - exact[0][1] * exact[1][0];
+    assert!((trace - 1.0).abs() < 1e-14, "trace {trace}");
+    assert!(det.abs() < 1e-14, "det {det}");
+    // the decaying solution starts along (1, −24) and is annihilated
+    for row in exact {
+        assert!((row[0] - 24.0 * row[1]).abs() < 1e-12);
+    }
+    let phi = Variational::default()
+        .monodromy(&Hill::default(), &HillOrbit)
+        .expect("variational runs");
+    let err = (0..2)
+        .flat_map(|i| (0..2).map(move |j| (i, j)))
+        .map(|(i, j)| (phi[(i, j)] - exact[i][j]).abs())
+        .fold(0.0, f64::max);
+    println!("exact monodromy {exact:?}, variational differs by {err:.3e}");
+    assert!(err < 1e-9, "variational vs exact monodromy: {err:e}");
+}
+
+// The table of `examples/hill.rs`, exactly as `cargo run --example hill` prints it.
+#[path = "../examples/hill.rs"]
+#[allow(dead_code)]
+mod example;
+
+#[test]
+fn example_table_shows_second_order_sip_and_accurate_variational() {
+    let rows = example::rows().expect("example runs");
+    let csv = example::table_csv(&rows);
+    print!("{csv}");
+    let sip: Vec<_> = rows.iter().filter(|r| r.method == "sip").collect();
+    assert_eq!(sip.len(), example::INTERVALS.len());
+    for w in sip.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let n = b.intervals.expect("intervals");
+        // the monodromy matrix: second order once the series is accurate (N ≥ 512)
+        let order = (a.monodromy_error / b.monodromy_error).log2();
+        if n >= 512 {
+            assert!((order - 2.0).abs() < 0.1, "N = {n}: matrix order {order}");
+        }
+        // the multiplier on the circle: at least second order, until round-off (1e-13)
+        if a.mu1_error > 1e-12 {
+            let order = (a.mu1_error / b.mu1_error).log2();
+            assert!(order > 1.9, "N = {n}: multiplier order {order}");
+        }
+        // the fast exponent: error falls with N
+        let (ea, eb) = (
+            a.exponent2_error.expect("SIP gives exponent 2"),
+            b.exponent2_error.expect("SIP gives exponent 2"),
+        );
+        assert!(eb < ea, "N = {n}: exponent −24 error {eb} after {ea}");
+    }
+    let finest = sip.last().expect("rows");
+    assert!(finest.mu1_error < 1e-12 && finest.exponent2_error.expect("exp 2") < 1e-6);
+    let var = rows
+        .iter()
+        .find(|r| r.method == "variational")
+        .expect("variational row");
+    assert!(var.mu1_error < 1e-9 && var.monodromy_error < 1e-9);
+    // the CSV lists the exact row and one row per method run
+    assert_eq!(
+        csv.lines().filter(|l| !l.starts_with('#')).count(),
+        2 + rows.len()
+    );
+    assert!(csv.contains("\nexact,,1e0,0e0,"));
 }

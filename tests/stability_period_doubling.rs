@@ -2,8 +2,16 @@
 //! Duffing oscillator `ẍ + 0.3ẋ − x + x³ = γ cos(1.2 t)`. The first period doubling of the
 //! one-well orbit is located from the Floquet multipliers (a real multiplier through −1),
 //! checked against the literature bracket 0.20 < γ < 0.28, against SIP, and against the
-//! time integrator's stroboscopic samples (period 1 below, period 2 above).
+//! time integrator's stroboscopic samples (period 1 below, period 2 above). The
+//! harmonic-balance continuation in γ of `examples/period_doubling.rs` must find the same
+//! point.
 
+// The example's continuation, exactly as `cargo run --example period_doubling` runs it.
+#[path = "../examples/period_doubling.rs"]
+#[allow(dead_code)]
+mod example;
+
+use tmrotor::continuation::csv::branch_csv_with_parameter;
 use tmrotor::integrate::{
     Dopri5Options, FlowSensitivity, ShootingOptions, poincare_samples, shoot_periodic, steady_state,
 };
@@ -201,4 +209,68 @@ fn sip_bisection_locates_the_same_period_doubling() {
     );
     // The reference itself is bisected to 1e-6.
     assert!((found[1] - gamma_ref).abs() < 2e-6);
+}
+
+#[test]
+fn example_continuation_locates_the_shooting_period_doubling() {
+    let (gamma_ref, y_ref) = locate();
+    let branch = example::branch().expect("the example's continuation runs");
+    assert!(
+        matches!(branch.finish, tmrotor::continuation::FinishReason::Bound { omega } if omega == GAMMA_BRACKET.1),
+        "the branch reaches the end of the range: {:?}",
+        branch.finish
+    );
+    let kinds: Vec<_> = branch.bifurcations.iter().map(|b| b.bifurcation).collect();
+    assert_eq!(kinds, vec![Some(BifurcationKind::PeriodDoubling)]);
+    let gamma_hb = branch.bifurcations[0].solution.omega;
+    let csv = branch_csv_with_parameter(&branch, 0, "gamma").expect("csv");
+    assert!(
+        csv.lines()
+            .nth(1)
+            .is_some_and(|h| h.starts_with("gamma,amplitude,stable,bifurcation,"))
+    );
+    assert_eq!(csv.matches(",period-doubling,").count(), 1);
+    println!("γ* shooting {gamma_ref:.8}, example (HB + extrapolated SIP) {gamma_hb:.8}");
+    // The reference is bisected to 1e-6; the extrapolated SIP shifts the crossing by
+    // ~1e-7 (see the SIP test above) and 16 harmonics leave residuals below 1e-11.
+    assert!(
+        (gamma_hb - gamma_ref).abs() < 2e-6,
+        "γ* example {gamma_hb} vs shooting {gamma_ref}"
+    );
+    // Stable before the located point, unstable after it.
+    for p in &branch.points {
+        let expect_stable = p.solution.omega < gamma_hb;
+        assert_eq!(p.stable(), Some(expect_stable), "γ = {}", p.solution.omega);
+    }
+    // Amplitudes equal those of the shooting orbit (stable or not) on both sides.
+    for target in [0.22, 0.275] {
+        let p = branch
+            .points
+            .iter()
+            .min_by(|a, b| {
+                (a.solution.omega - target)
+                    .abs()
+                    .total_cmp(&(b.solution.omega - target).abs())
+            })
+            .expect("points");
+        let gamma = p.solution.omega;
+        let o = orbit_at(gamma, &y_ref);
+        let ti = steady_state(
+            &DoubleWellDuffing::reference(gamma),
+            OMEGA,
+            &o.y,
+            period(),
+            0,
+        )
+        .expect("samples")
+        .amplitude(0);
+        let hb = p.solution.max_abs(0);
+        println!("γ = {gamma:.5}: max|x| HB {hb:.10}, shooting {ti:.10}");
+        // The sampled orbit's maximum is read on a 4096-point grid (under-estimate up to
+        // (2π/4096)²/8 · max|d²x/dθ²| ≈ 1.5e-7); the HB maximum is refined to ~Δt⁴.
+        assert!(
+            (hb - ti).abs() < 3e-7,
+            "γ = {gamma}: HB {hb} vs shooting {ti}"
+        );
+    }
 }

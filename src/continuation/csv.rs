@@ -15,6 +15,18 @@ use super::{Branch, BranchPoint, ContinuationError};
 /// CSV of `branch` with amplitudes of mechanical DoF `dof` (0-based); the first line is a
 /// `#` comment explaining the columns. Errors when `dof` is not a mechanical DoF.
 pub fn branch_csv(branch: &Branch, dof: usize) -> Result<String, ContinuationError> {
+    branch_csv_with_parameter(branch, dof, "omega")
+}
+
+/// As [`branch_csv`], with the first column (the continuation parameter) named
+/// `parameter` instead of `omega`, for systems whose continuation parameter is not a
+/// speed (e.g. a forcing amplitude written as the base frequency of a rescaled time, see
+/// [`crate::systems::period_doubling::GammaParametrized`]).
+pub fn branch_csv_with_parameter(
+    branch: &Branch,
+    dof: usize,
+    parameter: &str,
+) -> Result<String, ContinuationError> {
     if let Some(p) = branch.points.first()
         && dof >= p.solution.n_mech()
     {
@@ -32,7 +44,8 @@ pub fn branch_csv(branch: &Branch, dof: usize) -> Result<String, ContinuationErr
         "# amplitude = max |x(t)| over one period of mechanical DoF {} (index {dof}); rms_amplitude = paper Eq. 35 of that DoF; stable empty = not computed",
         dof + 1
     );
-    s.push_str("omega,amplitude,stable,bifurcation,rms_amplitude,arclength,newton_iterations,residual_mech,residual_therm\n");
+    s.push_str(parameter);
+    s.push_str(",amplitude,stable,bifurcation,rms_amplitude,arclength,newton_iterations,residual_mech,residual_therm\n");
     for p in rows {
         let stable = match p.stable() {
             Some(true) => "true",

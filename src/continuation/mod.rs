@@ -3,7 +3,8 @@
 //!
 //! ## Method
 //! Unknowns `X = (A, ω)` are measured in scaled units `u = A / s` (`s = s_mech` for
-//! mechanical, `s_therm` for thermal coefficients) and `ϖ = ω / s_ω`, so that
+//! mechanical, `s_therm` for thermal coefficients, or one scale per DoF with
+//! [`ContinuationOptions::scale_per_dof`]) and `ϖ = ω / s_ω`, so that
 //! displacements, temperatures and speed weigh comparably in the arclength (see
 //! [`ContinuationOptions`] for the scales). From an accepted point with unit tangent `τ`:
 //!
@@ -13,7 +14,8 @@
 //! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
 //!   orientation (`τ_prev·t > 0`), i.e. direction control;
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
-//!   after a failed corrector or a turn of the tangent by more than 60°;
+//!   after a failed corrector, a turn of the tangent by more than 60°, or a corrected point
+//!   farther than `max_corrector_distance · ds` from the predictor;
 //! * the start point is Newton at `ω_start` from zero coefficients (its first iterate is the
 //!   linear response) or from [`ContinuationOptions::initial_guess`]; its tangent is oriented towards `ω_end`;
 //! * stops when ω leaves `[min(ω_start, ω_end), max(…)]` (the last point is re-solved on the
@@ -64,6 +66,22 @@ pub struct ContinuationOptions {
     pub scale_therm: Option<f64>,
     /// Scale of ω; default `|ω_end − ω_start|`.
     pub scale_omega: Option<f64>,
+    /// Scale each DoF's coefficients by that DoF's largest coefficient magnitude at the
+    /// start point instead of one scale for all mechanical (thermal) DoFs; `scale_mech` /
+    /// `scale_therm` then only replace DoFs whose coefficients are all zero. Default false.
+    /// Use it when the branch's structure lives in DoFs much smaller than the largest one
+    /// (a journal inside a bearing clearance next to a disk's static sag): with one scale,
+    /// their changes hardly count in the arclength, steps grow across their folds, and the
+    /// corrector can land on a neighbouring segment of the branch.
+    pub scale_per_dof: bool,
+    /// Largest corrector displacement, as a multiple of the step: a step is rejected (and
+    /// halved) when the corrected point lies farther than `max_corrector_distance · ds`
+    /// (scaled norm) from the predictor. On a smooth branch the displacement is about
+    /// `κ ds² / 2` (`κ` the curvature), so this bounds the step by the local curvature; a
+    /// corrector that converges onto another nearby branch segment lands about their
+    /// separation away and is rejected when that exceeds the bound. Default 1.0 (a turn of
+    /// about 115° within one step, beyond the 60° tangent check on smooth branches).
+    pub max_corrector_distance: f64,
     /// Bisection stops when the arclength bracket is shorter than this (scaled units,
     /// default 1e-6).
     pub bifurcation_tol_arclength: f64,
@@ -90,6 +108,8 @@ impl ContinuationOptions {
             scale_mech: None,
             scale_therm: None,
             scale_omega: None,
+            scale_per_dof: false,
+            max_corrector_distance: 1.0,
             bifurcation_tol_arclength: 1e-6,
             max_bisections: 60,
             initial_guess: None,
@@ -149,6 +169,9 @@ pub enum RejectReason {
     Corrector { ds: f64, message: String },
     /// The tangent turned by more than 60°; the step is halved.
     Turn { ds: f64, cos_angle: f64 },
+    /// The corrected point lies farther than `max_corrector_distance · ds` from the
+    /// predictor (scaled norm); the step is halved.
+    Distance { ds: f64, distance: f64 },
 }
 
 /// Why the continuation stopped.
@@ -244,6 +267,12 @@ impl<'a> Continuation<'a> {
             "must lie in [ds_min, ds_max]",
         )?;
         check("ds_min", opts.ds_min, opts.ds_min > 0.0, "must be positive")?;
+        check(
+            "max_corrector_distance",
+            opts.max_corrector_distance,
+            opts.max_corrector_distance > 0.0,
+            "must be positive",
+        )?;
         let ds = opts.ds_initial;
         Ok(Self {
             hb,
@@ -376,6 +405,15 @@ impl<'a> Continuation<'a> {
             .scale_omega
             .unwrap_or((self.opts.omega_end - self.opts.omega_start).abs());
         self.scales = (0..a.len()).map(|i| if i < nm { sm } else { st }).collect();
+        if self.opts.scale_per_dof {
+            let nc = self.hb.n_coeffs();
+            for (block, scales) in a.chunks(nc).zip(self.scales.chunks_mut(nc)) {
+                let m = maxabs(block);
+                if m > 0.0 && m.is_finite() {
+                    scales.iter_mut().for_each(|v| *v = m);
+                }
+            }
+        }
         self.scales.push(sw);
         let tangent = self.tangent(&a, omega, None)?;
         let point = self.make_point(&a, omega, &stats, 0.0);
@@ -415,6 +453,17 @@ impl<'a> Continuation<'a> {
         newton::solve_arclength(&self.hb, &pred, w_pred, &arc, &self.opts.newton)
     }
 
+    /// Scaled distance of `(a, omega)` from the predictor `cur + ds·τ`.
+    fn corrector_distance(&self, cur: &Current, ds: f64, a: &[f64], omega: f64) -> f64 {
+        let s = &self.scales;
+        let t = &cur.tangent;
+        let nu = a.len();
+        let sq: f64 = (0..nu)
+            .map(|i| ((a[i] - cur.a[i]) / s[i] - ds * t[i]).powi(2))
+            .sum();
+        (sq + ((omega - cur.omega) / s[nu] - ds * t[nu]).powi(2)).sqrt()
+    }
+
     /// One continuation step (the first call computes the start point).
     pub fn step(&mut self) -> Result<StepOutcome, ContinuationError> {
         if let Some(f) = &self.finished {
@@ -449,6 +498,10 @@ impl<'a> Continuation<'a> {
                 ));
             }
         };
+        let distance = self.corrector_distance(cur, ds, &a, omega);
+        if distance > self.opts.max_corrector_distance * ds {
+            return Ok(self.reject(RejectReason::Distance { ds, distance }, cur.omega));
+        }
         let tangent = match self.tangent(&a, omega, Some(&cur.tangent)) {
             Ok(t) => t,
             Err(e) => {

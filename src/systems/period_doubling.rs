@@ -22,7 +22,22 @@
 //! apart at `γ* + 0.005`.
 //!
 //! The continuation parameter `ω` of [`System`] is the forcing frequency; `γ` and `δ` are
-//! fields.
+//! fields of [`DoubleWellDuffing`].
+//!
+//! ## Continuation in γ
+//! The engine continues periodic orbits in the base frequency of their basis. To continue
+//! in `γ` at the fixed forcing frequency `Ω` ([`OMEGA`]), [`GammaParametrized`] writes the
+//! same equation in the rescaled time `s = γ t / Ω`, in which the forcing frequency *is*
+//! `γ`. With `X(s) = x(t)`, `d/dt = (Ω/γ) d/ds`:
+//!
+//! ```text
+//!   (Ω/γ)² X'' + δ (Ω/γ) X' − X + X³ = γ cos(γ s),
+//! ```
+//!
+//! so its continuation parameter (`omega` in the engine's API) is `γ`, its mass and damping
+//! depend on it, and its orbits are those of the original with time stretched by `Ω/γ`:
+//! displacements, amplitudes and Floquet multipliers (the monodromy matrices are similar,
+//! `(X, X') = (x, (γ/Ω) ẋ)`) are the same. Velocities and times differ by the factor.
 
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 
@@ -101,5 +116,85 @@ impl System for DoubleWellDuffing {
 
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
         out[0] = self.gamma * (omega * t).cos();
+    }
+}
+
+/// The double-well Duffing oscillator at fixed forcing frequency with the forcing
+/// amplitude `γ` as continuation parameter, in the rescaled time `s = γ t / Ω` (see
+/// "Continuation in γ" in the module docs). Every `omega` argument of its [`System`]
+/// methods, and the `omega` of its orbits, is `γ`.
+#[derive(Clone, Debug)]
+pub struct GammaParametrized {
+    /// Linear damping `δ`.
+    pub delta: f64,
+    /// Fixed forcing frequency `Ω` in physical time (rad/s).
+    pub forcing_frequency: f64,
+    dofs: NonlinearDofs,
+}
+
+impl GammaParametrized {
+    /// The oscillator with damping `delta`, forced at `forcing_frequency`.
+    pub fn new(delta: f64, forcing_frequency: f64) -> Self {
+        Self {
+            delta,
+            forcing_frequency,
+            dofs: NonlinearDofs {
+                mech: vec![0],
+                therm: vec![],
+            },
+        }
+    }
+
+    /// The reference: damping [`DELTA`], forcing frequency [`OMEGA`].
+    pub fn reference() -> Self {
+        Self::new(DELTA, OMEGA)
+    }
+
+    /// `Ω / γ`: physical time `t = s / (Ω/γ)`, physical velocity `ẋ = (Ω/γ) X'`.
+    pub fn time_scale(&self, gamma: f64) -> f64 {
+        self.forcing_frequency / gamma
+    }
+}
+
+impl System for GammaParametrized {
+    fn n_mech(&self) -> usize {
+        1
+    }
+
+    fn linear(&self, gamma: f64) -> LinearPart {
+        let scalar = |v: f64| DenseMatrix {
+            n: 1,
+            data: vec![v],
+        };
+        let r = self.time_scale(gamma);
+        LinearPart {
+            mass: scalar(r * r),
+            damping: scalar(self.delta * r),
+            stiffness: scalar(-1.0),
+            thermal_capacity: DenseMatrix::zeros(0),
+            thermal_conductance: DenseMatrix::zeros(0),
+        }
+    }
+
+    fn nonlinear_dofs(&self) -> &NonlinearDofs {
+        &self.dofs
+    }
+
+    fn eval_nonlinear(
+        &self,
+        _gamma: f64,
+        _s: f64,
+        x: &[f64],
+        _v: &[f64],
+        _temp: &[f64],
+        out: &mut NonlinearEval,
+    ) {
+        out.f[0] = x[0] * x[0] * x[0];
+        out.df_dx[0] = 3.0 * x[0] * x[0];
+        out.df_dv[0] = 0.0;
+    }
+
+    fn forcing(&self, gamma: f64, s: f64, out: &mut [f64]) {
+        out[0] = gamma * (gamma * s).cos();
     }
 }
