@@ -103,6 +103,9 @@ impl Default for StudySettings {
     }
 }
 
+/// Bisection tolerance (scaled arclength) for locating bifurcations in a sweep.
+pub const BIFURCATION_TOL_ARCLENGTH: f64 = 1e-4;
+
 /// Default SIP intervals per period of a sweep.
 ///
 /// Why 256: on the built-in dual rotor (period = ten shaft revolutions) the exponential
@@ -354,6 +357,11 @@ impl SweepProblem {
         opts.ds_initial = opts.ds_initial.min(s.ds_max);
         opts.max_points = s.max_points;
         opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
+        // Bisection to 1e-4 in scaled arclength (≈ 0.04 rad/s on the default range): finer
+        // brackets cannot place a crossing better than the multipliers' own accuracy
+        // (moduli to ~5e-4 at the default intervals), and each halving costs a Newton
+        // solve plus a stability evaluation.
+        opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
         let sip = GivingUp::new(if s.stability {
             stability_method(s, &self.system, s.omega_start)
         } else {
