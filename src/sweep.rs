@@ -231,6 +231,24 @@ impl SweepProblem {
         })
     }
 
+    /// The continuation this problem's sweep runs (settings' range, step limits, AFT
+    /// samples and the model's static start guess), with `stability` per point or none.
+    /// [`Self::run`] drives it into a sink; other drivers (the truncation study) step it
+    /// themselves.
+    pub fn continuation<'s>(
+        &'s self,
+        stability: Option<&'s dyn StabilityMethod>,
+    ) -> Result<Continuation<'s>, SweepError> {
+        let s = &self.settings;
+        let hb = HarmonicBalance::new(&self.system, &self.basis, s.aft_samples)?;
+        let mut opts = ContinuationOptions::new(s.omega_start, s.omega_end);
+        opts.ds_max = s.ds_max;
+        opts.ds_initial = opts.ds_initial.min(s.ds_max);
+        opts.max_points = s.max_points;
+        opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
+        Ok(Continuation::new(hb, opts, stability)?)
+    }
+
     /// Runs the sweep, writing into `sink` as it goes, polling `interrupt` between steps
     /// and calling `progress` after every step.
     pub fn run(
@@ -241,18 +259,12 @@ impl SweepProblem {
     ) -> Result<SweepReport, SweepError> {
         let start = std::time::Instant::now();
         let s = &self.settings;
-        let hb = HarmonicBalance::new(&self.system, &self.basis, s.aft_samples)?;
-        let mut opts = ContinuationOptions::new(s.omega_start, s.omega_end);
-        opts.ds_max = s.ds_max;
-        opts.ds_initial = opts.ds_initial.min(s.ds_max);
-        opts.max_points = s.max_points;
-        opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
         let sip = GivingUp::new(Sip {
             intervals: s.sip_intervals,
             ..Sip::default()
         });
         let stab: Option<&dyn StabilityMethod> = if s.stability { Some(&sip) } else { None };
-        let mut cont = Continuation::new(hb, opts, stab)?;
+        let mut cont = self.continuation(stab)?;
 
         sink.begin_run(&self.run)?;
         let mut prog = Progress::default();
