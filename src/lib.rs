@@ -20,7 +20,8 @@
 //! ```
 //!
 //! The driver that runs one sweep from study settings into a sink is [`sweep`]; several
-//! sweeps in parallel with a manifest are a [`campaign`]. The binaries (`tmrotor`, see
+//! sweeps in parallel with a manifest are a [`campaign`]; the comparison of truncation
+//! orders with the residual of the governing equations (Eq. 36) is [`truncation`]. The binaries (`tmrotor`, see
 //! [`cli`], and `replay`) are thin layers over these.
 //!
 //! Linear analyses of the assembled rotor (modes, Campbell diagram) live in [`linear`];
@@ -42,3 +43,4 @@ pub mod sweep;
 pub mod system;
 pub mod systems;
 pub mod thermal;
+pub mod truncation;

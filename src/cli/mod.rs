@@ -6,6 +6,7 @@ pub mod campbell;
 pub mod model;
 pub mod modes;
 pub mod sweep;
+pub mod truncation;
 
 use clap::{Parser, Subcommand};
 
@@ -33,6 +34,9 @@ pub enum Command {
     Modes(modes::ModesArgs),
     /// Campbell diagram and critical speeds (1× LP, 1× HP) over a speed range.
     Campbell(campbell::CampbellArgs),
+    /// Truncation study (paper Section 5.1): per order, amplitudes, temperatures and the
+    /// residual of the governing equations (Eq. 36) at points A–D.
+    Truncation(truncation::TruncationArgs),
 }
 
 /// Runs the parsed command line.
@@ -50,5 +54,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Model(cmd)) => model::run(&cmd, &mut std::io::stdout().lock()),
         Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Truncation(args)) => truncation::run(&args, &mut std::io::stdout().lock()),
     }
 }
