@@ -144,6 +144,8 @@ pub struct TruncationProgress {
     pub points: usize,
     /// Target speeds crossed so far on this order's branch (counting repeats).
     pub crossings: usize,
+    /// Target speeds crossed in this step.
+    pub crossed: Vec<f64>,
     /// Fraction of the whole study (0–1; not monotone through folds).
     pub fraction: f64,
 }
@@ -278,6 +280,7 @@ pub fn run(
             match cont.step().map_err(SweepError::from)? {
                 StepOutcome::Accepted { point, .. } => {
                     let sol = point.solution;
+                    prog.crossed.clear();
                     for (ti, &w) in targets.iter().enumerate() {
                         let hit = match &prev {
                             None => sol.omega == w,
@@ -287,6 +290,7 @@ pub fn run(
                             continue;
                         }
                         seen[ti] += 1;
+                        prog.crossed.push(w);
                         if seen[ti] > 1 && !opts.all_solutions {
                             continue;
                         }
@@ -314,6 +318,7 @@ pub fn run(
                 }
                 StepOutcome::Rejected(_) => {
                     rejected += 1;
+                    prog.crossed.clear();
                     progress(&prog);
                 }
                 StepOutcome::Finished(f) => break f,

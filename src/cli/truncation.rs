@@ -1,6 +1,7 @@
 //! `tmrotor truncation`: the paper's truncation study (Section 5.1, Figs. 5–6), a table of
 //! amplitudes, temperatures and Eq. 36 residuals per truncation order at points A–D.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 use clap::Args;
@@ -146,7 +147,8 @@ impl TruncationArgs {
 /// Runs the study, progress on stderr, the table on `out`.
 pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
     let (settings, opts) = args.resolve()?;
-    let bar = if args.quiet {
+    // a bar on a terminal; plain lines (order starts, crossings, order ends) always
+    let bar = if args.quiet || !std::io::stderr().is_terminal() {
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new(1000);
@@ -157,17 +159,37 @@ pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Resu
         );
         b
     };
+    let say = |line: String| {
+        if args.quiet {
+            return;
+        }
+        if bar.is_hidden() {
+            eprintln!("{line}");
+        } else {
+            bar.println(line);
+        }
+    };
+    let start = std::time::Instant::now();
     let mut last_order = None;
     let report = truncation::run(&settings, &opts, |p| {
         if last_order != Some(p.order_index) {
             last_order = Some(p.order_index);
-            bar.println(format!(
-                "order {} ({}/{}): tracing {}–{} rad/s",
+            say(format!(
+                "[{:6.1} s] order {} ({}/{}): tracing {}–{} rad/s",
+                start.elapsed().as_secs_f64(),
                 p.order,
                 p.order_index + 1,
                 p.n_orders,
                 settings.omega_start,
                 settings.omega_end
+            ));
+        }
+        for w in &p.crossed {
+            say(format!(
+                "[{:6.1} s] order {}: branch crosses ω = {w} rad/s (point {})",
+                start.elapsed().as_secs_f64(),
+                p.order,
+                p.points
             ));
         }
         bar.set_position((p.fraction * 1000.0) as u64);
