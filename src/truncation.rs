@@ -20,7 +20,8 @@
 use thiserror::Error;
 
 use crate::continuation::{Continuation, FinishReason, StepOutcome, crosses};
-use crate::hb::{HbSolution, ResidualNorms, ResidualStats, TimeResidual};
+use crate::hb::time_residual::DEFAULT_OVERSAMPLING;
+use crate::hb::{Aft, HbSolution, ResidualNorms, ResidualStats, TimeResidual};
 use crate::model::Dir;
 use crate::sweep::{StudySettings, SweepError, SweepProblem};
 
@@ -37,8 +38,9 @@ pub struct TruncationOptions {
     /// Thermal nodes (1-based) whose temperature and residual are reported (default 41 =
     /// HPC disk, 58 = 3# rolling elements); ignored for a model without thermal network.
     pub thermal_nodes: Vec<u32>,
-    /// Residual grid; default `None`: [`crate::hb::time_residual::DEFAULT_OVERSAMPLING`] ×
-    /// the AFT's default sample count of each basis.
+    /// Residual samples per period; default `None`:
+    /// [`crate::hb::time_residual::DEFAULT_OVERSAMPLING`] × the AFT's default sample
+    /// count of the largest basis compared, the same grid for every order.
     pub residual_samples: Option<usize>,
     /// Report every crossing of a target speed, not only the first (default false).
     pub all_solutions: bool,
@@ -194,6 +196,9 @@ pub fn check_options(
     Ok(())
 }
 
+/// A solution at a target speed: which crossing it is, of how many.
+type Found = (HbSolution, usize, usize);
+
 struct Nodes {
     dynamic: Vec<(usize, usize)>,
     thermal: Vec<usize>,
@@ -248,7 +253,10 @@ pub fn run(
     let mut targets = opts.omegas_rad_s.clone();
     targets.sort_by(f64::total_cmp);
     targets.dedup();
-    let mut rows = Vec::new();
+    // solutions are kept per order and evaluated once all bases are known, so that every
+    // order's residual is sampled on the same grid
+    let mut kept: Vec<(SweepProblem, Nodes, Vec<Found>)> = Vec::new();
+    let mut max_default_samples = 0;
     let mut summaries = Vec::new();
     let mut missed = Vec::new();
     let mut unreached = Vec::new();
@@ -327,11 +335,15 @@ pub fn run(
         for (&w, _) in targets.iter().zip(&seen).filter(|(_, n)| **n == 0) {
             unreached.push((order, w));
         }
-        for (ti, sols) in found.into_iter().enumerate() {
-            for (crossing, sol) in sols {
-                rows.push(row(&problem, &nodes, opts, &sol, crossing, seen[ti])?);
-            }
-        }
+        max_default_samples = max_default_samples.max(Aft::default_samples(&problem.basis));
+        let sols = found
+            .into_iter()
+            .enumerate()
+            .flat_map(|(ti, sols)| {
+                let n = seen[ti];
+                sols.into_iter().map(move |(c, sol)| (sol, c, n))
+            })
+            .collect();
         summaries.push(OrderSummary {
             order,
             points: prog.points,
@@ -339,6 +351,16 @@ pub fn run(
             seconds: start.elapsed().as_secs_f64(),
             finish,
         });
+        kept.push((problem, nodes, sols));
+    }
+    let samples = opts
+        .residual_samples
+        .unwrap_or(DEFAULT_OVERSAMPLING * max_default_samples);
+    let mut rows = Vec::new();
+    for (problem, nodes, sols) in &kept {
+        for (sol, crossing, crossings) in sols {
+            rows.push(row(problem, nodes, samples, sol, *crossing, *crossings)?);
+        }
     }
     rows.sort_by(|a, b| {
         a.omega_rad_s
@@ -368,14 +390,14 @@ fn solve_at(
 fn row(
     problem: &SweepProblem,
     nodes: &Nodes,
-    opts: &TruncationOptions,
+    samples: usize,
     sol: &HbSolution,
     crossing: usize,
     crossings: usize,
 ) -> Result<TruncationRow, TruncationError> {
     let order = problem.settings.order;
     let res = |source| TruncationError::Residual { order, source };
-    let r = TimeResidual::evaluate(&problem.system, sol, opts.residual_samples).map_err(res)?;
+    let r = TimeResidual::evaluate(&problem.system, sol, Some(samples)).map_err(res)?;
     let mut residual_node_n = Vec::new();
     let mut nonlinear_node_n = Vec::new();
     let mut amplitude_m = Vec::new();

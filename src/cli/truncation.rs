@@ -4,6 +4,7 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 
+use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -53,9 +54,10 @@ pub struct TruncationArgs {
     /// Residual samples per period [default: 16 × the AFT's default].
     #[arg(long, value_name = "N")]
     pub samples: Option<usize>,
-    /// Print CSV (SI units) instead of the markdown table.
-    #[arg(long)]
-    pub csv: bool,
+    /// CSV (SI units, RMS and max columns, the nonlinear force per node): `--csv` prints
+    /// it instead of the markdown table, `--csv FILE` writes it to FILE as well.
+    #[arg(long, value_name = "FILE", num_args = 0..=1, default_missing_value = "-")]
+    pub csv: Option<PathBuf>,
     /// No progress on stderr.
     #[arg(long, short)]
     pub quiet: bool,
@@ -220,11 +222,15 @@ pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Resu
     for (order, w) in &report.unreached {
         eprintln!("warning: order {order}: the branch never reached ω = {w} rad/s");
     }
-    let text = if args.csv {
-        truncation::csv(&report, &opts)
-    } else {
-        truncation::markdown(&report, &opts)
-    };
-    write!(out, "{text}")?;
+    let csv = truncation::csv(&report, &opts);
+    match &args.csv {
+        Some(path) if path.as_os_str() == "-" => write!(out, "{csv}")?,
+        Some(path) => {
+            std::fs::write(path, &csv)
+                .with_context(|| format!("--csv: writing {}", path.display()))?;
+            write!(out, "{}", truncation::markdown(&report, &opts))?;
+        }
+        None => write!(out, "{}", truncation::markdown(&report, &opts))?,
+    }
     Ok(())
 }
