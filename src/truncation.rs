@@ -13,6 +13,16 @@
 //! the crossings (solutions on the traced branch in the study range). With
 //! [`TruncationOptions::all_solutions`] every crossing is reported.
 //!
+//! At a few speeds Newton at exactly the target stalls just above its tolerance although
+//! the branch on both sides converges: the bearing model is not smooth everywhere (the
+//! Hertz force `δ^{3/2}` has unbounded curvature at first contact, and the thermal contact
+//! conductance of Eq. 17 jumps with the integer number of loaded elements), and when such
+//! an event falls on an AFT sample at the solution, the exact Jacobian no longer gives a
+//! descent direction. The tolerance is kept; instead the speed is moved by the smallest
+//! of [`NUDGES_RAD_S`] that converges inside the bracket, and the row reports the speed
+//! actually solved ([`TruncationRow::omega_rad_s`] next to
+//! [`TruncationRow::target_rad_s`]).
+//!
 //! Nodes follow the recordings' numbering: dynamic nodes by their model id (the pair of
 //! lateral DoFs), thermal nodes by their 1-based position in the network (as in the
 //! paper: 41 = HPC disk, 58 = rolling elements of the 3# bearing).
@@ -77,6 +87,9 @@ pub enum TruncationError {
 /// One solution at one target speed and order.
 #[derive(Clone, Debug)]
 pub struct TruncationRow {
+    /// The target speed (rad/s).
+    pub target_rad_s: f64,
+    /// The speed solved (rad/s): the target, or a nudged speed when Newton failed there.
     pub omega_rad_s: f64,
     pub order: u32,
     /// Which crossing of the speed along the branch this is (1 = first from the start).
@@ -196,8 +209,8 @@ pub fn check_options(
     Ok(())
 }
 
-/// A solution at a target speed: which crossing it is, of how many.
-type Found = (HbSolution, usize, usize);
+/// A solution at a target speed: the target, which crossing it is, of how many.
+type Found = (HbSolution, f64, usize, usize);
 
 struct Nodes {
     dynamic: Vec<(usize, usize)>,
@@ -340,8 +353,8 @@ pub fn run(
             .into_iter()
             .enumerate()
             .flat_map(|(ti, sols)| {
-                let n = seen[ti];
-                sols.into_iter().map(move |(c, sol)| (sol, c, n))
+                let (n, w) = (seen[ti], targets[ti]);
+                sols.into_iter().map(move |(c, sol)| (sol, w, c, n))
             })
             .collect();
         summaries.push(OrderSummary {
@@ -358,13 +371,15 @@ pub fn run(
         .unwrap_or(DEFAULT_OVERSAMPLING * max_default_samples);
     let mut rows = Vec::new();
     for (problem, nodes, sols) in &kept {
-        for (sol, crossing, crossings) in sols {
-            rows.push(row(problem, nodes, samples, sol, *crossing, *crossings)?);
+        for (sol, target, crossing, crossings) in sols {
+            rows.push(row(
+                problem, nodes, samples, sol, *target, *crossing, *crossings,
+            )?);
         }
     }
     rows.sort_by(|a, b| {
-        a.omega_rad_s
-            .total_cmp(&b.omega_rad_s)
+        a.target_rad_s
+            .total_cmp(&b.target_rad_s)
             .then(a.order.cmp(&b.order))
             .then(a.crossing.cmp(&b.crossing))
     });
@@ -377,14 +392,29 @@ pub fn run(
     })
 }
 
+/// Offsets (rad/s) tried, in this order, when Newton fails at exactly the target speed.
+pub const NUDGES_RAD_S: [f64; 6] = [0.01, -0.01, 0.02, -0.02, 0.05, -0.05];
+
+/// The solution at `omega` between two branch points; when Newton fails there, at the
+/// nearest of `omega + NUDGES_RAD_S` inside the bracket that converges (see the module
+/// docs for why). The error is the one at `omega` itself.
 fn solve_at(
     cont: &Continuation<'_>,
     from: &HbSolution,
     to: &HbSolution,
     omega: f64,
 ) -> Result<HbSolution, String> {
-    cont.solve_between(from, to, omega)
-        .map_err(|e| e.to_string())
+    let first = match cont.solve_between(from, to, omega) {
+        Ok(s) => return Ok(s),
+        Err(e) => e.to_string(),
+    };
+    let (lo, hi) = (from.omega.min(to.omega), from.omega.max(to.omega));
+    NUDGES_RAD_S
+        .iter()
+        .map(|d| omega + d)
+        .filter(|w| *w >= lo && *w <= hi)
+        .find_map(|w| cont.solve_between(from, to, w).ok())
+        .ok_or(first)
 }
 
 fn row(
@@ -392,6 +422,7 @@ fn row(
     nodes: &Nodes,
     samples: usize,
     sol: &HbSolution,
+    target_rad_s: f64,
     crossing: usize,
     crossings: usize,
 ) -> Result<TruncationRow, TruncationError> {
@@ -413,6 +444,7 @@ fn row(
         temperature_c.push(sol.therm_coeffs(p)[0]);
     }
     Ok(TruncationRow {
+        target_rad_s,
         omega_rad_s: sol.omega,
         order,
         crossing,
@@ -430,7 +462,8 @@ fn row(
 }
 
 /// The report as a markdown table: amplitudes in µm, temperatures in °C, residuals as
-/// `RMS / max` over the period in N (mechanical) and W (thermal).
+/// `RMS / max` over the period in N (mechanical) and W (thermal); a nudged speed shows as
+/// `target → solved`.
 pub fn markdown(report: &TruncationReport, opts: &TruncationOptions) -> String {
     let mut head = vec!["ω (rad/s)".to_string(), "order".into(), "solution".into()];
     for id in &opts.dynamic_nodes {
@@ -453,8 +486,13 @@ pub fn markdown(report: &TruncationReport, opts: &TruncationOptions) -> String {
     out += &format!("|{}\n", "---:|".repeat(head.len()));
     let pair = |s: &ResidualStats| format!("{:.2e} / {:.2e}", s.rms, s.max);
     for r in &report.rows {
+        let omega = if r.omega_rad_s == r.target_rad_s {
+            format!("{}", r.target_rad_s)
+        } else {
+            format!("{} → {:.2}", r.target_rad_s, r.omega_rad_s)
+        };
         let mut cells = vec![
-            format!("{}", r.omega_rad_s),
+            omega,
             r.order.to_string(),
             format!("{}/{}", r.crossing, r.crossings),
         ];
@@ -474,6 +512,7 @@ pub fn markdown(report: &TruncationReport, opts: &TruncationOptions) -> String {
 /// The report as CSV with SI units (m, °C, N, W), one row per solution.
 pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
     let mut head = vec![
+        "target_rad_s".to_string(),
         "omega_rad_s".to_string(),
         "order".into(),
         "crossing".into(),
@@ -508,6 +547,7 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
     let mut out = head.join(",") + "\n";
     for r in &report.rows {
         let mut c = vec![
+            r.target_rad_s.to_string(),
             r.omega_rad_s.to_string(),
             r.order.to_string(),
             r.crossing.to_string(),
