@@ -8,10 +8,12 @@
 //! range upwards to its end. Each time the branch crosses a target speed
 //! ([`crosses`]) the solution there is re-solved at exactly that speed
 //! ([`Continuation::solve_between`]). Where the response is multi-valued the branch
-//! crosses a speed several times; the study reports the **first** crossing, the solution
-//! that a slow run-up from the start of the range follows before any jump, and counts
-//! the crossings (solutions on the traced branch in the study range). With
-//! [`TruncationOptions::all_solutions`] every crossing is reported.
+//! crosses a speed several times; the study reports the solution of the **first**
+//! crossing, the one a slow run-up from the start of the range follows before any jump,
+//! and counts the distinct solutions the traced branch has at that speed. Crossings that
+//! return to a solution already found (a branch that, past a pitchfork, is followed back
+//! over itself) are not counted twice ([`SAME_SOLUTION_TOL`]). With
+//! [`TruncationOptions::all_solutions`] every distinct solution is reported.
 //!
 //! At a few speeds Newton at exactly the target stalls just above its tolerance although
 //! the branch on both sides converges: the bearing model is not smooth everywhere (the
@@ -52,7 +54,8 @@ pub struct TruncationOptions {
     /// [`crate::hb::time_residual::DEFAULT_OVERSAMPLING`] × the AFT's default sample
     /// count of the largest basis compared, the same grid for every order.
     pub residual_samples: Option<usize>,
-    /// Report every crossing of a target speed, not only the first (default false).
+    /// Report every distinct solution at a target speed, not only the first (default
+    /// false).
     pub all_solutions: bool,
 }
 
@@ -92,9 +95,13 @@ pub struct TruncationRow {
     /// The speed solved (rad/s): the target, or a nudged speed when Newton failed there.
     pub omega_rad_s: f64,
     pub order: u32,
-    /// Which crossing of the speed along the branch this is (1 = first from the start).
-    pub crossing: usize,
-    /// How many times the traced branch crosses the speed in the study range.
+    /// Which of the distinct solutions at this speed, in the order the branch reaches
+    /// them (1 = the first from the start of the range).
+    pub solution: usize,
+    /// Distinct solutions on the traced branch at this speed.
+    pub solutions: usize,
+    /// How many times the traced branch crosses the speed (a branch that turns back over
+    /// itself crosses again at the same solution).
     pub crossings: usize,
     /// Eq. 35 amplitude per dynamic node (m).
     pub amplitude_m: Vec<f64>,
@@ -137,7 +144,7 @@ pub struct OrderSummary {
 /// The study's result.
 #[derive(Clone, Debug)]
 pub struct TruncationReport {
-    /// Sorted by speed, then order, then crossing.
+    /// Sorted by target speed, then order, then solution.
     pub rows: Vec<TruncationRow>,
     pub orders: Vec<OrderSummary>,
     /// Crossings that could not be re-solved.
@@ -209,8 +216,31 @@ pub fn check_options(
     Ok(())
 }
 
-/// A solution at a target speed: the target, which crossing it is, of how many.
-type Found = (HbSolution, f64, usize, usize);
+/// A solution at a target speed, its place among the distinct solutions there and the
+/// number of crossings.
+struct Found {
+    solution: HbSolution,
+    target_rad_s: f64,
+    index: usize,
+    distinct: usize,
+    crossings: usize,
+}
+
+/// Relative tolerance under which two solutions at (nearly) the same speed count as one:
+/// a branch traced back over itself crosses a speed again at the same solution; distinct
+/// sheets of a multi-valued response differ far more. Loose enough for the nudged speeds.
+pub const SAME_SOLUTION_TOL: f64 = 1e-3;
+
+fn same_solution(a: &HbSolution, b: &HbSolution) -> bool {
+    let close = |x: &[f64], y: &[f64]| {
+        let scale = x.iter().chain(y).fold(0.0f64, |m, v| m.max(v.abs()));
+        x.len() == y.len()
+            && x.iter()
+                .zip(y)
+                .all(|(p, q)| (p - q).abs() <= SAME_SOLUTION_TOL * scale)
+    };
+    close(&a.mech, &b.mech) && close(&a.therm, &b.therm)
+}
 
 struct Nodes {
     dynamic: Vec<(usize, usize)>,
@@ -286,9 +316,9 @@ pub fn run(
         let nodes = resolve_nodes(&problem, opts)?;
         thermal_ids.clone_from(&nodes.thermal_ids);
         let mut cont = problem.continuation(None)?;
-        // per target: crossings seen, and the solutions (or failures) kept
+        // per target: crossings seen, and the distinct solutions in branch order
         let mut seen = vec![0usize; targets.len()];
-        let mut found: Vec<Vec<(usize, HbSolution)>> = vec![Vec::new(); targets.len()];
+        let mut found: Vec<Vec<HbSolution>> = vec![Vec::new(); targets.len()];
         let mut prev: Option<HbSolution> = None;
         let mut prog = TruncationProgress {
             order,
@@ -312,15 +342,16 @@ pub fn run(
                         }
                         seen[ti] += 1;
                         prog.crossed.push(w);
-                        if seen[ti] > 1 && !opts.all_solutions {
-                            continue;
-                        }
                         let solved = match &prev {
                             Some(p) if sol.omega != w => solve_at(&cont, p, &sol, w),
                             _ => Ok(sol.clone()),
                         };
                         match solved {
-                            Ok(s) => found[ti].push((seen[ti], s)),
+                            Ok(s) => {
+                                if !found[ti].iter().any(|f| same_solution(f, &s)) {
+                                    found[ti].push(s);
+                                }
+                            }
                             Err(reason) => missed.push(MissedCrossing {
                                 order,
                                 omega_rad_s: w,
@@ -349,12 +380,22 @@ pub fn run(
             unreached.push((order, w));
         }
         max_default_samples = max_default_samples.max(Aft::default_samples(&problem.basis));
+        let keep = if opts.all_solutions { usize::MAX } else { 1 };
         let sols = found
             .into_iter()
             .enumerate()
             .flat_map(|(ti, sols)| {
-                let (n, w) = (seen[ti], targets[ti]);
-                sols.into_iter().map(move |(c, sol)| (sol, w, c, n))
+                let (w, n, c) = (targets[ti], sols.len(), seen[ti]);
+                sols.into_iter()
+                    .take(keep)
+                    .enumerate()
+                    .map(move |(i, sol)| Found {
+                        solution: sol,
+                        target_rad_s: w,
+                        index: i + 1,
+                        distinct: n,
+                        crossings: c,
+                    })
             })
             .collect();
         summaries.push(OrderSummary {
@@ -371,17 +412,15 @@ pub fn run(
         .unwrap_or(DEFAULT_OVERSAMPLING * max_default_samples);
     let mut rows = Vec::new();
     for (problem, nodes, sols) in &kept {
-        for (sol, target, crossing, crossings) in sols {
-            rows.push(row(
-                problem, nodes, samples, sol, *target, *crossing, *crossings,
-            )?);
+        for f in sols {
+            rows.push(row(problem, nodes, samples, f)?);
         }
     }
     rows.sort_by(|a, b| {
         a.target_rad_s
             .total_cmp(&b.target_rad_s)
             .then(a.order.cmp(&b.order))
-            .then(a.crossing.cmp(&b.crossing))
+            .then(a.solution.cmp(&b.solution))
     });
     Ok(TruncationReport {
         rows,
@@ -421,11 +460,9 @@ fn row(
     problem: &SweepProblem,
     nodes: &Nodes,
     samples: usize,
-    sol: &HbSolution,
-    target_rad_s: f64,
-    crossing: usize,
-    crossings: usize,
+    found: &Found,
 ) -> Result<TruncationRow, TruncationError> {
+    let sol = &found.solution;
     let order = problem.settings.order;
     let res = |source| TruncationError::Residual { order, source };
     let r = TimeResidual::evaluate(&problem.system, sol, Some(samples)).map_err(res)?;
@@ -444,11 +481,12 @@ fn row(
         temperature_c.push(sol.therm_coeffs(p)[0]);
     }
     Ok(TruncationRow {
-        target_rad_s,
+        target_rad_s: found.target_rad_s,
         omega_rad_s: sol.omega,
         order,
-        crossing,
-        crossings,
+        solution: found.index,
+        solutions: found.distinct,
+        crossings: found.crossings,
         amplitude_m,
         temperature_c,
         residual_node_n,
@@ -494,7 +532,7 @@ pub fn markdown(report: &TruncationReport, opts: &TruncationOptions) -> String {
         let mut cells = vec![
             omega,
             r.order.to_string(),
-            format!("{}/{}", r.crossing, r.crossings),
+            format!("{}/{}", r.solution, r.solutions),
         ];
         cells.extend(r.amplitude_m.iter().map(|a| format!("{:.3}", a * 1e6)));
         cells.extend(r.temperature_c.iter().map(|t| format!("{t:.2}")));
@@ -515,7 +553,8 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
         "target_rad_s".to_string(),
         "omega_rad_s".to_string(),
         "order".into(),
-        "crossing".into(),
+        "solution".into(),
+        "solutions".into(),
         "crossings".into(),
     ];
     for id in &opts.dynamic_nodes {
@@ -550,7 +589,8 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
             r.target_rad_s.to_string(),
             r.omega_rad_s.to_string(),
             r.order.to_string(),
-            r.crossing.to_string(),
+            r.solution.to_string(),
+            r.solutions.to_string(),
             r.crossings.to_string(),
         ];
         c.extend(r.amplitude_m.iter().map(|v| format!("{v:e}")));
@@ -578,4 +618,33 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
         out += &(c.join(",") + "\n");
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hb::Basis;
+
+    fn sol(mech: Vec<f64>, therm: Vec<f64>) -> HbSolution {
+        HbSolution {
+            omega: 400.0,
+            basis: Basis::integer(1).expect("basis"),
+            mech,
+            therm,
+            residual: ResidualNorms::default(),
+            relative_residual: ResidualNorms::default(),
+            iterations: 0,
+        }
+    }
+
+    #[test]
+    fn solutions_count_as_one_only_within_the_tolerance_of_each_field() {
+        let a = sol(vec![1e-5, 2e-5, -3e-5], vec![40.0, 0.1, 0.0]);
+        let close = sol(vec![1e-5, 2e-5, -3.002e-5], vec![40.01, 0.1, 0.0]);
+        assert!(same_solution(&a, &close));
+        let other_sheet = sol(vec![1e-5, 2e-5, -3.5e-5], vec![40.0, 0.1, 0.0]);
+        assert!(!same_solution(&a, &other_sheet));
+        let hotter = sol(vec![1e-5, 2e-5, -3e-5], vec![41.0, 0.1, 0.0]);
+        assert!(!same_solution(&a, &hotter));
+    }
 }

@@ -48,7 +48,7 @@ pub struct TruncationArgs {
     /// Thermal nodes (1-based), comma-separated.
     #[arg(long, default_value = "41,58")]
     pub thermal_nodes: String,
-    /// Report every solution on the branch at a target speed, not only the first.
+    /// Report every distinct solution on the branch at a target speed, not only the first.
     #[arg(long)]
     pub all_solutions: bool,
     /// Residual samples per period [default: 16 × the AFT's default].
