@@ -147,7 +147,9 @@ pub struct TruncationReport {
     /// Sorted by target speed, then order, then solution.
     pub rows: Vec<TruncationRow>,
     pub orders: Vec<OrderSummary>,
-    /// Crossings that could not be re-solved.
+    /// Crossings that could not be re-solved. When the first crossing of a speed is among
+    /// them, that speed has no row for the order (unless all solutions are listed, where
+    /// the numbering then counts the solutions found).
     pub missed: Vec<MissedCrossing>,
     /// `(order, ω)` of target speeds the branch never reached (it stopped early).
     pub unreached: Vec<(u32, f64)>,
@@ -319,6 +321,8 @@ pub fn run(
         // per target: crossings seen, and the distinct solutions in branch order
         let mut seen = vec![0usize; targets.len()];
         let mut found: Vec<Vec<HbSolution>> = vec![Vec::new(); targets.len()];
+        // the first crossing could not be solved: no later solution stands in for it
+        let mut first_missed = vec![false; targets.len()];
         let mut prev: Option<HbSolution> = None;
         let mut prog = TruncationProgress {
             order,
@@ -352,12 +356,15 @@ pub fn run(
                                     found[ti].push(s);
                                 }
                             }
-                            Err(reason) => missed.push(MissedCrossing {
-                                order,
-                                omega_rad_s: w,
-                                crossing: seen[ti],
-                                reason,
-                            }),
+                            Err(reason) => {
+                                first_missed[ti] |= found[ti].is_empty();
+                                missed.push(MissedCrossing {
+                                    order,
+                                    omega_rad_s: w,
+                                    crossing: seen[ti],
+                                    reason,
+                                });
+                            }
                         }
                     }
                     prog.points += 1;
@@ -380,12 +387,16 @@ pub fn run(
             unreached.push((order, w));
         }
         max_default_samples = max_default_samples.max(Aft::default_samples(&problem.basis));
-        let keep = if opts.all_solutions { usize::MAX } else { 1 };
         let sols = found
             .into_iter()
             .enumerate()
             .flat_map(|(ti, sols)| {
                 let (w, n, c) = (targets[ti], sols.len(), seen[ti]);
+                let keep = match (opts.all_solutions, first_missed[ti]) {
+                    (true, _) => usize::MAX,
+                    (false, false) => 1,
+                    (false, true) => 0,
+                };
                 sols.into_iter()
                     .take(keep)
                     .enumerate()
