@@ -22,7 +22,9 @@
 //! The driver that runs one sweep from study settings into a sink is [`sweep`]; several
 //! sweeps in parallel with a manifest are a [`campaign`], whose runs
 //! [`campaign::figures`] overlays in PNG figures drawn with the helpers of [`figure`]
-//! (shared with `replay plot`). The binaries (`tmrotor`, see [`cli`], and `replay`) are
+//! (shared with `replay plot`); the comparison of truncation orders with the residual of
+//! the governing equations (Eq. 36) is [`truncation`], and the paper's findings against a
+//! campaign are the [`report`]. The binaries (`tmrotor`, see [`cli`], and `replay`) are
 //! thin layers over these.
 //!
 //! Linear analyses of the assembled rotor (modes, Campbell diagram) live in [`linear`];
@@ -46,3 +48,4 @@ pub mod sweep;
 pub mod system;
 pub mod systems;
 pub mod thermal;
+pub mod truncation;

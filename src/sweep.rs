@@ -341,15 +341,14 @@ impl SweepProblem {
         })
     }
 
-    /// Runs the sweep, writing into `sink` as it goes, polling `interrupt` between steps
-    /// and calling `progress` after every step.
-    pub fn run(
-        &self,
-        sink: &mut dyn Sink,
-        interrupt: Option<Arc<AtomicBool>>,
-        mut progress: impl FnMut(&Progress),
-    ) -> Result<SweepReport, SweepError> {
-        let start = std::time::Instant::now();
+    /// The continuation this problem's sweep runs (settings' range, step limits, AFT
+    /// samples and the model's static start guess), with `stability` per point or none.
+    /// [`Self::run`] drives it into a sink; other drivers (the truncation study) step it
+    /// themselves.
+    pub fn continuation<'s>(
+        &'s self,
+        stability: Option<&'s dyn StabilityMethod>,
+    ) -> Result<Continuation<'s>, SweepError> {
         let s = &self.settings;
         let hb = HarmonicBalance::new(&self.system, &self.basis, s.aft_samples)?;
         let mut opts = ContinuationOptions::new(s.omega_start, s.omega_end);
@@ -362,13 +361,26 @@ impl SweepProblem {
         // (moduli to ~5e-4 at the default intervals), and each halving costs a Newton
         // solve plus a stability evaluation.
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
+        Ok(Continuation::new(hb, opts, stability)?)
+    }
+
+    /// Runs the sweep, writing into `sink` as it goes, polling `interrupt` between steps
+    /// and calling `progress` after every step.
+    pub fn run(
+        &self,
+        sink: &mut dyn Sink,
+        interrupt: Option<Arc<AtomicBool>>,
+        mut progress: impl FnMut(&Progress),
+    ) -> Result<SweepReport, SweepError> {
+        let start = std::time::Instant::now();
+        let s = &self.settings;
         let sip = GivingUp::new(if s.stability {
             stability_method(s, &self.system, s.omega_start)
         } else {
             Ok(Box::new(ExpSip::default()) as Box<dyn StabilityMethod>)
         });
         let stab: Option<&dyn StabilityMethod> = if s.stability { Some(&sip) } else { None };
-        let mut cont = Continuation::new(hb, opts, stab)?;
+        let mut cont = self.continuation(stab)?;
 
         sink.begin_run(&self.run)?;
         let mut prog = Progress::default();

@@ -215,3 +215,89 @@ fn stability_changes_exactly_at_the_folds_and_stable_amplitudes_match_time_integ
     }
     assert_eq!(checked, 4);
 }
+
+/// Amplitudes `a` of the single-harmonic frequency-response equation at `Ω`: the positive
+/// roots `u = a²` of `(¾k₃)² u³ + 2(1 − Ω²)(¾k₃) u² + ((1 − Ω²)² + (cΩ)²) u − F² = 0`,
+/// found by scanning for sign changes and bisecting.
+fn analytic_amplitudes(omega: f64) -> Vec<f64> {
+    let (c, k3, f) = (0.05_f64, 0.1_f64, 0.18_f64);
+    let (g, d) = (0.75 * k3, 1.0 - omega * omega);
+    let p = |u: f64| {
+        g * g * u.powi(3) + 2.0 * d * g * u * u + (d * d + (c * omega).powi(2)) * u - f * f
+    };
+    let n = 100_000;
+    let u_max = 25.0;
+    let mut roots = Vec::new();
+    for i in 0..n {
+        let (mut lo, mut hi) = (
+            u_max * i as f64 / n as f64,
+            u_max * (i + 1) as f64 / n as f64,
+        );
+        if p(lo) * p(hi) > 0.0 {
+            continue;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if p(lo) * p(mid) <= 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        roots.push((0.5 * (lo + hi)).sqrt());
+    }
+    roots
+}
+
+/// Inside the hysteresis interval the traced branch crosses a speed three times; the
+/// re-solve at exactly that speed between the bracketing points gives the three
+/// single-harmonic amplitudes, in the order of the branch (hardening: resonant branch
+/// first, then the unstable middle one, then the low one).
+#[test]
+fn solutions_at_a_speed_inside_the_hysteresis_interval_match_the_three_roots() {
+    use tmrotor::continuation::{StepOutcome, crosses};
+    use tmrotor::hb::HbSolution;
+    let target = 1.2;
+    let roots = analytic_amplitudes(target);
+    assert_eq!(
+        roots.len(),
+        3,
+        "Ω = {target} must lie in the hysteresis interval"
+    );
+    let sys = Duffing::default();
+    let basis = Basis::integer(1).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.5, 1.6);
+    opts.ds_max = 0.05;
+    opts.max_points = 100_000;
+    let mut cont = Continuation::new(hb, opts, None).expect("continuation");
+    let mut prev: Option<HbSolution> = None;
+    let mut found = Vec::new();
+    loop {
+        match cont.step().expect("step") {
+            StepOutcome::Accepted { point, .. } => {
+                let sol = point.solution;
+                if let Some(p) = &prev
+                    && crosses(p.omega, sol.omega, target)
+                {
+                    let s = cont.solve_between(p, &sol, target).expect("re-solves");
+                    assert_eq!(s.omega, target);
+                    let c = s.mech_coeffs(0);
+                    found.push((c[1] * c[1] + c[2] * c[2]).sqrt());
+                }
+                prev = Some(sol);
+            }
+            StepOutcome::Rejected(_) => {}
+            StepOutcome::Finished(_) => break,
+        }
+    }
+    assert_eq!(found.len(), 3, "crossings {found:?}");
+    let mut expected = roots.clone();
+    expected.sort_by(|a, b| b.total_cmp(a));
+    for (a, b) in found.iter().zip(&expected) {
+        assert!(
+            (a - b).abs() <= 1e-6 * b,
+            "found {found:?}, roots {expected:?}"
+        );
+    }
+}

@@ -7,6 +7,7 @@ pub mod model;
 pub mod modes;
 pub mod report;
 pub mod sweep;
+pub mod truncation;
 
 use clap::{Parser, Subcommand};
 
@@ -37,6 +38,9 @@ pub enum Command {
     /// The reproduction report (markdown) of a campaign directory: the paper's findings
     /// against the recordings.
     Report(report::ReportArgs),
+    /// Truncation study (paper Section 5.1): per order, amplitudes, temperatures and the
+    /// residual of the governing equations (Eq. 36) at points A–D.
+    Truncation(truncation::TruncationArgs),
 }
 
 /// Runs the parsed command line.
@@ -55,5 +59,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Report(args)) => report::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Truncation(args)) => truncation::run(&args, &mut std::io::stdout().lock()),
     }
 }

@@ -67,16 +67,7 @@ pub struct SweepArgs {
 impl SweepArgs {
     /// The settings these arguments describe.
     pub fn settings(&self) -> anyhow::Result<StudySettings> {
-        let mut s = match &self.study {
-            Some(path) => {
-                let text = std::fs::read_to_string(path)
-                    .with_context(|| format!("reading study file {}", path.display()))?;
-                toml::from_str::<StudySettings>(&text).map_err(|e| {
-                    anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end())
-                })?
-            }
-            None => StudySettings::default(),
-        };
+        let mut s = load_study(self.study.as_deref())?;
         if self.model.is_some() {
             s.model = self.model.clone();
         }
@@ -93,17 +84,7 @@ impl SweepArgs {
             s.order = v;
         }
         if let Some(r) = &self.omega {
-            let (a, b) = r
-                .split_once(':')
-                .ok_or_else(|| anyhow::anyhow!("--omega {r:?}: expected START:END in rad/s"))?;
-            s.omega_start = a
-                .trim()
-                .parse()
-                .map_err(|_| anyhow::anyhow!("--omega {r:?}: START is not a number"))?;
-            s.omega_end = b
-                .trim()
-                .parse()
-                .map_err(|_| anyhow::anyhow!("--omega {r:?}: END is not a number"))?;
+            (s.omega_start, s.omega_end) = parse_range("--omega", r)?;
         }
         if let Some(v) = self.ds_max {
             s.ds_max = v;
@@ -131,6 +112,35 @@ impl SweepArgs {
         }
         Ok(s)
     }
+}
+
+/// Study settings from a TOML file (keys of `StudySettings`), or the defaults.
+pub fn load_study(path: Option<&std::path::Path>) -> anyhow::Result<StudySettings> {
+    match path {
+        Some(path) => {
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("reading study file {}", path.display()))?;
+            toml::from_str::<StudySettings>(&text)
+                .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))
+        }
+        None => Ok(StudySettings::default()),
+    }
+}
+
+/// `START:END` in rad/s for option `option`.
+pub fn parse_range(option: &str, r: &str) -> anyhow::Result<(f64, f64)> {
+    let (a, b) = r
+        .split_once(':')
+        .ok_or_else(|| anyhow::anyhow!("{option} {r:?}: expected START:END in rad/s"))?;
+    let start = a
+        .trim()
+        .parse()
+        .map_err(|_| anyhow::anyhow!("{option} {r:?}: START is not a number"))?;
+    let end = b
+        .trim()
+        .parse()
+        .map_err(|_| anyhow::anyhow!("{option} {r:?}: END is not a number"))?;
+    Ok((start, end))
 }
 
 /// Runs the sweep and prints a summary.

@@ -28,6 +28,10 @@
 //! `bifurcation_tol_arclength`, classified with [`classify_crossing`], and emitted as a
 //! labelled point. One change per step is located (the first along the step).
 //!
+//! Solutions at given speeds (a truncation study at fixed ω, say): watch consecutive
+//! accepted points with [`crosses`] and re-solve on the speed with
+//! [`Continuation::solve_between`].
+//!
 //! The driver follows argmin's split: [`Continuation::step`] returns a [`StepOutcome`],
 //! [`Continuation::run`] loops and calls an observer per outcome.
 
@@ -132,10 +136,23 @@ pub enum ContinuationError {
         #[source]
         source: NewtonError,
     },
+    #[error("no solution at ω = {omega} rad/s between two branch points: {source}")]
+    Target {
+        omega: f64,
+        #[source]
+        source: NewtonError,
+    },
     #[error(transparent)]
     Hb(#[from] HbError),
     #[error(transparent)]
     Solve(#[from] SolveError),
+}
+
+/// Whether the branch segment from speed `from` to speed `to` crosses `omega`. Half-open,
+/// so that a crossing is counted once: a segment that ends exactly on `omega` crosses it,
+/// one that starts there does not.
+pub fn crosses(from: f64, to: f64, omega: f64) -> bool {
+    (from < omega && omega <= to) || (from > omega && omega >= to)
 }
 
 /// One point of a branch.
@@ -524,13 +541,7 @@ impl<'a> Continuation<'a> {
             // re-solve on the bound from the interpolation between the two points
             let wb = if omega < lo { lo } else { hi };
             let f = (wb - cur.omega) / (omega - cur.omega);
-            let guess: Vec<f64> = cur
-                .a
-                .iter()
-                .zip(&a)
-                .map(|(x0, x1)| x0 + f * (x1 - x0))
-                .collect();
-            match newton::solve_fixed(&self.hb, wb, &guess, &self.opts.newton) {
+            match self.solve_interpolated(&cur.a, cur.omega, &a, omega, wb) {
                 Ok((ab, st)) => {
                     arclength = cur.arclength + f * ds;
                     self.finish_after = Some(FinishReason::Bound { omega: wb });
@@ -630,6 +641,63 @@ impl<'a> Continuation<'a> {
         p.bifurcation = Some(kind);
         p.index = self.n_points;
         Some(p)
+    }
+
+    /// Newton at fixed `omega` from the linear interpolation (in ω) between `(a0, w0)`
+    /// and `(a1, w1)`.
+    fn solve_interpolated(
+        &self,
+        a0: &[f64],
+        w0: f64,
+        a1: &[f64],
+        w1: f64,
+        omega: f64,
+    ) -> Result<(Vec<f64>, newton::NewtonStats), NewtonError> {
+        let f = if w1 == w0 {
+            0.0
+        } else {
+            (omega - w0) / (w1 - w0)
+        };
+        let guess: Vec<f64> = a0
+            .iter()
+            .zip(a1)
+            .map(|(x0, x1)| x0 + f * (x1 - x0))
+            .collect();
+        newton::solve_fixed(&self.hb, omega, &guess, &self.opts.newton)
+    }
+
+    /// The solution at exactly `omega` on the branch segment between two consecutive
+    /// accepted solutions `from` and `to` whose speeds bracket it (see [`crosses`]): Newton
+    /// at fixed ω from their linear interpolation, the same re-solve the continuation uses
+    /// on the sweep bounds. Close to a fold, where the fixed-ω Jacobian is nearly
+    /// singular, it may fail; the error says so.
+    pub fn solve_between(
+        &self,
+        from: &HbSolution,
+        to: &HbSolution,
+        omega: f64,
+    ) -> Result<HbSolution, ContinuationError> {
+        let a0 = from.unknowns();
+        let a1 = to.unknowns();
+        for a in [&a0, &a1] {
+            if a.len() != self.hb.n_unknowns() {
+                return Err(ContinuationError::Hb(HbError::Dimension {
+                    what: "branch solution",
+                    expected: self.hb.n_unknowns(),
+                    got: a.len(),
+                }));
+            }
+        }
+        let (a, stats) = self
+            .solve_interpolated(&a0, from.omega, &a1, to.omega, omega)
+            .map_err(|source| ContinuationError::Target { omega, source })?;
+        Ok(HbSolution::from_unknowns(
+            omega,
+            self.hb.basis(),
+            self.hb.n_mech(),
+            &a,
+            &stats,
+        ))
     }
 
     /// Runs to the end, calling `observer` after every step.

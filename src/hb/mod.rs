@@ -10,12 +10,14 @@
 //! | [`LinearSolver`] | Newton systems with the linear DoFs condensed per harmonic |
 //! | [`newton`] | damped Newton with separate mechanical / thermal tests (Eq. 29) |
 //! | [`HbSolution`] | a converged periodic solution; amplitude helpers (Eq. 35) |
+//! | [`time_residual`] | residual of the governing equations on a fine time grid (Eq. 36) |
 pub mod aft;
 pub mod basis;
 pub mod condense;
 pub mod newton;
 pub mod residual;
 pub mod solution;
+pub mod time_residual;
 
 pub use aft::{Aft, AftError, Signal};
 pub use basis::{Basis, BasisError, Ratio};
@@ -23,3 +25,4 @@ pub use condense::{Border, LinearSolver, SolveError};
 pub use newton::{NewtonError, NewtonOptions, NewtonStats};
 pub use residual::{HarmonicBalance, HbError, JacobianParts, ResidualNorms};
 pub use solution::HbSolution;
+pub use time_residual::{ResidualStats, TimeResidual, time_domain_residual};

@@ -49,6 +49,12 @@ pub enum HbError {
         field: &'static str,
         indices: Vec<usize>,
     },
+    #[error("{field} DoF index {index} is out of range (the system has {n})")]
+    DofOutOfRange {
+        field: &'static str,
+        index: usize,
+        n: usize,
+    },
     #[error("non-finite {what} at ω = {omega} rad/s")]
     NonFinite { what: &'static str, omega: f64 },
 }

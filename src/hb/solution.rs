@@ -15,7 +15,8 @@ pub struct HbSolution {
     pub mech: Vec<f64>,
     /// Thermal coefficients, `n_therm` blocks of `1 + 2H`.
     pub therm: Vec<f64>,
-    /// Absolute 2-norms of the residual coefficients (paper Eq. 36).
+    /// Absolute 2-norms of the harmonic-balance residual coefficients (Eq. 36 projected
+    /// onto the basis; the time-domain residual is [`super::time_residual`]).
     pub residual: ResidualNorms,
     /// Normalised residuals `ε` of the convergence test ([`super::newton`]).
     pub relative_residual: ResidualNorms,
