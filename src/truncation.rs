@@ -195,6 +195,15 @@ pub fn check_options(
             "must be between 1 and 12",
         ));
     }
+    if settings.omega_end <= settings.omega_start {
+        return Err(option_error(
+            format!(
+                "range {}–{} rad/s",
+                settings.omega_start, settings.omega_end
+            ),
+            "the branch is traced upwards: the end must exceed the start",
+        ));
+    }
     if opts.omegas_rad_s.is_empty() {
         return Err(option_error(
             "speeds",

@@ -119,6 +119,16 @@ fn bad_command_line_input_names_the_option() {
             "{args:?}: {msg}"
         );
     }
+    // a downward study range (from a study file) is refused by the study itself
+    let down = StudySettings {
+        omega_start: 700.0,
+        omega_end: 300.0,
+        ..Default::default()
+    };
+    let msg = truncation::run(&down, &TruncationOptions::default(), |_| {})
+        .expect_err("downward")
+        .to_string();
+    assert!(msg.contains("traced upwards"), "{msg}");
     // a node the model does not have is reported by the study itself
     let settings = StudySettings {
         omega_start: 398.0,
