@@ -460,7 +460,19 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
     let _ = writeln!(s, "\n## Why results differ\n\n{NOTES}");
     if let Some(t) = truncation {
         let _ = writeln!(s, "\n## Truncation study (points A–D)\n");
-        let _ = writeln!(s, "{}", t.trim());
+        match truncation_rows(t) {
+            Ok(rows) => {
+                let _ = writeln!(s, "{}", truncation_table(&rows));
+            }
+            Err(e) => {
+                let _ = writeln!(s, "(truncation table not readable: {e})");
+            }
+        }
+        let _ = writeln!(
+            s,
+            "\nThe full study, with the 20 L/min run and the frequency content of the \
+             residual, is in [`truncation.md`](truncation.md)."
+        );
     }
     s
 }
@@ -502,3 +514,112 @@ these findings most:
   resonances bend over further in this model), so it has more saddle-nodes; Neimark–Sacker
   points appear from 2 L/min down and multiply at 1 L/min.
 ";
+
+/// One row of the truncation study's CSV (`tmrotor truncation --csv FILE`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TruncationRow {
+    pub target_rad_s: f64,
+    pub order: u32,
+    pub amplitude_node8_um: f64,
+    pub residual_node8_n: f64,
+    pub residual_mech_n: f64,
+    pub residual_therm_w: f64,
+}
+
+/// Parses the truncation study's CSV.
+pub fn truncation_rows(csv: &str) -> Result<Vec<TruncationRow>, String> {
+    let mut lines = csv.lines().filter(|l| !l.trim().is_empty());
+    let header: Vec<&str> = lines.next().ok_or("empty file")?.split(',').collect();
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| h.trim() == name)
+            .ok_or(format!("no column {name}"))
+    };
+    let (ct, co, ca, cr, cm, cth) = (
+        col("target_rad_s")?,
+        col("order")?,
+        col("amplitude_node8_m")?,
+        col("residual_node8_rms_n")?,
+        col("residual_mech_rms_n")?,
+        col("residual_therm_rms_w")?,
+    );
+    let mut rows = Vec::new();
+    for (n, line) in lines.enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        let num = |c: usize| -> Result<f64, String> {
+            f.get(c)
+                .and_then(|v| v.trim().parse::<f64>().ok())
+                .ok_or(format!(
+                    "line {}: column {} is not a number",
+                    n + 2,
+                    header[c]
+                ))
+        };
+        rows.push(TruncationRow {
+            target_rad_s: num(ct)?,
+            order: num(co)? as u32,
+            amplitude_node8_um: num(ca)? * 1e6,
+            residual_node8_n: num(cr)?,
+            residual_mech_n: num(cm)?,
+            residual_therm_w: num(cth)?,
+        });
+    }
+    Ok(rows)
+}
+
+/// Table of the node-8 residual by order per target speed, and the verdict on "falls
+/// with order up to 3" (non-increasing from order 1 to 3 within 1 %).
+pub fn truncation_table(rows: &[TruncationRow]) -> String {
+    let mut targets: Vec<f64> = rows.iter().map(|r| r.target_rad_s).collect();
+    targets.sort_by(f64::total_cmp);
+    targets.dedup();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| ω (rad/s) | node-8 residual RMS (N), orders 1 → 4 | node-8 amplitude (µm), orders 1 → 4 | falls up to order 3 |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|");
+    let mut falling = 0;
+    for &t in &targets {
+        let mut rs: Vec<&TruncationRow> = rows.iter().filter(|r| r.target_rad_s == t).collect();
+        rs.sort_by_key(|r| r.order);
+        let res: Vec<f64> = rs.iter().map(|r| r.residual_node8_n).collect();
+        let amp: Vec<f64> = rs.iter().map(|r| r.amplitude_node8_um).collect();
+        let upto3: Vec<f64> = rs
+            .iter()
+            .filter(|r| r.order <= 3)
+            .map(|r| r.residual_node8_n)
+            .collect();
+        let falls = upto3.len() >= 2 && upto3.windows(2).all(|w| w[1] <= 1.01 * w[0]);
+        falling += usize::from(falls);
+        let _ = writeln!(
+            s,
+            "| {t:.0} | {} | {} | {} |",
+            res.iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(" → "),
+            amp.iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(" → "),
+            if falls { "yes" } else { "no" }
+        );
+    }
+    let verdict = if falling == targets.len() {
+        "match"
+    } else if falling > 0 {
+        "partial"
+    } else {
+        "differs"
+    };
+    let _ = writeln!(
+        s,
+        "\nPaper: third-order truncation is converged, the residuals at A–D fall with order up \
+         to 3. Ours: the residual is non-increasing from order 1 to 3 at {falling} of {} \
+         speeds — **{verdict}**.",
+        targets.len()
+    );
+    s
+}

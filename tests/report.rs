@@ -51,15 +51,16 @@ flow_l_min = 2.0
     let fast = runs.iter().find(|r| r.name == "fast").expect("fast");
     let slow = runs.iter().find(|r| r.name == "slow").expect("slow");
     assert_eq!((fast.flow_l_min, slow.flow_l_min), (20.0, 2.0));
-    let md = markdown(
-        &runs,
-        "out",
-        Some("| order | residual |\n|---|---|\n| 1 | 1e-3 |"),
-    );
+    let csv = "target_rad_s,order,amplitude_node8_m,residual_node8_rms_n,residual_mech_rms_n,residual_therm_rms_w\n\
+               400,1,2e-6,8.0,9.0,1.0\n400,2,2e-6,5.0,6.0,1.0\n400,3,2e-6,4.0,5.0,1.0\n\
+               530,1,1e-5,200.0,210.0,1.0\n530,2,1e-5,250.0,260.0,1.0\n530,3,1e-5,100.0,110.0,1.0\n";
+    let md = markdown(&runs, "out", Some(csv));
     assert!(md.contains("| fast | 20 | 25 |"), "{md}");
     assert!(md.contains("| slow | 2 | 25 |"), "{md}");
     assert!(md.contains("At 20 L/min"), "{md}");
     assert!(md.contains("## Truncation study"), "{md}");
+    assert!(md.contains("| 400 | 8.000 → 5.000 → 4.000 | "), "{md}");
+    assert!(md.contains("at 1 of 2 speeds — **partial**"), "{md}");
 
     let err = campaign_findings(dir.path()).expect_err("no manifest there");
     assert!(err.to_string().contains("manifest.toml"), "{err}");

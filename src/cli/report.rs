@@ -15,7 +15,8 @@ pub struct ReportArgs {
     /// Output file; default: stdout.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Markdown of the truncation study to include (e.g. examples/truncation.md).
+    /// CSV of the truncation study (`tmrotor truncation --csv FILE`, e.g.
+    /// examples/truncation_q2.csv) to tabulate and judge.
     #[arg(long)]
     pub truncation: Option<PathBuf>,
 }
