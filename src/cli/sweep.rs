@@ -9,9 +9,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 use crate::record::{McapOptions, McapSink, install_interrupt_flag};
 use crate::sweep::{StudySettings, SweepProblem};
 
-/// Study parameters; every default is the paper's default study.
+/// The study flags shared by `tmrotor sweep` and `tmrotor truncation`: model, study file,
+/// flow rate and temperatures.
 #[derive(Debug, Clone, Args)]
-pub struct SweepArgs {
+pub struct StudyArgs {
     /// Model file (TOML); default: the built-in dual rotor (`tmrotor model show`).
     #[arg(long)]
     pub model: Option<PathBuf>,
@@ -27,6 +28,33 @@ pub struct SweepArgs {
     /// Ambient temperature (°C) [default: 25].
     #[arg(long = "ambient-temp", value_name = "C")]
     pub ambient_temp_c: Option<f64>,
+}
+
+impl StudyArgs {
+    /// The study file's settings (or the defaults) with these flags applied.
+    pub fn settings(&self) -> anyhow::Result<StudySettings> {
+        let mut s = load_study(self.study.as_deref())?;
+        if self.model.is_some() {
+            s.model = self.model.clone();
+        }
+        if let Some(v) = self.flow_l_min {
+            s.flow_l_min = v;
+        }
+        if let Some(v) = self.cooling_temp_c {
+            s.cooling_temp_c = v;
+        }
+        if let Some(v) = self.ambient_temp_c {
+            s.ambient_temp_c = v;
+        }
+        Ok(s)
+    }
+}
+
+/// Study parameters; every default is the paper's default study.
+#[derive(Debug, Clone, Args)]
+pub struct SweepArgs {
+    #[command(flatten)]
+    pub base: StudyArgs,
     /// Truncation order of the harmonic basis (paper Eq. 34) [default: 3].
     #[arg(long)]
     pub order: Option<u32>,
@@ -67,19 +95,7 @@ pub struct SweepArgs {
 impl SweepArgs {
     /// The settings these arguments describe.
     pub fn settings(&self) -> anyhow::Result<StudySettings> {
-        let mut s = load_study(self.study.as_deref())?;
-        if self.model.is_some() {
-            s.model = self.model.clone();
-        }
-        if let Some(v) = self.flow_l_min {
-            s.flow_l_min = v;
-        }
-        if let Some(v) = self.cooling_temp_c {
-            s.cooling_temp_c = v;
-        }
-        if let Some(v) = self.ambient_temp_c {
-            s.ambient_temp_c = v;
-        }
+        let mut s = self.base.settings()?;
         if let Some(v) = self.order {
             s.order = v;
         }

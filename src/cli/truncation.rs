@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use super::sweep::{load_study, parse_range};
+use super::sweep::{StudyArgs, parse_range};
 use crate::sweep::StudySettings;
 use crate::truncation::{self, TruncationOptions};
 
@@ -17,26 +17,15 @@ use crate::truncation::{self, TruncationOptions};
 /// rate of its truncation study.
 #[derive(Debug, Clone, Args)]
 pub struct TruncationArgs {
-    /// Model file (TOML); default: the built-in dual rotor.
-    #[arg(long)]
-    pub model: Option<PathBuf>,
-    /// Study settings file (TOML, keys of `StudySettings`); flags override it. Its
-    /// `order` is ignored (see --orders) and stability is not computed.
-    #[arg(long)]
-    pub study: Option<PathBuf>,
-    /// Lubricant flow rate per bearing q_l (L/min) [default: 2].
-    #[arg(long = "flow", value_name = "L_MIN")]
-    pub flow_l_min: Option<f64>,
-    /// Lubricant cooling temperature (°C) [default: 25].
-    #[arg(long = "cooling-temp", value_name = "C")]
-    pub cooling_temp_c: Option<f64>,
-    /// Ambient temperature (°C) [default: 25].
-    #[arg(long = "ambient-temp", value_name = "C")]
-    pub ambient_temp_c: Option<f64>,
+    /// Model, study file (its `order` is ignored, see --orders, and stability is not
+    /// computed), flow rate and temperatures.
+    #[command(flatten)]
+    pub base: StudyArgs,
     /// Range START:END (rad/s) traced from START for every order [default: 300:700].
     #[arg(long, value_name = "START:END")]
     pub range: Option<String>,
-    /// Truncation orders to compare, comma-separated.
+    /// Truncation orders to compare, comma-separated (a study file's `order` is ignored;
+    /// stability is not computed).
     #[arg(long, default_value = "1,2,3,4")]
     pub orders: String,
     /// Target speeds (rad/s), comma-separated; default: points A–D of the paper.
@@ -88,19 +77,7 @@ fn parse_list<T: std::str::FromStr>(
 impl TruncationArgs {
     /// Study settings and study options these arguments describe, checked.
     pub fn resolve(&self) -> anyhow::Result<(StudySettings, TruncationOptions)> {
-        let mut s = load_study(self.study.as_deref())?;
-        if self.model.is_some() {
-            s.model = self.model.clone();
-        }
-        if let Some(v) = self.flow_l_min {
-            s.flow_l_min = v;
-        }
-        if let Some(v) = self.cooling_temp_c {
-            s.cooling_temp_c = v;
-        }
-        if let Some(v) = self.ambient_temp_c {
-            s.ambient_temp_c = v;
-        }
+        let mut s = self.base.settings()?;
         if let Some(r) = &self.range {
             (s.omega_start, s.omega_end) = parse_range("--range", r)?;
             if s.omega_end <= s.omega_start {
