@@ -355,12 +355,20 @@ impl System for ReducedSystem<'_> {
 pub struct ReducedOrbit<'a> {
     inner: &'a dyn PeriodicOrbit,
     cb: &'a CraigBampton,
+    /// Full displacement and velocity at the last evaluation (reused: `state_at` runs
+    /// once per quadrature node or integrator stage).
+    full: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
 impl<'a> ReducedOrbit<'a> {
     /// Views `orbit` (of the full system) through `cb`.
     pub fn new(orbit: &'a dyn PeriodicOrbit, cb: &'a CraigBampton) -> Self {
-        Self { inner: orbit, cb }
+        let n = cb.n;
+        Self {
+            inner: orbit,
+            cb,
+            full: std::cell::RefCell::new((vec![0.0; n], vec![0.0; n])),
+        }
     }
 }
 
@@ -375,8 +383,9 @@ impl PeriodicOrbit for ReducedOrbit<'_> {
 
     fn state_at(&self, t: f64, x: &mut [f64], v: &mut [f64], temp: &mut [f64]) {
         let n = self.cb.n;
-        let (mut fx, mut fv) = (vec![0.0; n], vec![0.0; n]);
-        self.inner.state_at(t, &mut fx, &mut fv, temp);
+        let mut full = self.full.borrow_mut();
+        let (fx, fv) = &mut *full;
+        self.inner.state_at(t, fx, fv, temp);
         let r = self.cb.project.as_ref();
         for (k, (xo, vo)) in x.iter_mut().zip(v.iter_mut()).enumerate() {
             let (mut sx, mut sv) = (0.0, 0.0);
