@@ -169,6 +169,35 @@ impl Basis {
         2.0 * std::f64::consts::PI * f64::from(self.base_den) / omega
     }
 
+    /// `(w_h, sin w_h t, cos w_h t)` of every harmonic `h` at time `t` into `out` (resized):
+    /// the table [`Basis::eval_with`] reads, so that many coefficient sets evaluated at the
+    /// same `t` share one set of `sin_cos` calls.
+    pub fn trig_table(&self, omega: f64, t: f64, out: &mut Vec<(f64, f64, f64)>) {
+        out.clear();
+        out.extend(self.harmonics.iter().map(|r| {
+            let w = r.value() * omega;
+            let (s, c) = (w * t).sin_cos();
+            (w, s, c)
+        }));
+    }
+
+    /// [`Basis::eval`] with the harmonic values taken from a [`Basis::trig_table`].
+    #[inline]
+    pub fn eval_with(&self, coeffs: &[f64], trig: &[(f64, f64, f64)]) -> (f64, f64, f64) {
+        let nh = trig.len();
+        let mut x = coeffs[0];
+        let mut v = 0.0;
+        let mut a = 0.0;
+        for (h, &(w, s, c)) in trig.iter().enumerate() {
+            let (ac, bs) = (coeffs[1 + h], coeffs[1 + nh + h]);
+            let p = ac * c + bs * s;
+            x += p;
+            v += w * (-ac * s + bs * c);
+            a -= w * w * p;
+        }
+        (x, v, a)
+    }
+
     /// Evaluates `x(t)`, `ẋ(t)` and `ẍ(t)` of one DoF from its `1 + 2H` coefficients.
     pub fn eval(&self, coeffs: &[f64], omega: f64, t: f64) -> (f64, f64, f64) {
         let nh = self.harmonics.len();
@@ -227,6 +256,10 @@ mod tests {
         assert!((v - (-2.0 * w * (w * t).sin() + 6.0 * w * (2.0 * w * t).cos())).abs() < 1e-13);
         let a_ref = -2.0 * w * w * (w * t).cos() - 12.0 * w * w * (2.0 * w * t).sin();
         assert!((a - a_ref).abs() < 1e-12);
+        let mut trig = Vec::new();
+        b.trig_table(w, t, &mut trig);
+        let (xt, vt, at) = b.eval_with(&c, &trig);
+        assert!((xt - x).abs() < 1e-14 && (vt - v).abs() < 1e-13 && (at - a).abs() < 1e-12);
     }
 
     #[test]

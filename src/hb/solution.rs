@@ -128,17 +128,19 @@ impl PeriodicOrbit for HbSolution {
 
     fn state_at(&self, t: f64, x: &mut [f64], v: &mut [f64], temp: &mut [f64]) {
         let nc = self.basis.n_coeffs();
+        let mut trig = Vec::with_capacity(self.basis.n_harmonics());
+        self.basis.trig_table(self.omega, t, &mut trig);
         for (i, (xi, vi)) in x.iter_mut().zip(v.iter_mut()).enumerate() {
             let (p, d, _) = self
                 .basis
-                .eval(&self.mech[i * nc..(i + 1) * nc], self.omega, t);
+                .eval_with(&self.mech[i * nc..(i + 1) * nc], &trig);
             *xi = p;
             *vi = d;
         }
         for (i, ti) in temp.iter_mut().enumerate() {
             *ti = self
                 .basis
-                .eval(&self.therm[i * nc..(i + 1) * nc], self.omega, t)
+                .eval_with(&self.therm[i * nc..(i + 1) * nc], &trig)
                 .0;
         }
     }

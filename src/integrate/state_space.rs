@@ -286,46 +286,104 @@ impl<'a> StateSpace<'a> {
         }
     }
 
-    /// `ws.mixed = D S W`: gathers the rows `x_P`, `v_P`, `T_Q` of `w` and mixes them with
-    /// the pointwise derivatives in `derivs` (see the module docs).
-    fn mix(&self, derivs: &NonlinearEval, w: MatRef<'_, f64>, ws: &mut Workspace) {
-        let n = self.n;
+    /// Number of rows `S` gathers (`2p + q`: `x_P`, `v_P`, `T_Q`) and of columns `L` spreads
+    /// (`p + q`).
+    pub fn low_rank_dims(&self) -> (usize, usize) {
         let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
-        let c = w.ncols();
-        // D = [[df_dx, df_dv, df_dt], [dg_dx, dg_dv, dg_dt]], (p+q) × (2p+q).
+        (2 * p + q, p + q)
+    }
+
+    /// The pointwise derivative matrix
+    /// `D = [[∂f/∂x, ∂f/∂v, ∂f/∂T], [∂g/∂x, ∂g/∂v, ∂g/∂T]]`, `(p+q) × (2p+q)`, into `out`.
+    pub fn derivative_matrix(&self, derivs: &NonlinearEval, mut out: MatMut<'_, f64>) {
+        let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
         for i in 0..p {
             for j in 0..p {
-                ws.d_mat[(i, j)] = derivs.df_dx[i * p + j];
-                ws.d_mat[(i, p + j)] = derivs.df_dv[i * p + j];
+                out[(i, j)] = derivs.df_dx[i * p + j];
+                out[(i, p + j)] = derivs.df_dv[i * p + j];
             }
             for j in 0..q {
-                ws.d_mat[(i, 2 * p + j)] = derivs.df_dt[i * q + j];
+                out[(i, 2 * p + j)] = derivs.df_dt[i * q + j];
             }
         }
         for i in 0..q {
             for j in 0..p {
-                ws.d_mat[(p + i, j)] = derivs.dg_dx[i * p + j];
-                ws.d_mat[(p + i, p + j)] = derivs.dg_dv[i * p + j];
+                out[(p + i, j)] = derivs.dg_dx[i * p + j];
+                out[(p + i, p + j)] = derivs.dg_dv[i * p + j];
             }
             for j in 0..q {
-                ws.d_mat[(p + i, 2 * p + j)] = derivs.dg_dt[i * q + j];
+                out[(p + i, 2 * p + j)] = derivs.dg_dt[i * q + j];
             }
         }
-        if ws.gathered.ncols() != c {
-            ws.gathered = Mat::zeros(2 * p + q, c);
-            ws.mixed = Mat::zeros(p + q, c);
-        }
-        for col in 0..c {
+    }
+
+    /// `out = S W`: the rows `x_P`, `v_P`, `T_Q` of `w` (`d × c` → `(2p+q) × c`).
+    pub fn gather(&self, w: MatRef<'_, f64>, mut out: MatMut<'_, f64>) {
+        let n = self.n;
+        let p = self.dofs.mech.len();
+        for col in 0..w.ncols() {
             let wc = w.col(col);
             for (k, &i) in self.dofs.mech.iter().enumerate() {
-                ws.gathered[(k, col)] = wc[i];
-                ws.gathered[(p + k, col)] = wc[n + i];
+                out[(k, col)] = wc[i];
+                out[(p + k, col)] = wc[n + i];
             }
             for (k, &i) in self.dofs.therm.iter().enumerate() {
-                ws.gathered[(2 * p + k, col)] = wc[2 * n + i];
+                out[(2 * p + k, col)] = wc[2 * n + i];
             }
         }
-        if p + q > 0 {
+    }
+
+    /// `out += L Y` for `y` (`(p+q) × c`), `L = −[0; M⁻¹P, 0; 0, C_T⁻¹Q]` the columns that
+    /// spread the nonlinear terms (`out` is `d × c`).
+    pub fn spread_add(&self, y: MatRef<'_, f64>, out: MatMut<'_, f64>) {
+        let n = self.n;
+        let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
+        let (_, orest) = out.split_at_row_mut(n);
+        let (ov, ot) = orest.split_at_row_mut(n);
+        if p > 0 {
+            matmul(
+                ov,
+                Accum::Add,
+                self.minv_p.as_ref(),
+                y.subrows(0, p),
+                -1.0,
+                Par::Seq,
+            );
+        }
+        if q > 0 {
+            matmul(
+                ot,
+                Accum::Add,
+                self.ctinv_q.as_ref(),
+                y.subrows(p, q),
+                -1.0,
+                Par::Seq,
+            );
+        }
+    }
+
+    /// `K = S L` (`(2p+q) × (p+q)`): the gathered rows of the spreading columns, so that
+    /// `(L D S)ⁱ = L (D K)^{i−1} D S`.
+    pub fn gather_of_spread(&self) -> Mat<f64> {
+        let (g, r) = self.low_rank_dims();
+        let mut l = Mat::<f64>::zeros(self.dim(), r);
+        self.spread_add(Mat::<f64>::identity(r, r).as_ref(), l.as_mut());
+        let mut k = Mat::<f64>::zeros(g, r);
+        self.gather(l.as_ref(), k.as_mut());
+        k
+    }
+
+    /// `ws.mixed = D S W` for the derivatives in `derivs` (see the module docs).
+    fn mix(&self, derivs: &NonlinearEval, w: MatRef<'_, f64>, ws: &mut Workspace) {
+        let c = w.ncols();
+        self.derivative_matrix(derivs, ws.d_mat.as_mut());
+        let (g, r) = self.low_rank_dims();
+        if ws.gathered.ncols() != c {
+            ws.gathered = Mat::zeros(g, c);
+            ws.mixed = Mat::zeros(r, c);
+        }
+        self.gather(w, ws.gathered.as_mut());
+        if r > 0 {
             matmul(
                 ws.mixed.as_mut(),
                 Accum::Replace,
@@ -346,32 +404,9 @@ impl<'a> StateSpace<'a> {
         mut out: MatMut<'_, f64>,
         ws: &mut Workspace,
     ) {
-        let n = self.n;
-        let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
         self.mix(derivs, w, ws);
         out.fill(0.0);
-        let (_, orest) = out.split_at_row_mut(n);
-        let (mut ov, mut ot) = orest.split_at_row_mut(n);
-        if p > 0 {
-            matmul(
-                ov.as_mut(),
-                Accum::Replace,
-                self.minv_p.as_ref(),
-                ws.mixed.as_ref().subrows(0, p),
-                -1.0,
-                Par::Seq,
-            );
-        }
-        if q > 0 {
-            matmul(
-                ot.as_mut(),
-                Accum::Replace,
-                self.ctinv_q.as_ref(),
-                ws.mixed.as_ref().subrows(p, q),
-                -1.0,
-                Par::Seq,
-            );
-        }
+        self.spread_add(ws.mixed.as_ref(), out);
     }
 
     /// `out = B W` (or `out += alpha·B W` with `accumulate`), with `B` built from the

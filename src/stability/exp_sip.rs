@@ -30,7 +30,7 @@
 //! and `N` low-rank products; the columns are split over the rayon threads.
 
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par};
+use faer::{Accum, Mat, Par};
 
 use super::expm::expm;
 use super::sip::{
@@ -49,6 +49,20 @@ pub struct ExpSip {
     pub series_order: usize,
     /// Gauss–Legendre points per interval for the interval means (1..=5). Default 3.
     pub gauss_points: usize,
+    /// Which part of the orbit-mean state matrix is taken exactly. Default
+    /// [`MeanSplit::Coupled`].
+    pub mean_split: MeanSplit,
+}
+
+/// The constant part `B̄` of the splitting `B_k = B̄ + δB_k`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MeanSplit {
+    /// The whole orbit-mean state matrix (one dense `d × d` exponential).
+    #[default]
+    Coupled,
+    /// Its mechanical and thermal diagonal blocks only (two exponentials, `(2n)²` and
+    /// `m²`); the mean thermo-mechanical coupling joins the fluctuation.
+    Fields,
 }
 
 impl Default for ExpSip {
@@ -62,6 +76,7 @@ impl Default for ExpSip {
             intervals: 512,
             series_order: 4,
             gauss_points: 3,
+            mean_split: MeanSplit::Coupled,
         }
     }
 }
@@ -100,24 +115,43 @@ impl ExpSip {
         for m in &means {
             axpy_derivs(&mut mean, 1.0 / n_k as f64, m);
         }
+        if self.mean_split == MeanSplit::Fields {
+            // the mean coupling between the fields goes with the fluctuation
+            for c in [&mut mean.df_dt, &mut mean.dg_dx, &mut mean.dg_dv] {
+                c.iter_mut().for_each(|v| *v = 0.0);
+            }
+        }
         for m in &mut means {
             axpy_derivs(m, -1.0, &mean);
         }
         let b_bar = space.linearization_dense(&mean, &mut ws);
-        let half = Mat::from_fn(d, d, |i, j| 0.5 * delta * b_bar[(i, j)]);
-        let e_half = expm(&half).ok_or(StabilityError::NonFinite { omega })?;
-        let e_full = &e_half * &e_half;
-
+        let blocks: Vec<(usize, usize)> = match self.mean_split {
+            MeanSplit::Coupled => vec![(0, d)],
+            MeanSplit::Fields => {
+                let dm = 2 * space.n_mech();
+                [(0, dm), (dm, d)]
+                    .into_iter()
+                    .filter(|b| b.1 > b.0)
+                    .collect()
+            }
+        };
+        let mut e_half = Vec::with_capacity(blocks.len());
+        let mut e_full = Vec::with_capacity(blocks.len());
+        for &(r0, r1) in &blocks {
+            let len = r1 - r0;
+            let half = Mat::from_fn(len, len, |i, j| 0.5 * delta * b_bar[(r0 + i, r0 + j)]);
+            let eh = expm(&half).ok_or(StabilityError::NonFinite { omega })?;
+            e_full.push(&eh * &eh);
+            e_half.push(eh);
+        }
+        let factors = self.fluctuation_factors(&space, &means, delta);
+        let exps = Exponentials {
+            blocks: &blocks,
+            half: &e_half,
+            full: &e_full,
+        };
         let prod = by_column_blocks(d, |c0, c1| {
-            self.product_block(
-                &space,
-                &means,
-                delta,
-                e_half.as_ref(),
-                e_full.as_ref(),
-                c0,
-                c1,
-            )
+            Self::product_block(&space, &factors, &exps, c0, c1)
         });
         if !all_finite(prod.as_ref()) {
             return Err(StabilityError::NonFinite { omega });
@@ -125,42 +159,128 @@ impl ExpSip {
         Ok(prod)
     }
 
-    /// Columns `c0..c1` of the product.
-    #[allow(clippy::too_many_arguments)]
-    fn product_block(
+    /// `G_k` with `T_N(Δ L D_k S) = I + L G_k S` for every interval: since
+    /// `(L D S)ⁱ = L (D K)^{i−1} D S` with `K = S L`,
+    /// `G_k = [Σ_{i=1}^{N} Δⁱ/i! (D_k K)^{i−1}] D_k`, evaluated by Horner's scheme on
+    /// `(p+q) × (p+q)` matrices.
+    fn fluctuation_factors(
         &self,
         space: &StateSpace<'_>,
         fluctuations: &[NonlinearEval],
         delta: f64,
-        e_half: MatRef<'_, f64>,
-        e_full: MatRef<'_, f64>,
+    ) -> Vec<Mat<f64>> {
+        let (g, r) = space.low_rank_dims();
+        let k_mat = space.gather_of_spread();
+        let mut d_mat = Mat::<f64>::zeros(r, g);
+        let mut y = Mat::<f64>::zeros(r, r);
+        let mut h = Mat::<f64>::zeros(r, r);
+        let mut tmp = Mat::<f64>::zeros(r, r);
+        fluctuations
+            .iter()
+            .map(|fl| {
+                space.derivative_matrix(fl, d_mat.as_mut());
+                matmul(
+                    y.as_mut(),
+                    Accum::Replace,
+                    d_mat.as_ref(),
+                    k_mat.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                h.fill(0.0);
+                for i in 0..r {
+                    h[(i, i)] = 1.0;
+                }
+                for i in (2..=self.series_order).rev() {
+                    matmul(
+                        tmp.as_mut(),
+                        Accum::Replace,
+                        y.as_ref(),
+                        h.as_ref(),
+                        delta / i as f64,
+                        Par::Seq,
+                    );
+                    for j in 0..r {
+                        tmp[(j, j)] += 1.0;
+                    }
+                    std::mem::swap(&mut h, &mut tmp);
+                }
+                let mut gk = Mat::<f64>::zeros(r, g);
+                matmul(
+                    gk.as_mut(),
+                    Accum::Replace,
+                    h.as_ref(),
+                    d_mat.as_ref(),
+                    delta,
+                    Par::Seq,
+                );
+                gk
+            })
+            .collect()
+    }
+
+    /// Columns `c0..c1` of the product.
+    fn product_block(
+        space: &StateSpace<'_>,
+        factors: &[Mat<f64>],
+        exps: &Exponentials<'_>,
         c0: usize,
         c1: usize,
     ) -> Mat<f64> {
         let d = space.dim();
         let c = c1 - c0;
-        let mut ws = space.workspace();
-        let mut prod = e_half.subcols(c0, c).to_owned();
-        let (mut w, mut bw) = (Mat::<f64>::zeros(d, c), Mat::<f64>::zeros(d, c));
-        let last = fluctuations.len().saturating_sub(1);
-        for (k, fl) in fluctuations.iter().enumerate() {
-            // w = T_N(Δ δB_k) prod by Horner's scheme.
-            w.copy_from(&prod);
-            for i in (1..=self.series_order).rev() {
-                space.apply_nonlinear_part(fl, w.as_ref(), bw.as_mut(), &mut ws);
-                let s = delta / i as f64;
-                for col in 0..c {
-                    let (wc, bc, pc) = (w.col_mut(col), bw.col(col), prod.col(col));
-                    for (r, wv) in wc.iter_mut().enumerate() {
-                        *wv = pc[r] + s * bc[r];
-                    }
-                }
+        let (g, r) = space.low_rank_dims();
+        let mut prod = Mat::<f64>::zeros(d, c);
+        for (b, &(r0, r1)) in exps.blocks.iter().enumerate() {
+            // columns c0..c1 of the block-diagonal e^{ΔB̄/2}
+            let (lo, hi) = (c0.max(r0), c1.min(r1));
+            if lo < hi {
+                prod.as_mut()
+                    .submatrix_mut(r0, lo - c0, r1 - r0, hi - lo)
+                    .copy_from(exps.half[b].as_ref().subcols(lo - r0, hi - lo));
             }
-            let e = if k == last { e_half } else { e_full };
-            matmul(prod.as_mut(), Accum::Replace, e, w.as_ref(), 1.0, Par::Seq);
+        }
+        let mut w = Mat::<f64>::zeros(d, c);
+        let mut gathered = Mat::<f64>::zeros(g, c);
+        let mut mixed = Mat::<f64>::zeros(r, c);
+        let last = factors.len().saturating_sub(1);
+        for (k, gk) in factors.iter().enumerate() {
+            // w = T_N(Δ δB_k) prod = prod + L G_k S prod
+            w.copy_from(&prod);
+            if r > 0 {
+                space.gather(prod.as_ref(), gathered.as_mut());
+                matmul(
+                    mixed.as_mut(),
+                    Accum::Replace,
+                    gk.as_ref(),
+                    gathered.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                space.spread_add(mixed.as_ref(), w.as_mut());
+            }
+            let e = if k == last { exps.half } else { exps.full };
+            for (b, &(r0, r1)) in exps.blocks.iter().enumerate() {
+                matmul(
+                    prod.as_mut().subrows_mut(r0, r1 - r0),
+                    Accum::Replace,
+                    e[b].as_ref(),
+                    w.as_ref().subrows(r0, r1 - r0),
+                    1.0,
+                    Par::Seq,
+                );
+            }
         }
         prod
     }
+}
+
+/// The exponentials of the mean part, one per diagonal block of `B̄`.
+struct Exponentials<'e> {
+    /// Row (and column) ranges of the blocks.
+    blocks: &'e [(usize, usize)],
+    half: &'e [Mat<f64>],
+    full: &'e [Mat<f64>],
 }
 
 impl StabilityMethod for ExpSip {
