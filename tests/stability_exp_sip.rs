@@ -62,9 +62,10 @@ fn exp_sip_matches_the_variational_equations_on_the_duffing_resonance() {
         .multipliers(&sys, &orbit)
         .expect("variational")
         .multipliers;
-    let err = |n: usize| {
+    let err_with = |n: usize, extrapolate: bool| {
         let m = ExpSip {
             intervals: n,
+            extrapolate,
             ..ExpSip::default()
         }
         .multipliers(&sys, &orbit)
@@ -72,9 +73,10 @@ fn exp_sip_matches_the_variational_equations_on_the_duffing_resonance() {
         .multipliers;
         matched_distance(&m, &reference, 2)
     };
+    // The plain product is second order: halving Δ divides the error by about 4…
+    let err = |n: usize| err_with(n, false);
     let (e256, e512, e1024) = (err(256), err(512), err(1024));
     assert!(e1024 < 1e-4, "error at 1024 intervals {e1024:e}");
-    // Second order: halving Δ divides the error by about 4.
     for (coarse, fine) in [(e256, e512), (e512, e1024)] {
         let ratio = coarse / fine;
         assert!(
@@ -82,6 +84,9 @@ fn exp_sip_matches_the_variational_equations_on_the_duffing_resonance() {
             "error ratio {ratio} ({coarse:e} → {fine:e})"
         );
     }
+    // …so the extrapolation from 1024 and 512 removes most of it.
+    let ex = err_with(1024, true);
+    assert!(ex < e1024 / 4.0, "extrapolated {ex:e} vs plain {e1024:e}");
 }
 
 struct DualRotorPoint {
@@ -137,11 +142,15 @@ fn dual_rotor_reduced_stability_agrees_with_the_full_model_and_a_second_method()
         other => panic!("expected a stiffness refusal, got {other:?}"),
     }
 
-    // Full model, exponential split (210 states).
-    let full_all = ExpSip::default()
-        .multipliers(sys, orbit)
-        .expect("full")
-        .multipliers;
+    // Full model, exponential split (210 states). Both products on 4096 intervals: the
+    // full model's stiffer boundary modes give it a different discretisation error, and
+    // the reduced–full distance at the default cut-off falls with the intervals (measured
+    // 3.3e-4, 2.6e-4, 1.3e-4 at 1024, 2048, 4096) towards the reduction error itself.
+    let product = ExpSip {
+        intervals: 4096,
+        ..ExpSip::default()
+    };
+    let full_all = product.multipliers(sys, orbit).expect("full").multipliers;
     assert_eq!(full_all.len(), 2 * sys.n_mech() + sys.n_therm());
     let full = mechanical(sys, orbit, &full_all);
 
@@ -158,7 +167,7 @@ fn dual_rotor_reduced_stability_agrees_with_the_full_model_and_a_second_method()
         .expect("reduction");
         let rs = cb.system(sys).expect("reduced system");
         let view = ReducedOrbit::new(orbit, &cb);
-        let all = ExpSip::default()
+        let all = product
             .multipliers(&rs, &view)
             .expect("reduced")
             .multipliers;
@@ -218,7 +227,7 @@ fn dual_rotor_reduced_exp_sip_matches_the_variational_equations() {
         v
     };
     // Moduli (what the stable flag reads) are accurate already at the default count
-    // (measured 1.2e-4 at 512 intervals)…
+    // (measured 6.1e-5 at the default, 1024 intervals extrapolated with 512)…
     let by_exp = at(ExpSip::default().intervals);
     let (me, mv) = (moduli(&by_exp.multipliers), moduli(&by_var.multipliers));
     let dm = me
@@ -230,7 +239,8 @@ fn dual_rotor_reduced_exp_sip_matches_the_variational_equations() {
     assert!(dm < 3e-4, "multiplier moduli differ by {dm:e}");
     // …and the multipliers themselves (their phases converge more slowly, and not cleanly
     // at second order: the bearing stiffness has kinks where balls lose contact) approach
-    // the variational ones as the intervals are refined (measured 3.7e-3, 8.1e-4, 4.0e-4).
+    // the variational ones as the intervals are refined (measured 3.7e-3, 1.9e-4, 1.7e-4
+    // extrapolated).
     let errs: Vec<f64> = [1024, 2048, 4096]
         .iter()
         .map(|&n| matched_distance(&at(n).multipliers, &by_var.multipliers, 8))
@@ -270,4 +280,49 @@ fn exp_sip_matches_the_variational_equations_with_thermal_coupling() {
         d < 1e-4,
         "ExpSip vs variational with thermal coupling: {d:e}"
     );
+}
+
+/// The sweep's default stability method on a strongly parametric orbit: the coupled dual
+/// rotor (2 L/min, 25 °C) at ω = 500 rad/s on the branch reached from 440 rad/s. The
+/// bearing stiffness changes with every rolling-element pass while the bearing-local modes
+/// are stiff, so the product needs fine intervals here: the reference (the variational
+/// equations on the same reduced model, Dormand–Prince, rtol 1e-6) has one real
+/// multiplier of modulus 1.320 (measured 1.31994; 1.31999 at rtol 1e-9), which a plain
+/// product on 256 intervals misses entirely.
+#[test]
+fn sweep_default_stability_matches_the_variational_equations_on_an_unstable_orbit() {
+    use tmrotor::sweep::{StudySettings, SweepProblem, stability_method};
+    let settings = StudySettings::default();
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let (sys, basis) = (&problem.system, &problem.basis);
+    let hb = HarmonicBalance::new(sys, basis, None).expect("hb");
+    let a0 = sys.initial_guess(basis.n_coeffs());
+    let opts = NewtonOptions::default();
+    let (a440, _) = newton::solve_fixed(&hb, 440.0, &a0, &opts).expect("440 rad/s");
+    let (a, stats) = newton::solve_fixed(&hb, 500.0, &a440, &opts).expect("500 rad/s");
+    let orbit = HbSolution::from_unknowns(500.0, basis, sys.n_mech(), &a, &stats);
+
+    let method = stability_method(&settings, sys, 500.0).expect("sweep default method");
+    let got = method.multipliers(sys, &orbit).expect("default method");
+    let cb = CraigBampton::new(sys, 500.0, ReductionSettings::default()).expect("reduction");
+    let reference = Reduced {
+        reduction: cb,
+        method: Variational {
+            rtol: 1e-6,
+            atol: 1e-9,
+        },
+    }
+    .multipliers(sys, &orbit)
+    .expect("variational");
+    let top = |m: &[Complex64]| m.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    let (g, r) = (top(&got.multipliers), top(&reference.multipliers));
+    assert!(r > 1.3, "reference: unstable multiplier expected, got {r}");
+    assert!(
+        (g - r).abs() < 5e-3,
+        "default method {g} vs variational {r}"
+    );
+    assert!(!got.stable && !reference.stable);
+    // the largest 40 (the 66 thermal ones lie between 0.84 and 1)
+    let d = matched_distance(&got.multipliers, &reference.multipliers, 40);
+    assert!(d < 5e-3, "largest 40 multipliers: distance {d:e}");
 }
