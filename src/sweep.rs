@@ -106,6 +106,12 @@ impl Default for StudySettings {
 /// Bisection tolerance (scaled arclength) for locating bifurcations in a sweep.
 pub const BIFURCATION_TOL_ARCLENGTH: f64 = 1e-4;
 
+/// Crossing-multiplier modulus tolerance for locating bifurcations in a sweep: the search
+/// stops when the crossing multiplier is within 1e-4 of the unit circle, below the
+/// accuracy of the default product on the dual rotor (3e-3 on an unstable multiplier,
+/// see [`ExpSip::default`]).
+pub const BIFURCATION_TOL_MODULUS: f64 = 1e-4;
+
 /// Default SIP intervals per period of a sweep: [`ExpSip`]'s default, 1024 extrapolated
 /// with 512 (the reason, with the measured errors, is on [`ExpSip::default`]).
 pub const DEFAULT_INTERVALS: usize = 1024;
@@ -356,6 +362,7 @@ impl SweepProblem {
         // (moduli to ~5e-4 at the default intervals), and each halving costs a Newton
         // solve plus a stability evaluation.
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
+        opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
         Ok(Continuation::new(hb, opts, stability)?)
     }
 

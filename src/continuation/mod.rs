@@ -23,10 +23,12 @@
 //!
 //! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
 //! [`HbSolution`]. When the number of multipliers outside the unit circle differs between
-//! neighbours, the change is located by bisection in arclength (re-correcting from the
-//! earlier point at intermediate arclength) until the bracket is shorter than
-//! `bifurcation_tol_arclength`, classified with [`classify_crossing`], and emitted as a
-//! labelled point. One change per step is located (the first along the step).
+//! neighbours, the change is located in arclength (re-correcting from the earlier point at
+//! intermediate arclength) by a safeguarded regula falsi (Illinois) on the modulus of the
+//! crossing multiplier, until the bracket is shorter than `bifurcation_tol_arclength` or
+//! that modulus is within `bifurcation_tol_modulus` of the circle; it is classified with
+//! [`classify_crossing`] and emitted as a labelled point. One change per step is located
+//! (the first along the step).
 //!
 //! Solutions at given speeds (a truncation study at fixed ω, say): watch consecutive
 //! accepted points with [`crosses`] and re-solve on the speed with
@@ -41,7 +43,9 @@ use thiserror::Error;
 
 use crate::hb::newton::{self, ArcConstraint, NewtonError, NewtonOptions};
 use crate::hb::{HarmonicBalance, HbError, HbSolution, LinearSolver, SolveError, condense::Border};
-use crate::stability::{BifurcationKind, FloquetResult, StabilityMethod, classify_crossing};
+use crate::stability::{
+    BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL, classify_crossing,
+};
 
 /// Continuation settings. Every default is given in the field's doc.
 #[derive(Clone, Debug)]
@@ -86,10 +90,14 @@ pub struct ContinuationOptions {
     /// separation away and is rejected when that exceeds the bound. Default 1.0 (a turn of
     /// about 115° within one step, beyond the 60° tangent check on smooth branches).
     pub max_corrector_distance: f64,
-    /// Bisection stops when the arclength bracket is shorter than this (scaled units,
-    /// default 1e-6).
+    /// The crossing search stops when the arclength bracket is shorter than this (scaled
+    /// units, default 1e-6).
     pub bifurcation_tol_arclength: f64,
-    /// Maximum bisection steps per located bifurcation (default 60).
+    /// The crossing search also stops once the crossing multiplier's modulus is within
+    /// this of the unit circle (default 0: off). Worth setting to the accuracy of the
+    /// stability method: further steps only move the point within that error.
+    pub bifurcation_tol_modulus: f64,
+    /// Maximum search steps per located bifurcation (default 60).
     pub max_bisections: usize,
     /// Start guess for Newton at `omega_start` (all coefficients); default `None`: zero
     /// coefficients, whose first Newton iterate is the linear response. Systems without
@@ -115,6 +123,7 @@ impl ContinuationOptions {
             scale_per_dof: false,
             max_corrector_distance: 1.0,
             bifurcation_tol_arclength: 1e-6,
+            bifurcation_tol_modulus: 0.0,
             max_bisections: 60,
             initial_guess: None,
         }
@@ -614,27 +623,62 @@ impl<'a> Continuation<'a> {
         f_b: &FloquetResult,
     ) -> Option<BranchPoint> {
         let n_a = f_a.unstable_count();
+        // The crossing multiplier: the k-th largest modulus, k = min(n_a, n_b) + 1, is
+        // inside the circle at one end and outside at the other; g(s) = |μ_(k)(s)| − (1 +
+        // tol) is continuous in the arclength s and changes sign on the bracket.
+        let k = n_a.min(f_b.unstable_count());
+        let g = |f: &FloquetResult| {
+            let mut m: Vec<f64> = f.multipliers.iter().map(|c| c.norm()).collect();
+            m.sort_by(|x, y| y.total_cmp(x));
+            m.get(k).map_or(0.0, |v| v - (1.0 + UNIT_CIRCLE_TOL))
+        };
         let (mut lo, mut hi) = (0.0, span);
+        let (mut g_lo, mut g_hi) = (g(f_a), g(f_b));
         let (mut f_lo, mut f_hi) = (f_a.clone(), f_b.clone());
+        // which end was kept last (−1 lo, +1 hi), for the Illinois modification
+        let mut kept = 0i8;
         let mut best: Option<BranchPoint> = None;
         for _ in 0..self.opts.max_bisections {
-            if hi - lo <= self.opts.bifurcation_tol_arclength {
+            let width = hi - lo;
+            if width <= self.opts.bifurcation_tol_arclength {
                 break;
             }
-            let mid = 0.5 * (lo + hi);
+            // regula falsi on g, kept at least a tenth of the bracket from either end
+            // (bisection when g gives no usable slope)
+            let guard = 0.1 * width;
+            let mid = if g_lo.is_finite() && g_hi.is_finite() && g_lo != g_hi {
+                (lo - g_lo * width / (g_hi - g_lo)).clamp(lo + guard, hi - guard)
+            } else {
+                0.5 * (lo + hi)
+            };
             let Ok((a, w, st)) = self.correct(cur, mid) else {
                 break;
             };
             let p = self.make_point(&a, w, &st, cur.arclength + mid);
             let Some(fm) = p.stability.clone() else { break };
+            let g_mid = g(&fm);
             if fm.unstable_count() == n_a {
                 lo = mid;
+                g_lo = g_mid;
                 f_lo = fm;
+                if kept == 1 {
+                    g_hi *= 0.5;
+                }
+                kept = 1;
             } else {
                 hi = mid;
+                g_hi = g_mid;
                 f_hi = fm;
+                if kept == -1 {
+                    g_lo *= 0.5;
+                }
+                kept = -1;
             }
             best = Some(p);
+            // the crossing is found to the accuracy the multipliers themselves have
+            if g_mid.abs() <= self.opts.bifurcation_tol_modulus {
+                break;
+            }
         }
         let kind = classify_crossing(&f_lo, &f_hi)?;
         let mut p = best?;
