@@ -224,53 +224,61 @@ impl ExpSip {
         fluctuations: &[NonlinearEval],
         delta: f64,
     ) -> Vec<Mat<f64>> {
+        use rayon::prelude::*;
         let (g, r) = space.low_rank_dims();
         let k_mat = space.gather_of_spread();
-        let mut d_mat = Mat::<f64>::zeros(r, g);
-        let mut y = Mat::<f64>::zeros(r, r);
-        let mut h = Mat::<f64>::zeros(r, r);
-        let mut tmp = Mat::<f64>::zeros(r, r);
-        fluctuations
-            .iter()
-            .map(|fl| {
-                space.derivative_matrix(fl, d_mat.as_mut());
+        let factor = |bufs: &mut [Mat<f64>; 4], fl: &NonlinearEval| {
+            let [d_mat, y, h, tmp] = bufs;
+            space.derivative_matrix(fl, d_mat.as_mut());
+            matmul(
+                y.as_mut(),
+                Accum::Replace,
+                d_mat.as_ref(),
+                k_mat.as_ref(),
+                1.0,
+                Par::Seq,
+            );
+            h.fill(0.0);
+            for i in 0..r {
+                h[(i, i)] = 1.0;
+            }
+            for i in (2..=self.series_order).rev() {
                 matmul(
-                    y.as_mut(),
+                    tmp.as_mut(),
                     Accum::Replace,
-                    d_mat.as_ref(),
-                    k_mat.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                h.fill(0.0);
-                for i in 0..r {
-                    h[(i, i)] = 1.0;
-                }
-                for i in (2..=self.series_order).rev() {
-                    matmul(
-                        tmp.as_mut(),
-                        Accum::Replace,
-                        y.as_ref(),
-                        h.as_ref(),
-                        delta / i as f64,
-                        Par::Seq,
-                    );
-                    for j in 0..r {
-                        tmp[(j, j)] += 1.0;
-                    }
-                    std::mem::swap(&mut h, &mut tmp);
-                }
-                let mut gk = Mat::<f64>::zeros(r, g);
-                matmul(
-                    gk.as_mut(),
-                    Accum::Replace,
+                    y.as_ref(),
                     h.as_ref(),
-                    d_mat.as_ref(),
-                    delta,
+                    delta / i as f64,
                     Par::Seq,
                 );
-                gk
-            })
+                for j in 0..r {
+                    tmp[(j, j)] += 1.0;
+                }
+                std::mem::swap(h, tmp);
+            }
+            let mut gk = Mat::<f64>::zeros(r, g);
+            matmul(
+                gk.as_mut(),
+                Accum::Replace,
+                h.as_ref(),
+                d_mat.as_ref(),
+                delta,
+                Par::Seq,
+            );
+            gk
+        };
+        let buffers = || {
+            [
+                Mat::<f64>::zeros(r, g),
+                Mat::<f64>::zeros(r, r),
+                Mat::<f64>::zeros(r, r),
+                Mat::<f64>::zeros(r, r),
+            ]
+        };
+        fluctuations
+            .par_iter()
+            .with_min_len(32)
+            .map_init(buffers, factor)
             .collect()
     }
 

@@ -189,8 +189,9 @@ fn inf_norm_product(s: MatRef<'_, f64>, d: &[f64], c: usize) -> f64 {
 
 /// Eq. 32: interval means of the time-varying part (the pointwise derivatives) over
 /// `intervals` intervals of length `delta`, by Gauss–Legendre with `nodes`/`weights` on
-/// [−1, 1] (sequential: the orbit need not be shareable between threads; this is the cheap
-/// part).
+/// [−1, 1]. The orbit is sampled sequentially (it need not be shareable between threads;
+/// that is the cheap part), the nonlinear derivatives at the samples are evaluated on the
+/// rayon threads.
 pub(crate) fn interval_means(
     space: &StateSpace<'_>,
     sampler: &mut OrbitSampler<'_>,
@@ -200,19 +201,37 @@ pub(crate) fn interval_means(
     weights: &[f64],
     ws: &mut Workspace,
 ) -> Vec<NonlinearEval> {
-    let mut means = Vec::with_capacity(intervals);
-    for k in 0..intervals {
+    use rayon::prelude::*;
+    let (n, m) = (space.n_mech(), space.n_therm());
+    let width = 2 * n + m;
+    let per = nodes.len();
+    let time = |k: usize, j: usize| k as f64 * delta + 0.5 * delta * (1.0 + nodes[j]);
+    let mut states = vec![0.0; intervals * per * width];
+    for (i, y) in states.chunks_exact_mut(width).enumerate() {
+        let (x, rest) = y.split_at_mut(n);
+        let (v, temp) = rest.split_at_mut(n);
+        sampler.orbit.state_at(time(i / per, i % per), x, v, temp);
+    }
+    let mean_of = |k: usize, ws: &mut Workspace| {
         let mut mean = ws.eval.clone();
         mean.clear();
-        let t_start = k as f64 * delta;
-        for (&xi, &wi) in nodes.iter().zip(weights) {
-            let t = t_start + 0.5 * delta * (1.0 + xi);
-            sampler.eval(space, t, ws);
+        for (j, &wi) in weights.iter().enumerate() {
+            let y = &states[(k * per + j) * width..(k * per + j + 1) * width];
+            let (x, rest) = y.split_at(n);
+            let (v, temp) = rest.split_at(n);
+            space.eval_nonlinear_at(time(k, j), x, v, temp, ws);
             axpy_derivs(&mut mean, 0.5 * wi, &ws.eval);
         }
-        means.push(mean);
+        mean
+    };
+    if intervals >= 64 && rayon::current_num_threads() > 1 {
+        (0..intervals)
+            .into_par_iter()
+            .map_init(|| space.workspace(), |w, k| mean_of(k, w))
+            .collect()
+    } else {
+        (0..intervals).map(|k| mean_of(k, ws)).collect()
     }
-    means
 }
 
 /// Evaluates the orbit and the nonlinear derivatives at `t` into `ws.eval`.
