@@ -112,9 +112,10 @@ pub const BIFURCATION_TOL_ARCLENGTH: f64 = 1e-4;
 /// see [`ExpSip::default`]).
 pub const BIFURCATION_TOL_MODULUS: f64 = 1e-4;
 
-/// Default SIP intervals per period of a sweep: [`ExpSip`]'s default, 1024 extrapolated
-/// with 512 (the reason, with the measured errors, is on [`ExpSip::default`]).
-pub const DEFAULT_INTERVALS: usize = 1024;
+/// Default SIP intervals per period of a sweep: [`ExpSip`]'s default, 512 extrapolated
+/// with 256 and refined up to 4096 intervals near the unit circle (the reason, with the
+/// measured errors, is on [`ExpSip::default`]).
+pub const DEFAULT_INTERVALS: usize = 512;
 
 /// Which Floquet method a sweep uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]

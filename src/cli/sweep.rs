@@ -77,7 +77,8 @@ pub struct SweepArgs {
     /// explicit product, Eq. 33; refuses stiff models).
     #[arg(long, value_name = "METHOD", value_parser = ["exp-sip", "sip"])]
     pub stability_method: Option<String>,
-    /// SIP intervals per period (exp-sip: the fine product, extrapolated with half as many) [default: 1024].
+    /// SIP intervals per period (exp-sip: the start, extrapolated with half as many and
+    /// doubled up to 4096 where a multiplier is close to the unit circle) [default: 512].
     #[arg(long, value_name = "N")]
     pub sip_intervals: Option<usize>,
     /// Cut-off (rad/s) of the Craig–Bampton reduction used for stability; 0 = full model
