@@ -7,14 +7,15 @@
 //! stability change how they left the unit circle: through +1 (saddle-node / fold),
 //! through −1 (period doubling) or as a complex pair (Neimark–Sacker).
 //!
-//! Methods (both implement [`StabilityMethod`] on any [`System`] + [`PeriodicOrbit`]):
+//! Methods (all implement [`StabilityMethod`] on any [`System`] + [`PeriodicOrbit`]):
 //!
 //! | method | what | default settings | accuracy (measured) |
 //! |---|---|---|---|
 //! | [`Sip`] | paper Eqs. 30–33: product of truncated exponential series of interval means | 256 intervals (more when `P·ρ(B)` needs them), order 4, 3 Gauss points | `O(Δ²)`; 2e-7…6e-4 on the reference oscillators at 256 intervals (largest on strongly nonlinear orbits), exponent 0 of the Hill problem to 1e-8; opt-in extrapolation `O(Δ⁴)` |
 //! | [`Variational`] | `Φ̇ = B(t)Φ` over one period with Dormand–Prince 5(4) | `rtol` 1e-10, `atol` 1e-12 | ~1e-11 against shooting |
+//! | [`ExpSip`] | SIP with the orbit-mean state matrix's field blocks taken exactly, the low-rank fluctuation through the series; Richardson-extrapolated, refined near the unit circle | 512 intervals (with 256), doubled up to 4096 while a multiplier is within twice its error estimate of the circle, order 4, 2 Gauss points | `O(Δ²)` plain; on the dual rotor's unstable orbit at 500 rad/s 3e-3 against the variational equations (the sweep default, on a [`Reduced`] model) |
 //!
-//! Both build `B(t)` from [`crate::integrate::StateSpace`]: mechanical block
+//! All build `B(t)` from [`crate::integrate::StateSpace`]: mechanical block
 //! `[[0, I], [−M⁻¹(K + ∂f/∂x), −M⁻¹(C + ∂f/∂v)]]`, thermal block `−C_T⁻¹(K_T + ∂g/∂T)` and
 //! the coupling blocks `−M⁻¹ ∂f/∂T`, `−C_T⁻¹ ∂g/∂x`, `−C_T⁻¹ ∂g/∂v`, applied in factored
 //! form (constant part + low-rank part on the nonlinear DoFs). Cost of one evaluation on a

@@ -2,7 +2,7 @@
 //!
 //! Why: the monodromy matrix of a finite-element rotor is dominated, in cost, by modes far
 //! above anything the orbit excites. Short Timoshenko elements with stiffness-proportional
-//! damping put eigenvalues of `B(t)` at `10⁶…10⁷ 1/s`; the explicit SIP product ([`Sip`],
+//! damping put eigenvalues of `B(t)` at `10⁶…10⁷ 1/s`; the explicit SIP product ([`super::Sip`],
 //! paper Eqs. 32–33) must keep `Δ·ρ(B) ≲ 1` and would need ~`10⁷` intervals per period on
 //! the built-in dual rotor. Those modes are stable, heavily damped and play no part in a
 //! bifurcation of the orbit; the nonlinearity acts only on the few bearing DoFs.
