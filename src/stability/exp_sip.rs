@@ -413,3 +413,30 @@ fn clear_of_the_circle(mu: &[Complex64], mu_fine: &[Complex64]) -> bool {
         (m.norm() - 1.0).abs() > 2.0 * est
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c(re: f64, im: f64) -> Complex64 {
+        Complex64::new(re, im)
+    }
+
+    #[test]
+    fn refinement_is_asked_for_only_near_the_circle() {
+        // thermal multipliers just below +1, known to 1e-8, and damped mechanical ones
+        let fine = [c(0.999_995, 0.0), c(0.6, 0.3), c(0.01, 0.0)];
+        let ext = [c(0.999_995 + 1e-8, 0.0), c(0.62, 0.31), c(0.011, 0.0)];
+        assert!(clear_of_the_circle(&ext, &fine));
+        // an unstable multiplier whose estimate is larger than its distance to the circle
+        let fine = [c(1.07, 0.0), c(0.999_995, 0.0)];
+        let ext = [c(1.20, 0.0), c(0.999_995, 0.0)];
+        assert!(!clear_of_the_circle(&ext, &fine));
+        // …and the same once the estimate has shrunk
+        let fine = [c(1.256, 0.0), c(0.999_995, 0.0)];
+        let ext = [c(1.317, 0.0), c(0.999_995, 0.0)];
+        assert!(clear_of_the_circle(&ext, &fine));
+        // small multipliers never ask for refinement
+        assert!(clear_of_the_circle(&[c(0.3, 0.0)], &[c(0.1, 0.0)]));
+    }
+}
