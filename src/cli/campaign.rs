@@ -17,7 +17,7 @@ pub struct CampaignArgs {
     pub command: Option<CampaignCommand>,
     /// Campaign file (TOML; see `examples/paper_campaign.toml`).
     pub file: Option<PathBuf>,
-    /// Worker threads (default: all cores).
+    /// Runs computed at the same time (default: one per core).
     #[arg(long)]
     pub threads: Option<usize>,
     /// Run only shard I of N (runs whose position p has p mod N = I), e.g. `--shard 0/4`.
