@@ -70,8 +70,10 @@ pub struct StudySettings {
     pub stability: bool,
     /// Floquet method (see [`StabilityChoice`]).
     pub stability_method: StabilityChoice,
-    /// Intervals per period of the SIP product (Eq. 33); the explicit `sip` method raises
-    /// it automatically for stiff systems.
+    /// Intervals per period of the SIP product (Eq. 33), default 512. `exp-sip`: the fine
+    /// product of the extrapolation (even), the start of the refinement near the unit
+    /// circle (doubled up to 4096); the explicit `sip` method raises it automatically for
+    /// stiff systems.
     pub sip_intervals: usize,
     /// Cut-off (rad/s) of the Craig–Bampton reduction the stability is computed on
     /// (interior modes of the rotor with its bearing DoFs held, up to this frequency);
