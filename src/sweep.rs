@@ -787,6 +787,16 @@ pub struct CoupledRederive {
 impl CoupledRederive {
     /// Rebuilds the sweep problem from a recording's run description.
     pub fn from_run(run: &RunInfo) -> Result<Self, SweepError> {
+        Self::from_run_with_intervals(run, None)
+    }
+
+    /// [`CoupledRederive::from_run`] with the SIP intervals of the stability method
+    /// replaced (`sip_intervals`, checked like a study setting): to audit a recording's
+    /// stability with a finer product.
+    pub fn from_run_with_intervals(
+        run: &RunInfo,
+        sip_intervals: Option<usize>,
+    ) -> Result<Self, SweepError> {
         let mut settings: StudySettings =
             toml::from_str(&run.settings_toml).map_err(|e| SweepError::Setting {
                 field: "settings_toml",
@@ -799,6 +809,9 @@ impl CoupledRederive {
             })?;
         let model = Model::from_str(&run.model_text, &run.model_name)?;
         settings.model = None;
+        if let Some(n) = sip_intervals {
+            settings.sip_intervals = n;
+        }
         Ok(Self {
             problem: SweepProblem::with_model(&settings, model)?,
         })

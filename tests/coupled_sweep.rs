@@ -132,3 +132,47 @@ fn short_sweep_records_points_and_replay_rederives_bearings() {
         assert!((a.delta_v_m - b.delta_v_m).abs() <= 1e-15 + 1e-9 * b.delta_v_m.abs());
     }
 }
+
+/// Replay's stability audit: the multipliers of a short recorded sweep (stability on)
+/// recomputed from the embedded model with the recorded settings and with a finer product
+/// (`replay stability --sip-intervals`); an impossible interval count is refused naming
+/// the setting.
+#[test]
+fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
+    use tmrotor::record::derive::{StabilityRederive, multiplier_deviation};
+    let settings = StudySettings {
+        omega_start: 400.0,
+        omega_end: 402.0,
+        order: 1,
+        max_points: 3,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let mut sink = MemorySink::new();
+    problem.run(&mut sink, None, |_| {}).expect("sweep");
+    let run = sink.run.as_ref().expect("run info");
+    let p = &sink.points[0];
+    assert!(!p.multipliers.is_empty() && p.stable == Some(true));
+
+    let same = CoupledRederive::from_run(run).expect("rebuilds");
+    let again = same.multipliers(p).expect("recomputes");
+    let dev = multiplier_deviation(&p.multipliers, &again).expect("same count");
+    assert!(
+        dev < 1e-12,
+        "recorded settings reproduce the stored multipliers: {dev:e}"
+    );
+
+    let fine = CoupledRederive::from_run_with_intervals(run, Some(2048)).expect("rebuilds");
+    let finer = fine.multipliers(p).expect("recomputes");
+    let dev = multiplier_deviation(&p.multipliers, &finer).expect("same count");
+    assert!(
+        dev > 0.0 && dev < 1e-2,
+        "a finer product moves them a little: {dev:e}"
+    );
+    assert!(tmrotor::stability::FloquetResult::new(finer).stable);
+
+    let err = CoupledRederive::from_run_with_intervals(run, Some(511))
+        .err()
+        .expect("odd count refused");
+    assert!(err.to_string().contains("sip_intervals"), "{err}");
+}

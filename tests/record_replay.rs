@@ -149,6 +149,15 @@ fn stability_reports_largest_deviation_or_says_it_is_unavailable() {
     let e = res.expect_err("no model to rebuild");
     assert!(e.downcast_ref::<replay::NotAvailable>().is_some());
     assert!(e.to_string().contains("cannot be recomputed"), "{e}");
+    // an impossible audit product is refused before anything is recomputed
+    let (res, _, _) = replay_in_process(&[
+        "stability",
+        path.to_str().expect("utf-8"),
+        "--sip-intervals",
+        "513",
+    ]);
+    let e = res.expect_err("odd interval count");
+    assert!(e.to_string().contains("--sip-intervals 513"), "{e}");
 }
 
 #[test]

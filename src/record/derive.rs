@@ -275,7 +275,13 @@ pub struct Rederivers {
 ///
 /// This is the single place where model kinds are wired to replay.
 pub fn rederivers_for(run: &RunInfo) -> Rederivers {
-    match crate::sweep::CoupledRederive::from_run(run) {
+    rederivers_with_intervals(run, None)
+}
+
+/// [`rederivers_for`] with the stability method's SIP intervals replaced (see
+/// [`crate::sweep::CoupledRederive::from_run_with_intervals`]).
+pub fn rederivers_with_intervals(run: &RunInfo, sip_intervals: Option<usize>) -> Rederivers {
+    match crate::sweep::CoupledRederive::from_run_with_intervals(run, sip_intervals) {
         Ok(r) => {
             let r = std::sync::Arc::new(r);
             Rederivers {

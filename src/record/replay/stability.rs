@@ -2,7 +2,7 @@
 
 use std::io::Write;
 
-use crate::record::derive::{StabilityRederive, multiplier_deviation, rederivers_for};
+use crate::record::derive::{StabilityRederive, multiplier_deviation, rederivers_with_intervals};
 use crate::record::reader::Recording;
 
 use super::NotAvailable;
@@ -52,17 +52,26 @@ pub fn compare(
 }
 
 /// Runs the comparison with `method`, or with the method rebuilt from the recording's
-/// model; fails with [`NotAvailable`] when there is none.
+/// model (with `sip_intervals` replacing the recorded intervals when given, to audit the
+/// stored stability with a finer product); fails with [`NotAvailable`] when there is
+/// none.
 pub fn run(
     rec: &Recording,
     method: Option<&dyn StabilityRederive>,
+    sip_intervals: Option<usize>,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
+    if let Some(n) = sip_intervals.filter(|&n| n < 8 || n % 2 != 0) {
+        anyhow::bail!(
+            "--sip-intervals {n}: must be an even number of at least 8 (the exp-sip product \
+             is extrapolated from N and N/2 intervals)"
+        );
+    }
     let hooks;
     let method = match method {
         Some(m) => m,
         None => {
-            hooks = rederivers_for(&rec.run);
+            hooks = rederivers_with_intervals(&rec.run, sip_intervals);
             match &hooks.stability {
                 Some(m) => m.as_ref(),
                 None => {
@@ -84,6 +93,9 @@ pub fn run(
         }
     };
     let c = compare(rec, method)?;
+    if let Some(n) = sip_intervals {
+        writeln!(out, "recomputed with sip_intervals = {n}")?;
+    }
     writeln!(out, "points compared: {}", c.compared)?;
     match c.max_deviation {
         Some((d, i)) => writeln!(
