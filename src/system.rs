@@ -45,6 +45,14 @@ impl DenseMatrix {
         }
     }
 
+    /// The `1 × 1` matrix `[v]` (single-DoF systems).
+    pub fn scalar(v: f64) -> Self {
+        Self {
+            n: 1,
+            data: vec![v],
+        }
+    }
+
     /// Entry at row `i`, column `j`.
     #[inline]
     pub fn get(&self, i: usize, j: usize) -> f64 {
@@ -78,6 +86,19 @@ pub struct LinearPart {
     pub thermal_capacity: DenseMatrix,
     /// Thermal conductance matrix `K_T` (`n_therm × n_therm`; may be empty).
     pub thermal_conductance: DenseMatrix,
+}
+
+impl LinearPart {
+    /// A purely mechanical linear part (no thermal field).
+    pub fn mechanical(mass: DenseMatrix, damping: DenseMatrix, stiffness: DenseMatrix) -> Self {
+        Self {
+            mass,
+            damping,
+            stiffness,
+            thermal_capacity: DenseMatrix::zeros(0),
+            thermal_conductance: DenseMatrix::zeros(0),
+        }
+    }
 }
 
 /// Which DoFs the nonlinear terms touch. Indices are into the mechanical vector `x`

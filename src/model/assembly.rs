@@ -453,13 +453,11 @@ impl Assembly {
     /// Linear part for the nonlinear engine: `M`, `C + Σ s_r ω G_r`, `K` (shafts and
     /// supports; the bearings are nonlinear terms), no thermal matrices.
     pub fn linear_part(&self, omega: f64) -> LinearPart {
-        LinearPart {
-            mass: self.mass.clone(),
-            damping: self.velocity_matrix(omega),
-            stiffness: self.stiffness.clone(),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(
+            self.mass.clone(),
+            self.velocity_matrix(omega),
+            self.stiffness.clone(),
+        )
     }
 
     /// Linear part for linear analyses: as [`Self::linear_part`] with the linearised

@@ -71,13 +71,7 @@ impl System for Absorber {
             n: 2,
             data: vec![self.k1 + self.k2, -self.k2, -self.k2, self.k2],
         };
-        LinearPart {
-            mass: m,
-            damping: c,
-            stiffness: k,
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(m, c, k)
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {

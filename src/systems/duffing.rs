@@ -44,26 +44,17 @@ impl Duffing {
     }
 }
 
-fn scalar(v: f64) -> DenseMatrix {
-    DenseMatrix {
-        n: 1,
-        data: vec![v],
-    }
-}
-
 impl System for Duffing {
     fn n_mech(&self) -> usize {
         1
     }
 
     fn linear(&self, _omega: f64) -> LinearPart {
-        LinearPart {
-            mass: scalar(self.mass),
-            damping: scalar(self.damping),
-            stiffness: scalar(self.stiffness),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(
+            DenseMatrix::scalar(self.mass),
+            DenseMatrix::scalar(self.damping),
+            DenseMatrix::scalar(self.stiffness),
+        )
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {

@@ -93,17 +93,11 @@ impl System for Hill {
     }
 
     fn linear(&self, _omega: f64) -> LinearPart {
-        let scalar = |v: f64| DenseMatrix {
-            n: 1,
-            data: vec![v],
-        };
-        LinearPart {
-            mass: scalar(1.0),
-            damping: scalar(24.0),
-            stiffness: scalar(0.0),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(
+            DenseMatrix::scalar(1.0),
+            DenseMatrix::scalar(24.0),
+            DenseMatrix::scalar(0.0),
+        )
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {

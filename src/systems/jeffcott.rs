@@ -235,13 +235,7 @@ impl System for Jeffcott {
             k.add(d, b, -ks);
             k.add(b, d, -ks);
         }
-        LinearPart {
-            mass: m,
-            damping: c,
-            stiffness: k,
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(m, c, k)
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {

@@ -83,17 +83,11 @@ impl System for DoubleWellDuffing {
     }
 
     fn linear(&self, _omega: f64) -> LinearPart {
-        let scalar = |v: f64| DenseMatrix {
-            n: 1,
-            data: vec![v],
-        };
-        LinearPart {
-            mass: scalar(1.0),
-            damping: scalar(self.delta),
-            stiffness: scalar(-1.0),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(
+            DenseMatrix::scalar(1.0),
+            DenseMatrix::scalar(self.delta),
+            DenseMatrix::scalar(-1.0),
+        )
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {
@@ -162,18 +156,12 @@ impl System for GammaParametrized {
     }
 
     fn linear(&self, gamma: f64) -> LinearPart {
-        let scalar = |v: f64| DenseMatrix {
-            n: 1,
-            data: vec![v],
-        };
         let r = self.time_scale(gamma);
-        LinearPart {
-            mass: scalar(r * r),
-            damping: scalar(self.delta * r),
-            stiffness: scalar(-1.0),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
+        LinearPart::mechanical(
+            DenseMatrix::scalar(r * r),
+            DenseMatrix::scalar(self.delta * r),
+            DenseMatrix::scalar(-1.0),
+        )
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {
