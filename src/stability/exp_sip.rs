@@ -34,9 +34,7 @@ use faer::{Accum, Mat, Par};
 use num_complex::Complex64;
 
 use super::expm::expm;
-use super::sip::{
-    OrbitSampler, axpy_derivs, by_column_blocks, gauss_legendre, interval_means, state_space_for,
-};
+use super::sip::{axpy_derivs, by_column_blocks, gauss_legendre, interval_means, state_space_for};
 use super::{FloquetResult, StabilityError, StabilityMethod, all_finite, eigenvalues_checked};
 use crate::integrate::StateSpace;
 use crate::system::{NonlinearEval, PeriodicOrbit, System};
@@ -118,7 +116,8 @@ impl ExpSip {
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
     ) -> Result<Mat<f64>, StabilityError> {
-        self.monodromy_pair(system, orbit, self.intervals)
+        let (space, _, period) = state_space_for(system, orbit)?;
+        self.monodromy_pair(&space, orbit, period, self.intervals)
             .map(|(m, _)| m)
     }
 
@@ -126,8 +125,9 @@ impl ExpSip {
     /// extrapolating, the plain product on the `n_k` intervals as well.
     fn monodromy_pair(
         &self,
-        system: &dyn System,
+        space: &StateSpace<'_>,
         orbit: &dyn PeriodicOrbit,
+        period: f64,
         n_k: usize,
     ) -> Result<(Mat<f64>, Option<Mat<f64>>), StabilityError> {
         if n_k == 0 {
@@ -150,12 +150,11 @@ impl ExpSip {
                 value: self.gauss_points.to_string(),
                 reason: "supported: 1 to 5",
             })?;
-        let (space, omega, period) = state_space_for(system, orbit)?;
+        let omega = orbit.omega();
         let d = space.dim();
         let mut ws = space.workspace();
-        let mut sampler = OrbitSampler::new(orbit, &space);
         let delta = period / n_k as f64;
-        let means = interval_means(&space, &mut sampler, delta, n_k, nodes, weights, &mut ws);
+        let means = interval_means(space, orbit, delta, n_k, nodes, weights, &mut ws);
         // Orbit mean D̄ (the same for both products when extrapolating).
         let mut mean = ws.eval.clone();
         mean.clear();
@@ -168,8 +167,12 @@ impl ExpSip {
                 c.iter_mut().for_each(|v| *v = 0.0);
             }
         }
+        let b_bar = space.linearization_dense(&mean, &mut ws);
         if !self.extrapolate {
-            return Ok((self.product(&space, &mean, means, delta, omega)?, None));
+            return Ok((
+                self.product(space, &b_bar, &mean, means, delta, omega)?,
+                None,
+            ));
         }
         // Coarse means: each the average of two fine ones (a composite Gauss rule).
         let coarse: Vec<NonlinearEval> = means
@@ -182,28 +185,27 @@ impl ExpSip {
                 m
             })
             .collect();
-        let fine = self.product(&space, &mean, means, delta, omega)?;
-        let rough = self.product(&space, &mean, coarse, 2.0 * delta, omega)?;
+        let fine = self.product(space, &b_bar, &mean, means, delta, omega)?;
+        let rough = self.product(space, &b_bar, &mean, coarse, 2.0 * delta, omega)?;
         let extrapolated = Mat::from_fn(d, d, |i, j| (4.0 * fine[(i, j)] - rough[(i, j)]) / 3.0);
         Ok((extrapolated, Some(fine)))
     }
 
     /// The split product over the intervals whose means are `means` (consumed: turned into
-    /// the fluctuations about `mean`).
+    /// the fluctuations about `mean`, whose state matrix is `b_bar`).
     fn product(
         &self,
         space: &StateSpace<'_>,
+        b_bar: &Mat<f64>,
         mean: &NonlinearEval,
         mut means: Vec<NonlinearEval>,
         delta: f64,
         omega: f64,
     ) -> Result<Mat<f64>, StabilityError> {
         let d = space.dim();
-        let mut ws = space.workspace();
         for m in &mut means {
             axpy_derivs(m, -1.0, mean);
         }
-        let b_bar = space.linearization_dense(mean, &mut ws);
         let blocks: Vec<(usize, usize)> = match self.mean_split {
             MeanSplit::Coupled => vec![(0, d)],
             MeanSplit::Fields => {
@@ -379,10 +381,10 @@ impl StabilityMethod for ExpSip {
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
     ) -> Result<FloquetResult, StabilityError> {
-        let omega = orbit.omega();
+        let (space, omega, period) = state_space_for(system, orbit)?;
         let mut n_k = self.intervals;
         loop {
-            let (mono, fine) = self.monodromy_pair(system, orbit, n_k)?;
+            let (mono, fine) = self.monodromy_pair(&space, orbit, period, n_k)?;
             let mu = eigenvalues_checked(mono.as_ref(), omega)?;
             let refine = n_k < self.max_intervals
                 && match fine {

@@ -194,7 +194,7 @@ fn inf_norm_product(s: MatRef<'_, f64>, d: &[f64], c: usize) -> f64 {
 /// rayon threads.
 pub(crate) fn interval_means(
     space: &StateSpace<'_>,
-    sampler: &mut OrbitSampler<'_>,
+    orbit: &dyn PeriodicOrbit,
     delta: f64,
     intervals: usize,
     nodes: &[f64],
@@ -210,7 +210,7 @@ pub(crate) fn interval_means(
     for (i, y) in states.chunks_exact_mut(width).enumerate() {
         let (x, rest) = y.split_at_mut(n);
         let (v, temp) = rest.split_at_mut(n);
-        sampler.orbit.state_at(time(i / per, i % per), x, v, temp);
+        orbit.state_at(time(i / per, i % per), x, v, temp);
     }
     let mean_of = |k: usize, ws: &mut Workspace| {
         let mut mean = ws.eval.clone();
@@ -364,15 +364,7 @@ impl Sip {
         }
         let delta = period / intervals as f64;
 
-        let means = interval_means(
-            &space,
-            &mut sampler,
-            delta,
-            intervals,
-            nodes,
-            weights,
-            &mut ws,
-        );
+        let means = interval_means(&space, orbit, delta, intervals, nodes, weights, &mut ws);
 
         let mut log_abs_det = None;
         let prod = if want_det {
