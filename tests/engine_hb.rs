@@ -1,5 +1,6 @@
-//! Harmonic-balance residual, exact Jacobian and condensed solves, checked against finite
-//! differences and against the uncondensed dense solve.
+//! Harmonic-balance residual, exact Jacobian and condensed solves (one factorization for
+//! several right-hand sides), checked against finite differences and against the
+//! uncondensed dense solve.
 
 use tmrotor::hb::{Basis, Border, HarmonicBalance, LinearSolver, Ratio};
 use tmrotor::system::System;
@@ -118,6 +119,25 @@ fn solve_both(system: &dyn System, basis: &Basis, omega: f64, bordered: bool) {
             s += col[i] * mu1;
         }
         assert!((s - b[i]).abs() < 1e-9 * scale.max(1.0));
+    }
+    // one factorization, several right-hand sides: each equals a fresh full solve
+    let b2 = pseudo_random(nu, 13);
+    for condense in [true, false] {
+        let fact = LinearSolver { condense }
+            .factor(&hb, &parts, border)
+            .expect("factor");
+        assert_eq!(fact.bordered(), bordered);
+        for (rhs, e) in [(&b, 0.4), (&b2, -1.3)] {
+            let (x, mu) = fact.solve(rhs, e).expect("solve");
+            let (xf, muf) = LinearSolver { condense: false }
+                .solve(&hb, &parts, border, rhs, e)
+                .expect("full");
+            let scale = xf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (u, v) in x.iter().zip(&xf) {
+                assert!((u - v).abs() < 1e-10 * scale, "{u} vs {v}");
+            }
+            assert!((mu - muf).abs() < 1e-10 * muf.abs().max(1.0));
+        }
     }
 }
 

@@ -23,7 +23,7 @@
 //! instead (reference and benchmark).
 
 use faer::Mat;
-use faer::linalg::solvers::Solve;
+use faer::linalg::solvers::{PartialPivLu, Solve};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -82,25 +82,19 @@ fn z_entry(
     }
 }
 
-fn solve_dense(
-    a: &Mat<f64>,
-    b: &Mat<f64>,
+/// `x` finite, or the singular-matrix error for `what` (`size` × `size`).
+fn check_finite(
+    x: &Mat<f64>,
     what: &'static str,
+    size: usize,
     omega: f64,
-) -> Result<Mat<f64>, SolveError> {
-    let x = a.partial_piv_lu().solve(b);
-    for j in 0..x.ncols() {
-        for i in 0..x.nrows() {
-            if !x[(i, j)].is_finite() {
-                return Err(SolveError::Singular {
-                    what,
-                    size: a.nrows(),
-                    omega,
-                });
-            }
-        }
+) -> Result<(), SolveError> {
+    let finite = (0..x.ncols()).all(|j| (0..x.nrows()).all(|i| x[(i, j)].is_finite()));
+    if finite {
+        Ok(())
+    } else {
+        Err(SolveError::Singular { what, size, omega })
     }
-    Ok(x)
 }
 
 impl LinearSolver {
@@ -114,61 +108,155 @@ impl LinearSolver {
         b: &[f64],
         e: f64,
     ) -> Result<(Vec<f64>, f64), SolveError> {
-        if self.condense {
-            self.solve_condensed(hb, parts, border, b, e)
+        self.factor(hb, parts, border)?.solve(b, e)
+    }
+
+    /// Factors the (bordered) Newton matrix at the Jacobian `parts`, for any number of
+    /// right-hand sides ([`Factorization::solve`]): the corrector's last matrix serves the
+    /// tangent of the continuation, and a chord iteration reuses one matrix for several
+    /// steps.
+    pub fn factor(
+        &self,
+        hb: &HarmonicBalance<'_>,
+        parts: &JacobianParts,
+        border: Option<Border<'_>>,
+    ) -> Result<Factorization, SolveError> {
+        let inner = if self.condense {
+            Factored::Condensed(Box::new(Condensed::new(hb, parts, border)?))
         } else {
-            self.solve_full(hb, parts, border, b, e)
-        }
+            Factored::Full(full_lu(hb, parts, border))
+        };
+        Ok(Factorization {
+            inner,
+            omega: parts.omega,
+            n_unknowns: hb.n_unknowns(),
+            bordered: border.is_some(),
+        })
+    }
+}
+
+/// A factored (bordered) Newton matrix (see [`LinearSolver::factor`]).
+pub struct Factorization {
+    inner: Factored,
+    omega: f64,
+    n_unknowns: usize,
+    bordered: bool,
+}
+
+enum Factored {
+    Full(PartialPivLu<f64>),
+    Condensed(Box<Condensed>),
+}
+
+impl Factorization {
+    /// Whether the matrix carries a border row and column.
+    pub fn bordered(&self) -> bool {
+        self.bordered
     }
 
-    fn solve_full(
-        &self,
+    /// Solves for right-hand side `b` (and `e` for the border row; ignored without
+    /// border). Returns `(x, μ)` (`μ = 0` without border).
+    pub fn solve(&self, b: &[f64], e: f64) -> Result<(Vec<f64>, f64), SolveError> {
+        let nu = self.n_unknowns;
+        match &self.inner {
+            Factored::Full(lu) => {
+                let m = nu + usize::from(self.bordered);
+                let mut rhs = Mat::<f64>::zeros(m, 1);
+                for i in 0..nu {
+                    rhs[(i, 0)] = b[i];
+                }
+                if self.bordered {
+                    rhs[(nu, 0)] = e;
+                }
+                let x = lu.solve(&rhs);
+                check_finite(&x, "Jacobian", m, self.omega)?;
+                let sol = (0..nu).map(|i| x[(i, 0)]).collect();
+                let mu = if self.bordered { x[(nu, 0)] } else { 0.0 };
+                Ok((sol, mu))
+            }
+            Factored::Condensed(c) => c.solve(b, e, self.omega),
+        }
+    }
+}
+
+fn full_lu(
+    hb: &HarmonicBalance<'_>,
+    parts: &JacobianParts,
+    border: Option<Border<'_>>,
+) -> PartialPivLu<f64> {
+    let nu = hb.n_unknowns();
+    let m = nu + usize::from(border.is_some());
+    let jac = hb.dense_jacobian(parts);
+    let mut a = Mat::<f64>::zeros(m, m);
+    for i in 0..nu {
+        for j in 0..nu {
+            a[(i, j)] = jac[i * nu + j];
+        }
+    }
+    if let Some(bd) = border {
+        for i in 0..nu {
+            a[(i, nu)] = bd.column[i];
+            a[(nu, i)] = bd.row[i];
+        }
+        a[(nu, nu)] = bd.corner;
+    }
+    a.partial_piv_lu()
+}
+
+/// One (field, harmonic slot) block of the linear dynamic stiffness, split into the
+/// field's linear DoFs `L` and nonlinear DoFs `N`.
+struct Block {
+    /// Global DoFs of `L` and `N`.
+    lin: Vec<usize>,
+    nl: Vec<usize>,
+    /// Harmonic slot (0 constant, `h ≥ 1` harmonic `h − 1`) and its parts (1 or 2).
+    hs: usize,
+    parts: usize,
+    /// `Z_LL`, factored (`None` when the block has no linear DoFs).
+    zll: Option<PartialPivLu<f64>>,
+    /// `Z_NL` (`sn × sl`).
+    znl: Mat<f64>,
+    /// `W = Z_LL⁻¹ Z_LN` (`sl × sn`).
+    w: Mat<f64>,
+    /// `Z_LL⁻¹ c_L` for the border column `c` (`sl × 1`, empty without border).
+    yc: Mat<f64>,
+}
+
+/// The condensed factorization (see the module docs).
+struct Condensed {
+    nc: usize,
+    nh: usize,
+    n_unknowns: usize,
+    globals: Vec<usize>,
+    /// Position of each global DoF among the nonlinear ones (`usize::MAX`: linear).
+    pos: Vec<usize>,
+    blocks: Vec<Block>,
+    /// The border row (global unknowns), when bordered.
+    border_row: Option<Vec<f64>>,
+    /// LU of the condensed matrix (`None` when it is empty).
+    lu: Option<PartialPivLu<f64>>,
+}
+
+impl Condensed {
+    /// Coefficient index of (harmonic slot `hs`, part).
+    fn coeff(&self, hs: usize, part: usize) -> usize {
+        coeff_index(self.nh, hs, part)
+    }
+
+    fn pn(&self) -> usize {
+        self.globals.len() * self.nc
+    }
+
+    fn new(
         hb: &HarmonicBalance<'_>,
         parts: &JacobianParts,
         border: Option<Border<'_>>,
-        b: &[f64],
-        e: f64,
-    ) -> Result<(Vec<f64>, f64), SolveError> {
-        let nu = hb.n_unknowns();
-        let m = nu + usize::from(border.is_some());
-        let jac = hb.dense_jacobian(parts);
-        let mut a = Mat::<f64>::zeros(m, m);
-        for i in 0..nu {
-            for j in 0..nu {
-                a[(i, j)] = jac[i * nu + j];
-            }
-        }
-        let mut rhs = Mat::<f64>::zeros(m, 1);
-        for i in 0..nu {
-            rhs[(i, 0)] = b[i];
-        }
-        if let Some(bd) = border {
-            for i in 0..nu {
-                a[(i, nu)] = bd.column[i];
-                a[(nu, i)] = bd.row[i];
-            }
-            a[(nu, nu)] = bd.corner;
-            rhs[(nu, 0)] = e;
-        }
-        let x = solve_dense(&a, &rhs, "Jacobian", parts.omega)?;
-        let sol = (0..nu).map(|i| x[(i, 0)]).collect();
-        let mu = if border.is_some() { x[(nu, 0)] } else { 0.0 };
-        Ok((sol, mu))
-    }
-
-    fn solve_condensed(
-        &self,
-        hb: &HarmonicBalance<'_>,
-        parts: &JacobianParts,
-        border: Option<Border<'_>>,
-        b: &[f64],
-        e: f64,
-    ) -> Result<(Vec<f64>, f64), SolveError> {
+    ) -> Result<Self, SolveError> {
         let omega = parts.omega;
         let nc = hb.n_coeffs();
         let basis = hb.basis();
         let nh = basis.n_harmonics();
-        let globals = hb.nonlinear_global();
+        let globals = hb.nonlinear_global().to_vec();
         let pn = globals.len() * nc;
         let has_border = border.is_some();
         let m = pn + usize::from(has_border);
@@ -179,49 +267,19 @@ impl LinearSolver {
         }
         // condensed matrix, starts as J_nl (+ border)
         let mut a = Mat::<f64>::zeros(m, m);
-        for i in 0..pn {
-            for j in 0..pn {
-                a[(i, j)] = parts.nonlinear[i * pn + j];
-            }
-        }
-        let mut s = Mat::<f64>::zeros(m, 1);
-        for (k, &g) in globals.iter().enumerate() {
-            for c in 0..nc {
-                s[(k * nc + c, 0)] = b[g * nc + c];
-                if let Some(bd) = border {
+        a.as_mut()
+            .submatrix_mut(0, 0, pn, pn)
+            .copy_from(faer::MatRef::from_row_major_slice(&parts.nonlinear, pn, pn));
+        if let Some(bd) = border {
+            for (k, &g) in globals.iter().enumerate() {
+                for c in 0..nc {
                     a[(k * nc + c, pn)] = bd.column[g * nc + c];
                     a[(pn, k * nc + c)] = bd.row[g * nc + c];
                 }
             }
-        }
-        if let Some(bd) = border {
             a[(pn, pn)] = bd.corner;
-            s[(pn, 0)] = e;
         }
-        // coefficient index of (harmonic slot hs, part): hs = 0 constant, hs ≥ 1 harmonic hs-1
-        let coeff = |hs: usize, part: usize| -> usize {
-            if hs == 0 {
-                0
-            } else if part == 0 {
-                hs
-            } else {
-                nh + hs
-            }
-        };
-        // one block per (field, harmonic slot): the linear-DoF solves are independent and
-        // run in parallel; their contributions are added to the condensed system in order.
-        struct Block {
-            lin: Vec<usize>,
-            nl: Vec<usize>,
-            hs: usize,
-            parts: usize,
-            /// `Z_NN − Z_NL W` (sn × sn), row/col local (part·|N| + t)
-            schur: Mat<f64>,
-            /// `Z_NL [y_b, y_c]` (sn × 1 or 2)
-            rhs_corr: Mat<f64>,
-            /// `[W, y_b, y_c]` (sl × ncol)
-            sol: Option<Mat<f64>>,
-        }
+        let coeff = |hs: usize, part: usize| coeff_index(nh, hs, part);
         let flds = fields(&parts.linear, hb.n_mech(), hb.n_therm());
         let mut jobs = Vec::new();
         for (fi, fld) in flds.iter().enumerate() {
@@ -229,106 +287,114 @@ impl LinearSolver {
                 jobs.extend((0..=nh).map(|hs| (fi, hs)));
             }
         }
-        let build = |&(fi, hs): &(usize, usize)| -> Result<Block, SolveError> {
-            let fld = &flds[fi];
-            let nl: Vec<usize> = (0..fld.n)
-                .filter(|&i| pos[fld.offset + i] != usize::MAX)
-                .collect();
-            let lin: Vec<usize> = (0..fld.n)
-                .filter(|&i| pos[fld.offset + i] == usize::MAX)
-                .collect();
-            let w = if hs == 0 {
-                0.0
-            } else {
-                basis.harmonics()[hs - 1].value() * omega
-            };
-            let np = if hs == 0 { 1 } else { 2 };
-            let z = |i: usize, j: usize, pr: usize, pc: usize| {
-                z_entry(fld.stiffness, fld.damping, fld.mass, w, i, j, pr, pc)
-            };
-            let (nn, nl_len) = (lin.len(), nl.len());
-            let (sl, sn) = (np * nn, np * nl_len);
-            let mut schur = Mat::<f64>::zeros(sn, sn);
-            for pr in 0..np {
-                for (ti, &i) in nl.iter().enumerate() {
-                    for pc in 0..np {
-                        for (tj, &j) in nl.iter().enumerate() {
-                            schur[(pr * nl_len + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
-                        }
-                    }
-                }
-            }
-            let ncol = sn + 1 + usize::from(has_border);
-            let mut rhs_corr = Mat::<f64>::zeros(sn, ncol - sn);
-            let mut sol = None;
-            if nn > 0 {
-                let mut zll = Mat::<f64>::zeros(sl, sl);
-                let mut rhs = Mat::<f64>::zeros(sl, ncol);
-                let mut znl = Mat::<f64>::zeros(sn, sl);
+        // One block per (field, harmonic slot): the linear-DoF solves are independent and
+        // run in parallel; their contributions are added to the condensed matrix in order.
+        // Returns the block and its Schur complement `Z_NN − Z_NL W` plus `Z_NL Z_LL⁻¹ c_L`.
+        let build =
+            |&(fi, hs): &(usize, usize)| -> Result<(Block, Mat<f64>, Mat<f64>), SolveError> {
+                let fld = &flds[fi];
+                let nl: Vec<usize> = (0..fld.n)
+                    .filter(|&i| pos[fld.offset + i] != usize::MAX)
+                    .collect();
+                let lin: Vec<usize> = (0..fld.n)
+                    .filter(|&i| pos[fld.offset + i] == usize::MAX)
+                    .collect();
+                let w = if hs == 0 {
+                    0.0
+                } else {
+                    basis.harmonics()[hs - 1].value() * omega
+                };
+                let np = if hs == 0 { 1 } else { 2 };
+                let z = |i: usize, j: usize, pr: usize, pc: usize| {
+                    z_entry(fld.stiffness, fld.damping, fld.mass, w, i, j, pr, pc)
+                };
+                let (nn, nl_len) = (lin.len(), nl.len());
+                let (sl, sn) = (np * nn, np * nl_len);
+                let mut schur = Mat::<f64>::zeros(sn, sn);
                 for pr in 0..np {
-                    for (ti, &i) in lin.iter().enumerate() {
-                        let gi = (fld.offset + i) * nc + coeff(hs, pr);
+                    for (ti, &i) in nl.iter().enumerate() {
                         for pc in 0..np {
-                            for (tj, &j) in lin.iter().enumerate() {
-                                zll[(pr * nn + ti, pc * nn + tj)] = z(i, j, pr, pc);
-                            }
                             for (tj, &j) in nl.iter().enumerate() {
-                                rhs[(pr * nn + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
-                                znl[(pc * nl_len + tj, pr * nn + ti)] = z(j, i, pc, pr);
+                                schur[(pr * nl_len + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
                             }
                         }
-                        rhs[(pr * nn + ti, sn)] = b[gi];
-                        if let Some(bd) = border {
-                            rhs[(pr * nn + ti, sn + 1)] = bd.column[gi];
+                    }
+                }
+                let mut corr_c = Mat::<f64>::zeros(sn, usize::from(has_border));
+                let mut block = Block {
+                    lin: lin.iter().map(|&i| fld.offset + i).collect(),
+                    nl: nl.iter().map(|&i| fld.offset + i).collect(),
+                    hs,
+                    parts: np,
+                    zll: None,
+                    znl: Mat::zeros(sn, sl),
+                    w: Mat::zeros(sl, sn),
+                    yc: Mat::zeros(sl, usize::from(has_border)),
+                };
+                if nn > 0 {
+                    let ncol = sn + usize::from(has_border);
+                    let mut zll = Mat::<f64>::zeros(sl, sl);
+                    let mut rhs = Mat::<f64>::zeros(sl, ncol);
+                    for pr in 0..np {
+                        for (ti, &i) in lin.iter().enumerate() {
+                            for pc in 0..np {
+                                for (tj, &j) in lin.iter().enumerate() {
+                                    zll[(pr * nn + ti, pc * nn + tj)] = z(i, j, pr, pc);
+                                }
+                                for (tj, &j) in nl.iter().enumerate() {
+                                    rhs[(pr * nn + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
+                                    block.znl[(pc * nl_len + tj, pr * nn + ti)] = z(j, i, pc, pr);
+                                }
+                            }
+                            if let Some(bd) = border {
+                                let gi = (fld.offset + i) * nc + coeff(hs, pr);
+                                rhs[(pr * nn + ti, sn)] = bd.column[gi];
+                            }
                         }
                     }
-                }
-                let x = solve_dense(&zll, &rhs, "linear-DoF block", omega)?;
-                let prod = &znl * &x; // sn × ncol
-                for r in 0..sn {
-                    for c in 0..sn {
-                        schur[(r, c)] -= prod[(r, c)];
+                    let lu = zll.partial_piv_lu();
+                    let x = lu.solve(&rhs);
+                    check_finite(&x, "linear-DoF block", sl, omega)?;
+                    let prod = &block.znl * &x; // sn × ncol
+                    for r in 0..sn {
+                        for c in 0..sn {
+                            schur[(r, c)] -= prod[(r, c)];
+                        }
+                        if has_border {
+                            corr_c[(r, 0)] = prod[(r, sn)];
+                        }
                     }
-                    for c in sn..ncol {
-                        rhs_corr[(r, c - sn)] = prod[(r, c)];
+                    block.w = x.subcols(0, sn).to_owned();
+                    if has_border {
+                        block.yc = x.subcols(sn, 1).to_owned();
                     }
+                    block.zll = Some(lu);
                 }
-                sol = Some(x);
-            }
-            Ok(Block {
-                lin: lin.iter().map(|&i| fld.offset + i).collect(),
-                nl: nl.iter().map(|&i| fld.offset + i).collect(),
-                hs,
-                parts: np,
-                schur,
-                rhs_corr,
-                sol,
-            })
-        };
-        let blocks: Vec<Block> = if hb.n_unknowns() >= 256 {
+                Ok((block, schur, corr_c))
+            };
+        let built: Vec<(Block, Mat<f64>, Mat<f64>)> = if hb.n_unknowns() >= 256 {
             jobs.par_iter().map(build).collect::<Result<_, _>>()?
         } else {
             jobs.iter().map(build).collect::<Result<_, _>>()?
         };
-        for bl in &blocks {
+        let mut blocks = Vec::with_capacity(built.len());
+        for (bl, schur, corr_c) in built {
             let (nl_len, np, hs) = (bl.nl.len(), bl.parts, bl.hs);
-            let sn = np * nl_len;
             let crow = |t: usize, part: usize| pos[bl.nl[t]] * nc + coeff(hs, part);
             for pr in 0..np {
                 for ti in 0..nl_len {
                     let (r, ar) = (pr * nl_len + ti, crow(ti, pr));
                     for pc in 0..np {
                         for tj in 0..nl_len {
-                            a[(ar, crow(tj, pc))] += bl.schur[(r, pc * nl_len + tj)];
+                            a[(ar, crow(tj, pc))] += schur[(r, pc * nl_len + tj)];
                         }
                     }
-                    s[(ar, 0)] -= bl.rhs_corr[(r, 0)];
                     if has_border {
-                        a[(ar, pn)] -= bl.rhs_corr[(r, 1)];
+                        a[(ar, pn)] -= corr_c[(r, 0)];
                     }
                 }
             }
-            if let (Some(bd), Some(sol)) = (border, &bl.sol) {
+            if let (Some(bd), true) = (border, bl.zll.is_some()) {
                 let nn = bl.lin.len();
                 for pr in 0..np {
                     for (ti, &gi) in bl.lin.iter().enumerate() {
@@ -339,47 +405,119 @@ impl LinearSolver {
                         let li = pr * nn + ti;
                         for pc in 0..np {
                             for tj in 0..nl_len {
-                                a[(pn, crow(tj, pc))] -= rl * sol[(li, pc * nl_len + tj)];
+                                a[(pn, crow(tj, pc))] -= rl * bl.w[(li, pc * nl_len + tj)];
                             }
                         }
-                        s[(pn, 0)] -= rl * sol[(li, sn)];
-                        a[(pn, pn)] -= rl * sol[(li, sn + 1)];
+                        a[(pn, pn)] -= rl * bl.yc[(li, 0)];
                     }
                 }
             }
+            blocks.push(bl);
         }
-        let xs = if m > 0 {
-            solve_dense(&a, &s, "condensed Jacobian", omega)?
-        } else {
-            Mat::<f64>::zeros(0, 1)
+        Ok(Self {
+            nc,
+            nh,
+            n_unknowns: hb.n_unknowns(),
+            globals,
+            pos,
+            blocks,
+            border_row: border.map(|bd| bd.row.to_vec()),
+            lu: (m > 0).then(|| a.partial_piv_lu()),
+        })
+    }
+
+    fn solve(&self, b: &[f64], e: f64, omega: f64) -> Result<(Vec<f64>, f64), SolveError> {
+        let (nc, pn) = (self.nc, self.pn());
+        let has_border = self.border_row.is_some();
+        let m = pn + usize::from(has_border);
+        let mut s = Mat::<f64>::zeros(m, 1);
+        for (k, &g) in self.globals.iter().enumerate() {
+            for c in 0..nc {
+                s[(k * nc + c, 0)] = b[g * nc + c];
+            }
+        }
+        if has_border {
+            s[(pn, 0)] = e;
+        }
+        // y_b = Z_LL⁻¹ b_L per block, and its condensed contributions
+        let mut ys = Vec::with_capacity(self.blocks.len());
+        for bl in &self.blocks {
+            let Some(zll) = &bl.zll else {
+                ys.push(None);
+                continue;
+            };
+            let (nn, nl_len, np, hs) = (bl.lin.len(), bl.nl.len(), bl.parts, bl.hs);
+            let mut bl_rhs = Mat::<f64>::zeros(np * nn, 1);
+            for pr in 0..np {
+                for (ti, &gi) in bl.lin.iter().enumerate() {
+                    bl_rhs[(pr * nn + ti, 0)] = b[gi * nc + self.coeff(hs, pr)];
+                }
+            }
+            let y = zll.solve(&bl_rhs);
+            check_finite(&y, "linear-DoF block", np * nn, omega)?;
+            let corr = &bl.znl * &y;
+            for pr in 0..np {
+                for ti in 0..nl_len {
+                    let ar = self.pos[bl.nl[ti]] * nc + self.coeff(hs, pr);
+                    s[(ar, 0)] -= corr[(pr * nl_len + ti, 0)];
+                }
+            }
+            if let Some(row) = &self.border_row {
+                for pr in 0..np {
+                    for (ti, &gi) in bl.lin.iter().enumerate() {
+                        s[(pn, 0)] -= row[gi * nc + self.coeff(hs, pr)] * y[(pr * nn + ti, 0)];
+                    }
+                }
+            }
+            ys.push(Some(y));
+        }
+        let xs = match &self.lu {
+            Some(lu) => {
+                let xs = lu.solve(&s);
+                check_finite(&xs, "condensed Jacobian", m, omega)?;
+                xs
+            }
+            None => Mat::<f64>::zeros(0, 1),
         };
         let mu = if has_border { xs[(pn, 0)] } else { 0.0 };
-        let mut x = vec![0.0; hb.n_unknowns()];
-        for (k, &g) in globals.iter().enumerate() {
+        let mut x = vec![0.0; self.n_unknowns];
+        for (k, &g) in self.globals.iter().enumerate() {
             for c in 0..nc {
                 x[g * nc + c] = xs[(k * nc + c, 0)];
             }
         }
-        for bl in &blocks {
-            let Some(sol) = &bl.sol else { continue };
+        // x_L = y_b − y_c μ − W x_N
+        for (bl, y) in self.blocks.iter().zip(&ys) {
+            let Some(y) = y else { continue };
             let (nn, nl_len) = (bl.lin.len(), bl.nl.len());
-            let sn = bl.parts * nl_len;
             for pr in 0..bl.parts {
                 for (ti, &gi) in bl.lin.iter().enumerate() {
                     let li = pr * nn + ti;
-                    let mut v = sol[(li, sn)];
+                    let mut v = y[(li, 0)];
                     if has_border {
-                        v -= sol[(li, sn + 1)] * mu;
+                        v -= bl.yc[(li, 0)] * mu;
                     }
                     for pc in 0..bl.parts {
                         for (tj, &gj) in bl.nl.iter().enumerate() {
-                            v -= sol[(li, pc * nl_len + tj)] * x[gj * nc + coeff(bl.hs, pc)];
+                            v -= bl.w[(li, pc * nl_len + tj)] * x[gj * nc + self.coeff(bl.hs, pc)];
                         }
                     }
-                    x[gi * nc + coeff(bl.hs, pr)] = v;
+                    x[gi * nc + self.coeff(bl.hs, pr)] = v;
                 }
             }
         }
         Ok((x, mu))
+    }
+}
+
+/// Coefficient index of (harmonic slot `hs`, part) with `nh` harmonics: `hs = 0` is the
+/// constant, `hs ≥ 1` harmonic `hs − 1` (part 0 cosine, 1 sine).
+fn coeff_index(nh: usize, hs: usize, part: usize) -> usize {
+    if hs == 0 {
+        0
+    } else if part == 0 {
+        hs
+    } else {
+        nh + hs
     }
 }

@@ -21,7 +21,7 @@ pub mod time_residual;
 
 pub use aft::{Aft, AftError, Signal};
 pub use basis::{Basis, BasisError, Ratio};
-pub use condense::{Border, LinearSolver, SolveError};
+pub use condense::{Border, Factorization, LinearSolver, SolveError};
 pub use newton::{NewtonError, NewtonOptions, NewtonStats};
 pub use residual::{HarmonicBalance, HbError, JacobianParts, ResidualNorms};
 pub use solution::HbSolution;
