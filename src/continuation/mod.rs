@@ -12,10 +12,7 @@
 //!   `R(A, ω) = 0` plus `τ·(X − X_prev) = ds` (the bordered system stays regular at folds,
 //!   so folds are passed and unstable parts traced);
 //! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
-//!   orientation (`τ_prev·t > 0`), i.e. direction control. This is the corrector's own
-//!   bordered matrix, so the tangent is solved with the corrector's last factorization
-//!   (the Jacobian at the last iterate before convergence, one Newton correction from the
-//!   point) instead of factoring again;
+//!   orientation (`τ_prev·t > 0`), i.e. direction control;
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
 //!   after a failed corrector, a turn of the tangent by more than 60°, or a corrected point
 //!   farther than `max_corrector_distance · ds` from the predictor;
@@ -45,9 +42,7 @@ pub mod csv;
 use thiserror::Error;
 
 use crate::hb::newton::{self, ArcConstraint, NewtonError, NewtonOptions};
-use crate::hb::{
-    Factorization, HarmonicBalance, HbError, HbSolution, LinearSolver, SolveError, condense::Border,
-};
+use crate::hb::{HarmonicBalance, HbError, HbSolution, LinearSolver, SolveError, condense::Border};
 use crate::stability::{
     BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL, classify_crossing,
 };
@@ -376,42 +371,22 @@ impl<'a> Continuation<'a> {
             condense: self.opts.newton.condense,
         };
         let s = &self.scales;
-        match prev {
+        let (z, zeta) = match prev {
             Some(t) => {
-                let row = self.arc_row(t);
+                let row: Vec<f64> = (0..nu).map(|i| t[i] / s[i]).collect();
                 let border = Border {
                     column: &r_omega,
                     row: &row,
                     corner: t[nu] / s[nu],
                 };
-                let fact = solver.factor(&self.hb, &parts, Some(border))?;
-                self.tangent_from(&fact, prev)
+                solver.solve(&self.hb, &parts, Some(border), &vec![0.0; nu], 1.0)?
             }
             None => {
                 let neg: Vec<f64> = r_omega.iter().map(|v| -v).collect();
                 let (z, _) = solver.solve(&self.hb, &parts, None, &neg, 0.0)?;
-                Ok(self.unit_tangent(z, 1.0, None))
+                (z, 1.0)
             }
-        }
-    }
-
-    /// The tangent from the factored bordered matrix `[[∂R/∂A, ∂R/∂ω], [rowᵀ]]` whose
-    /// border row is the scaled previous tangent `prev` ([`Self::arc_row`]): the solution
-    /// of `[0; 1]`, normalised and oriented along `prev`.
-    fn tangent_from(
-        &self,
-        fact: &Factorization,
-        prev: Option<&[f64]>,
-    ) -> Result<Vec<f64>, ContinuationError> {
-        let nu = self.hb.n_unknowns();
-        let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
-        Ok(self.unit_tangent(z, zeta, prev))
-    }
-
-    /// `(z, ζ)` in scaled units, normalised; without `prev` oriented towards `omega_end`.
-    fn unit_tangent(&self, z: Vec<f64>, zeta: f64, prev: Option<&[f64]>) -> Vec<f64> {
-        let s = &self.scales;
-        let nu = z.len();
+        };
         let mut t: Vec<f64> = z.iter().zip(s).map(|(v, si)| v / si).collect();
         t.push(zeta / s[nu]);
         let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -421,13 +396,7 @@ impl<'a> Continuation<'a> {
         } else {
             1.0
         };
-        t.into_iter().map(|v| sign * v / norm).collect()
-    }
-
-    /// The arclength row of the unknowns for the scaled tangent `t`: `t_i / s_i`.
-    fn arc_row(&self, t: &[f64]) -> Vec<f64> {
-        let nu = self.hb.n_unknowns();
-        (0..nu).map(|i| t[i] / self.scales[i]).collect()
+        Ok(t.into_iter().map(|v| sign * v / norm).collect())
     }
 
     fn start(&mut self) -> Result<StepOutcome, ContinuationError> {
@@ -494,23 +463,12 @@ impl<'a> Continuation<'a> {
         cur: &Current,
         ds: f64,
     ) -> Result<(Vec<f64>, f64, newton::NewtonStats), NewtonError> {
-        self.correct_factored(cur, ds)
-            .map(|(a, w, st, _)| (a, w, st))
-    }
-
-    /// [`Self::correct`], also returning the corrector's last factored matrix (see
-    /// [`newton::solve_arclength_factored`]).
-    fn correct_factored(
-        &self,
-        cur: &Current,
-        ds: f64,
-    ) -> Result<(Vec<f64>, f64, newton::NewtonStats, Option<Factorization>), NewtonError> {
         let nu = self.hb.n_unknowns();
         let s = &self.scales;
         let t = &cur.tangent;
         let pred: Vec<f64> = (0..nu).map(|i| cur.a[i] + ds * t[i] * s[i]).collect();
         let w_pred = cur.omega + ds * t[nu] * s[nu];
-        let row = self.arc_row(t);
+        let row: Vec<f64> = (0..nu).map(|i| t[i] / s[i]).collect();
         let arc = ArcConstraint {
             anchor: &cur.a,
             anchor_omega: cur.omega,
@@ -518,7 +476,7 @@ impl<'a> Continuation<'a> {
             corner: t[nu] / s[nu],
             ds,
         };
-        newton::solve_arclength_factored(&self.hb, &pred, w_pred, &arc, &self.opts.newton)
+        newton::solve_arclength(&self.hb, &pred, w_pred, &arc, &self.opts.newton)
     }
 
     /// Scaled distance of `(a, omega)` from the predictor `cur + ds·τ`.
@@ -554,7 +512,7 @@ impl<'a> Continuation<'a> {
     fn advance(&mut self, cur: &Current) -> Result<StepOutcome, ContinuationError> {
         let ds = self.ds;
         let nu = self.hb.n_unknowns();
-        let (a, omega, stats, fact) = match self.correct_factored(cur, ds) {
+        let (a, omega, stats) = match self.correct(cur, ds) {
             Ok(v) => v,
             Err(e) => {
                 return Ok(self.reject(
@@ -570,11 +528,7 @@ impl<'a> Continuation<'a> {
         if distance > self.opts.max_corrector_distance * ds {
             return Ok(self.reject(RejectReason::Distance { ds, distance }, cur.omega));
         }
-        let tangent = match fact {
-            Some(f) => self.tangent_from(&f, Some(&cur.tangent)),
-            None => self.tangent(&a, omega, Some(&cur.tangent)),
-        };
-        let tangent = match tangent {
+        let tangent = match self.tangent(&a, omega, Some(&cur.tangent)) {
             Ok(t) => t,
             Err(e) => {
                 return Ok(self.reject(

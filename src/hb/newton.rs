@@ -23,7 +23,7 @@
 
 use thiserror::Error;
 
-use super::condense::{Border, Factorization, LinearSolver, SolveError};
+use super::condense::{Border, LinearSolver, SolveError};
 use super::residual::{HarmonicBalance, HbError, ResidualNorms};
 
 /// Newton settings. Every field's default is given in its doc.
@@ -145,7 +145,7 @@ pub fn solve_fixed(
     a0: &[f64],
     opts: &NewtonOptions,
 ) -> Result<(Vec<f64>, NewtonStats), NewtonError> {
-    let (a, _, st, _) = solve(hb, a0, omega, None, opts)?;
+    let (a, _, st) = solve(hb, a0, omega, None, opts)?;
     Ok((a, st))
 }
 
@@ -157,21 +157,6 @@ pub fn solve_arclength(
     arc: &ArcConstraint<'_>,
     opts: &NewtonOptions,
 ) -> Result<(Vec<f64>, f64, NewtonStats), NewtonError> {
-    solve(hb, a0, omega0, Some(arc), opts).map(|(a, w, st, _)| (a, w, st))
-}
-
-/// [`solve_arclength`], also returning the factored bordered matrix of the last Newton
-/// step (`None` when the start was already converged). Its border row is `arc.row`, so it
-/// is the matrix of the tangent system at the last iterate: the continuation takes the
-/// new tangent from it instead of factoring the matrix at the converged point (the two
-/// differ by the last Newton correction, far below what a predictor direction needs).
-pub fn solve_arclength_factored(
-    hb: &HarmonicBalance<'_>,
-    a0: &[f64],
-    omega0: f64,
-    arc: &ArcConstraint<'_>,
-    opts: &NewtonOptions,
-) -> Result<(Vec<f64>, f64, NewtonStats, Option<Factorization>), NewtonError> {
     solve(hb, a0, omega0, Some(arc), opts)
 }
 
@@ -181,7 +166,7 @@ fn solve(
     omega0: f64,
     arc: Option<&ArcConstraint<'_>>,
     opts: &NewtonOptions,
-) -> Result<(Vec<f64>, f64, NewtonStats, Option<Factorization>), NewtonError> {
+) -> Result<(Vec<f64>, f64, NewtonStats), NewtonError> {
     let solver = LinearSolver {
         condense: opts.condense,
     };
@@ -196,7 +181,6 @@ fn solve(
     let converged = |m: &Measure| m.rel.mech <= opts.tol_mech && m.rel.therm <= opts.tol_therm;
     let mut parts = hb.residual_jacobian(&a, omega, &mut r)?;
     let mut meas = measure(hb, &r, refs);
-    let mut last: Option<Factorization> = None;
     let arc_ok = |a: &[f64], w: f64| {
         arc.is_none_or(|c| c.value(a, w).abs() <= 1e-10 * c.ds.abs().max(1e-12))
     };
@@ -210,15 +194,14 @@ fn solve(
                     residual: meas.abs,
                     relative: meas.rel,
                 },
-                last,
             ));
         }
         if it == opts.max_iterations {
             break;
         }
         let neg_r: Vec<f64> = r.iter().map(|v| -v).collect();
-        let (fact, e) = match arc {
-            None => (solver.factor(hb, &parts, None)?, 0.0),
+        let (delta, d_omega) = match arc {
+            None => solver.solve(hb, &parts, None, &neg_r, 0.0)?,
             Some(c) => {
                 hb.d_residual_d_omega(&a, omega, &mut r_omega)?;
                 let border = Border {
@@ -226,14 +209,9 @@ fn solve(
                     row: c.row,
                     corner: c.corner,
                 };
-                (
-                    solver.factor(hb, &parts, Some(border))?,
-                    -c.value(&a, omega),
-                )
+                solver.solve(hb, &parts, Some(border), &neg_r, -c.value(&a, omega))?
             }
         };
-        let (delta, d_omega) = fact.solve(&neg_r, e)?;
-        last = Some(fact);
         let phi0 = merit(&meas);
         let mut lambda = 1.0;
         let mut accepted = None;
@@ -277,7 +255,6 @@ fn solve(
                     residual: meas.abs,
                     relative: meas.rel,
                 },
-                last,
             ));
         }
         parts = hb.residual_jacobian(&a, omega, &mut r)?;
