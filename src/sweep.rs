@@ -20,7 +20,9 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use crate::continuation::{BranchPoint, Continuation, ContinuationOptions, StepOutcome};
+use crate::continuation::{
+    BranchPoint, Continuation, ContinuationOptions, FinishReason, StepOutcome,
+};
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, HarmonicBalance, Ratio};
 use crate::model::{Dir, Model};
@@ -224,6 +226,8 @@ pub struct SweepReport {
     pub points: usize,
     pub bifurcations: Vec<(f64, String)>,
     pub status: RunStatus,
+    /// How the continuation ended, when it did (`None` when interrupted or failed).
+    pub finish: Option<FinishReason>,
     pub total_seconds: f64,
     /// Why stability was not assessed, when it was switched off during the sweep.
     pub stability_note: Option<String>,
@@ -391,6 +395,7 @@ impl SweepProblem {
         let mut prog = Progress::default();
         let mut bifs = Vec::new();
         let mut n_bif = 0u32;
+        let mut finish = None;
         let result: Result<RunStatus, SweepError> = (|| loop {
             if interrupt
                 .as_ref()
@@ -441,7 +446,10 @@ impl SweepProblem {
                     prog.rejected_steps += 1;
                     progress(&prog);
                 }
-                StepOutcome::Finished(_) => return Ok(RunStatus::Completed),
+                StepOutcome::Finished(f) => {
+                    finish = Some(f);
+                    return Ok(RunStatus::Completed);
+                }
             }
         })();
         match result {
@@ -451,6 +459,7 @@ impl SweepProblem {
                     points: prog.points,
                     bifurcations: bifs,
                     status,
+                    finish,
                     total_seconds: start.elapsed().as_secs_f64(),
                     stability_note: None,
                 })

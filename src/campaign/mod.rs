@@ -95,6 +95,10 @@ pub struct ManifestEntry {
     pub name: String,
     /// `completed`, `interrupted`, `failed: …`, or `pending`.
     pub status: String,
+    /// How a completed run's branch ended (`reached ω = 700.000 rad/s`, or why it stopped
+    /// before: the maximum number of points, a step below `ds_min`, a closed curve).
+    #[serde(default)]
+    pub ended: String,
     pub points: usize,
     pub seconds: f64,
     pub recording: String,
@@ -335,6 +339,11 @@ fn run_one(
     match result {
         Ok(report) => {
             entry.points = report.points;
+            entry.ended = report
+                .finish
+                .as_ref()
+                .map(|f| f.to_string())
+                .unwrap_or_default();
             entry.status = match report.status {
                 crate::record::RunStatus::Completed => "completed".into(),
                 crate::record::RunStatus::Interrupted => "interrupted".into(),

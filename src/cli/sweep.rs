@@ -199,6 +199,9 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         report.status,
         args.output.display()
     )?;
+    if let Some(finish) = &report.finish {
+        writeln!(out, "  the branch {finish}")?;
+    }
     if let Some(note) = &report.stability_note {
         writeln!(out, "  stability not assessed: {note}")?;
     }

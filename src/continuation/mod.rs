@@ -19,7 +19,9 @@
 //! * the start point is Newton at `ω_start` from zero coefficients (its first iterate is the
 //!   linear response) or from [`ContinuationOptions::initial_guess`]; its tangent is oriented towards `ω_end`;
 //! * stops when ω leaves `[min(ω_start, ω_end), max(…)]` (the last point is re-solved on the
-//!   bound), after `max_points`, or when the step falls below `ds_min`.
+//!   bound), after `max_points`, when the step falls below `ds_min`, or when the branch
+//!   comes back onto its own path ([`closing_point`]: a closed curve would otherwise be
+//!   traced round and round until `max_points`).
 //!
 //! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
 //! [`HbSolution`]. When the number of multipliers outside the unit circle differs between
@@ -209,6 +211,73 @@ pub enum FinishReason {
     MaxPoints,
     /// The step fell below `ds_min` at `omega`.
     StepTooSmall { omega: f64, ds: f64 },
+    /// The branch came back onto itself: the point at `omega` lies on the segment after
+    /// the earlier point `earlier` (running number), going the same way, so from here on
+    /// the continuation would retrace a closed curve (see [`closing_point`]).
+    Closed { omega: f64, earlier: usize },
+}
+
+impl std::fmt::Display for FinishReason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Bound { omega } => write!(f, "reached ω = {omega:.3} rad/s"),
+            Self::MaxPoints => write!(f, "stopped at the maximum number of points"),
+            Self::StepTooSmall { omega, ds } => write!(
+                f,
+                "stopped at ω = {omega:.3} rad/s: the step fell to {ds:.3e}, below ds_min"
+            ),
+            Self::Closed { omega, earlier } => write!(
+                f,
+                "stopped at ω = {omega:.3} rad/s: it closed on itself (it retraces the \
+                 segment after point {earlier})"
+            ),
+        }
+    }
+}
+
+/// Whether the point `x` (scaled unknowns and ω) at arclength `s_x`, with unit tangent
+/// `tangent`, lies on the earlier path `history` (scaled points with their arclengths, in
+/// order, the last one the point before `x`): the index `j` of the first segment
+/// `history[j] → history[j+1]` that `x` projects into, lies within a quarter of the
+/// segment's length from, and runs along (the segment's direction within about 37° of
+/// `tangent`), with at least eight of that segment's lengths of path between them.
+///
+/// A branch that is not closed never passes through an earlier point again in the same
+/// direction, so this fires when the continuation has gone round a closed curve: an isola
+/// it was started on, or one it jumped onto. The path-length condition keeps a tight
+/// Z-shaped pair of folds, whose third sheet may pass close to its first, from counting.
+pub fn closing_point(
+    history: &[(Vec<f64>, f64)],
+    x: &[f64],
+    s_x: f64,
+    tangent: &[f64],
+) -> Option<usize> {
+    let n = history.len();
+    if n < 3 {
+        return None;
+    }
+    (0..n - 2).find(|&j| {
+        let ((p, _), (q, s_q)) = (&history[j], &history[j + 1]);
+        let seg: Vec<f64> = q.iter().zip(p).map(|(a, b)| a - b).collect();
+        let len = seg.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if len.is_nan() || len <= 0.0 || s_x - s_q < 8.0 * len {
+            return false;
+        }
+        let along: f64 = x
+            .iter()
+            .zip(p)
+            .zip(&seg)
+            .map(|((a, b), u)| (a - b) * u)
+            .sum::<f64>()
+            / len;
+        if !(-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) {
+            return false;
+        }
+        let dist2: f64 = x.iter().zip(p).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
+        let perp = (dist2 - along * along).max(0.0).sqrt();
+        let cos: f64 = seg.iter().zip(tangent).map(|(u, t)| u * t).sum::<f64>() / len;
+        perp <= 0.25 * len && cos > 0.8
+    })
 }
 
 /// Result of one [`Continuation::step`].
@@ -251,6 +320,9 @@ pub struct Continuation<'a> {
     n_points: usize,
     finished: Option<FinishReason>,
     finish_after: Option<FinishReason>,
+    /// Accepted points in scaled units (unknowns, then ω) with their arclengths, for
+    /// [`closing_point`].
+    history: Vec<(Vec<f64>, f64)>,
 }
 
 impl<'a> Continuation<'a> {
@@ -310,6 +382,7 @@ impl<'a> Continuation<'a> {
             n_points: 0,
             finished: None,
             finish_after: None,
+            history: Vec::new(),
         })
     }
 
@@ -443,6 +516,7 @@ impl<'a> Continuation<'a> {
         self.scales.push(sw);
         let tangent = self.tangent(&a, omega, None)?;
         let point = self.make_point(&a, omega, &stats, 0.0);
+        self.history = vec![(self.scaled(&a, omega), 0.0)];
         self.current = Some(Current {
             a,
             omega,
@@ -455,6 +529,15 @@ impl<'a> Continuation<'a> {
             point: Box::new(point),
             bifurcations: Vec::new(),
         })
+    }
+
+    /// `(a, ω)` in scaled units.
+    fn scaled(&self, a: &[f64], omega: f64) -> Vec<f64> {
+        let s = &self.scales;
+        let nu = a.len();
+        let mut x: Vec<f64> = a.iter().zip(s).map(|(v, si)| v / si).collect();
+        x.push(omega / s[nu]);
+        x
     }
 
     /// Corrects from `cur` at arclength offset `ds` along its tangent.
@@ -589,6 +672,13 @@ impl<'a> Continuation<'a> {
         };
         self.ds = (self.ds * factor).clamp(self.opts.ds_min, self.opts.ds_max);
         self.n_points += 1;
+        let x = self.scaled(&a, omega);
+        if self.finish_after.is_none()
+            && let Some(earlier) = closing_point(&self.history, &x, arclength, &tangent)
+        {
+            self.finish_after = Some(FinishReason::Closed { omega, earlier });
+        }
+        self.history.push((x, arclength));
         if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
             self.finish_after = Some(FinishReason::MaxPoints);
         }
@@ -774,5 +864,98 @@ impl<'a> Continuation<'a> {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Points on a circle of radius 1 in the (x₀, x₁) plane, `n` per turn, for `turns`
+    /// turns (the radius shrinking by `shrink` per turn).
+    fn circle(n: usize, turns: f64, shrink: f64) -> Vec<(Vec<f64>, Vec<f64>)> {
+        let total = (n as f64 * turns) as usize;
+        (0..total)
+            .map(|k| {
+                let phi = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
+                let r = 1.0 - shrink * phi / (2.0 * std::f64::consts::PI);
+                (
+                    vec![r * phi.cos(), r * phi.sin(), 0.3],
+                    vec![-phi.sin(), phi.cos(), 0.0],
+                )
+            })
+            .collect()
+    }
+
+    /// The first index at which [`closing_point`] fires along `path`, and the earlier
+    /// point it names.
+    fn first_closure(path: &[(Vec<f64>, Vec<f64>)]) -> Option<(usize, usize)> {
+        let mut history: Vec<(Vec<f64>, f64)> = Vec::new();
+        let mut s = 0.0;
+        for (k, (x, t)) in path.iter().enumerate() {
+            if let Some((prev, _)) = history.last() {
+                s += x
+                    .iter()
+                    .zip(prev)
+                    .map(|(a, b)| (a - b).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+            }
+            if let Some(j) = closing_point(&history, x, s, t) {
+                return Some((k, j));
+            }
+            history.push((x.clone(), s));
+        }
+        None
+    }
+
+    #[test]
+    fn a_closed_curve_is_recognised_after_one_turn() {
+        // 40 points per turn: the 41st point coincides with the first, going the same way
+        let path = circle(40, 1.5, 0.0);
+        assert_eq!(first_closure(&path), Some((40, 0)));
+        // with the second turn offset by a third of a step it still lands on the first
+        // segment
+        let mut shifted = circle(40, 1.0, 0.0);
+        let phi0 = 2.0 * std::f64::consts::PI / 40.0 / 3.0;
+        shifted.extend((0..10).map(|k| {
+            let phi = phi0 + 2.0 * std::f64::consts::PI * k as f64 / 40.0;
+            (
+                vec![phi.cos(), phi.sin(), 0.3],
+                vec![-phi.sin(), phi.cos(), 0.0],
+            )
+        }));
+        assert_eq!(first_closure(&shifted), Some((40, 0)));
+    }
+
+    #[test]
+    fn open_paths_are_not_taken_for_closed_ones() {
+        // a spiral whose second turn passes 0.1 inside the first (steps are 0.157 long)
+        assert_eq!(first_closure(&circle(40, 2.0, 0.1)), None);
+        // the same circle run backwards on its second turn: it meets the earlier path
+        // going the other way
+        let mut back = circle(40, 1.0, 0.0);
+        back.extend(
+            circle(40, 1.0, 0.0)
+                .into_iter()
+                .rev()
+                .map(|(x, t)| (x, t.iter().map(|v| -v).collect::<Vec<_>>())),
+        );
+        assert_eq!(first_closure(&back), None);
+        // a Z of two folds within three steps, its third sheet right on its first
+        let z = [
+            (vec![0.0, 0.0], vec![1.0, 0.0]),
+            (vec![1.0, 0.0], vec![1.0, 0.0]),
+            (vec![0.4, 0.01], vec![-1.0, 0.0]),
+            (vec![0.45, 0.02], vec![1.0, 0.0]),
+            (vec![0.9, 0.0], vec![1.0, 0.0]),
+            (vec![1.5, 0.0], vec![1.0, 0.0]),
+        ];
+        assert_eq!(first_closure(&z), None);
+        // a straight line never closes
+        let line: Vec<_> = (0..50)
+            .map(|k| (vec![k as f64 * 0.1, 0.0], vec![1.0, 0.0]))
+            .collect();
+        assert_eq!(first_closure(&line), None);
     }
 }
