@@ -256,26 +256,25 @@ pub fn closing_point(
     if n < 3 {
         return None;
     }
+    let dot = |a: &mut dyn Iterator<Item = f64>| a.sum::<f64>();
     (0..n - 2).find(|&j| {
         let ((p, _), (q, s_q)) = (&history[j], &history[j + 1]);
-        let seg: Vec<f64> = q.iter().zip(p).map(|(a, b)| a - b).collect();
-        let len = seg.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let len2 = dot(&mut q.iter().zip(p).map(|(a, b)| (a - b).powi(2)));
+        let len = len2.sqrt();
         if len.is_nan() || len <= 0.0 || s_x - s_q < 8.0 * len {
             return false;
         }
-        let along: f64 = x
-            .iter()
-            .zip(p)
-            .zip(&seg)
-            .map(|((a, b), u)| (a - b) * u)
-            .sum::<f64>()
-            / len;
+        // within a quarter length of the segment, x is at most 1.03·len from its start
+        let dist2 = dot(&mut x.iter().zip(p).map(|(a, b)| (a - b).powi(2)));
+        if dist2 > 1.07 * len2 {
+            return false;
+        }
+        let along = dot(&mut x.iter().zip(p).zip(q).map(|((a, b), c)| (a - b) * (c - b))) / len;
         if !(-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) {
             return false;
         }
-        let dist2: f64 = x.iter().zip(p).map(|(a, b)| (a - b).powi(2)).sum::<f64>();
         let perp = (dist2 - along * along).max(0.0).sqrt();
-        let cos: f64 = seg.iter().zip(tangent).map(|(u, t)| u * t).sum::<f64>() / len;
+        let cos = dot(&mut q.iter().zip(p).zip(tangent).map(|((c, b), t)| (c - b) * t)) / len;
         perp <= 0.25 * len && cos > 0.8
     })
 }
