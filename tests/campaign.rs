@@ -41,6 +41,12 @@ fn campaign_runs_resumes_shards_and_merges() {
     for r in &m.runs {
         assert_eq!(r.status, "completed", "{r:?}");
         assert!(r.points >= 1);
+        // how the branch ended: at the bound or at max_points = 3
+        assert!(
+            r.ended == "reached ω = 402.000 rad/s"
+                || (r.ended == "stopped at the maximum number of points" && r.points == 3),
+            "{r:?}"
+        );
         assert_eq!(
             sha256_file(&out.join(&r.recording)).expect("recording"),
             r.sha256
@@ -50,6 +56,7 @@ fn campaign_runs_resumes_shards_and_merges() {
     let again = campaign::run(&file, Some(2), None, None, &quiet).expect("resume");
     for (x, y) in m.runs.iter().zip(&again.runs) {
         assert_eq!(x.seconds, y.seconds, "run {} was redone", x.name);
+        assert_eq!(x.ended, y.ended, "read back from the manifest");
     }
     // A damaged recording is redone.
     std::fs::write(out.join("b.mcap"), b"garbage").expect("damage");
