@@ -107,7 +107,8 @@ impl Default for StudySettings {
     }
 }
 
-/// Bisection tolerance (scaled arclength) for locating bifurcations in a sweep.
+/// Bracket tolerance (scaled arclength) of the crossing search that locates bifurcations
+/// in a sweep.
 pub const BIFURCATION_TOL_ARCLENGTH: f64 = 1e-4;
 
 /// Crossing-multiplier modulus tolerance for locating bifurcations in a sweep: the search
@@ -364,10 +365,10 @@ impl SweepProblem {
         opts.ds_initial = opts.ds_initial.min(s.ds_max);
         opts.max_points = s.max_points;
         opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
-        // Bisection to 1e-4 in scaled arclength (≈ 0.04 rad/s on the default range): finer
-        // brackets cannot place a crossing better than the multipliers' own accuracy
-        // (moduli to ~5e-4 at the default intervals), and each halving costs a Newton
-        // solve plus a stability evaluation.
+        // The crossing search stops at a bracket of 1e-4 in scaled arclength (≈ 0.04 rad/s
+        // on the default range) or a crossing modulus within 1e-4 of the circle: finer
+        // cannot place a crossing better than the multipliers' own accuracy, and each
+        // search step costs a Newton solve plus a stability evaluation.
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
         opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
         Ok(Continuation::new(hb, opts, stability)?)

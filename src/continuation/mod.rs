@@ -256,25 +256,38 @@ pub fn closing_point(
     if n < 3 {
         return None;
     }
-    let dot = |a: &mut dyn Iterator<Item = f64>| a.sum::<f64>();
+    let dot = |u: &[f64], v: &[f64], w: &[f64], z: &[f64]| -> f64 {
+        // (u − v)·(w − z)
+        u.iter()
+            .zip(v)
+            .zip(w.iter().zip(z))
+            .map(|((a, b), (c, e))| (a - b) * (c - e))
+            .sum()
+    };
     (0..n - 2).find(|&j| {
         let ((p, _), (q, s_q)) = (&history[j], &history[j + 1]);
-        let len2 = dot(&mut q.iter().zip(p).map(|(a, b)| (a - b).powi(2)));
+        let len2 = dot(q, p, q, p);
         let len = len2.sqrt();
         if len.is_nan() || len <= 0.0 || s_x - s_q < 8.0 * len {
             return false;
         }
         // within a quarter length of the segment, x is at most 1.03·len from its start
-        let dist2 = dot(&mut x.iter().zip(p).map(|(a, b)| (a - b).powi(2)));
+        let dist2 = dot(x, p, x, p);
         if dist2 > 1.07 * len2 {
             return false;
         }
-        let along = dot(&mut x.iter().zip(p).zip(q).map(|((a, b), c)| (a - b) * (c - b))) / len;
+        let along = dot(x, p, q, p) / len;
         if !(-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) {
             return false;
         }
         let perp = (dist2 - along * along).max(0.0).sqrt();
-        let cos = dot(&mut q.iter().zip(p).zip(tangent).map(|((c, b), t)| (c - b) * t)) / len;
+        let cos: f64 = q
+            .iter()
+            .zip(p)
+            .zip(tangent)
+            .map(|((c, b), t)| (c - b) * t)
+            .sum::<f64>()
+            / len;
         perp <= 0.25 * len && cos > 0.8
     })
 }

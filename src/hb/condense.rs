@@ -187,11 +187,9 @@ fn full_lu(
     let m = nu + usize::from(border.is_some());
     let jac = hb.dense_jacobian(parts);
     let mut a = Mat::<f64>::zeros(m, m);
-    for i in 0..nu {
-        for j in 0..nu {
-            a[(i, j)] = jac[i * nu + j];
-        }
-    }
+    a.as_mut()
+        .submatrix_mut(0, 0, nu, nu)
+        .copy_from(faer::MatRef::from_row_major_slice(&jac, nu, nu));
     if let Some(bd) = border {
         for i in 0..nu {
             a[(i, nu)] = bd.column[i];
@@ -309,16 +307,7 @@ impl Condensed {
                 };
                 let (nn, nl_len) = (lin.len(), nl.len());
                 let (sl, sn) = (np * nn, np * nl_len);
-                let mut schur = Mat::<f64>::zeros(sn, sn);
-                for pr in 0..np {
-                    for (ti, &i) in nl.iter().enumerate() {
-                        for pc in 0..np {
-                            for (tj, &j) in nl.iter().enumerate() {
-                                schur[(pr * nl_len + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
-                            }
-                        }
-                    }
-                }
+                let mut schur = z_block(&nl, &nl, np, z);
                 let mut corr_c = Mat::<f64>::zeros(sn, usize::from(has_border));
                 let mut block = Block {
                     lin: lin.iter().map(|&i| fld.offset + i).collect(),
@@ -326,32 +315,25 @@ impl Condensed {
                     hs,
                     parts: np,
                     zll: None,
-                    znl: Mat::zeros(sn, sl),
+                    znl: z_block(&nl, &lin, np, z),
                     w: Mat::zeros(sl, sn),
                     yc: Mat::zeros(sl, usize::from(has_border)),
                 };
                 if nn > 0 {
-                    let ncol = sn + usize::from(has_border);
-                    let mut zll = Mat::<f64>::zeros(sl, sl);
-                    let mut rhs = Mat::<f64>::zeros(sl, ncol);
-                    for pr in 0..np {
-                        for (ti, &i) in lin.iter().enumerate() {
-                            for pc in 0..np {
-                                for (tj, &j) in lin.iter().enumerate() {
-                                    zll[(pr * nn + ti, pc * nn + tj)] = z(i, j, pr, pc);
-                                }
-                                for (tj, &j) in nl.iter().enumerate() {
-                                    rhs[(pr * nn + ti, pc * nl_len + tj)] = z(i, j, pr, pc);
-                                    block.znl[(pc * nl_len + tj, pr * nn + ti)] = z(j, i, pc, pr);
-                                }
-                            }
-                            if let Some(bd) = border {
+                    // [Z_LN, c_L]
+                    let mut rhs = Mat::<f64>::zeros(sl, sn + usize::from(has_border));
+                    rhs.as_mut()
+                        .subcols_mut(0, sn)
+                        .copy_from(z_block(&lin, &nl, np, z));
+                    if let Some(bd) = border {
+                        for pr in 0..np {
+                            for (ti, &i) in lin.iter().enumerate() {
                                 let gi = (fld.offset + i) * nc + coeff(hs, pr);
                                 rhs[(pr * nn + ti, sn)] = bd.column[gi];
                             }
                         }
                     }
-                    let lu = zll.partial_piv_lu();
+                    let lu = z_block(&lin, &lin, np, z).partial_piv_lu();
                     let x = lu.solve(&rhs);
                     check_finite(&x, "linear-DoF block", sl, omega)?;
                     let prod = &block.znl * &x; // sn × ncol
@@ -507,6 +489,21 @@ impl Condensed {
         }
         Ok((x, mu))
     }
+}
+
+/// The block of one harmonic slot's dynamic stiffness with rows `rows` and columns
+/// `cols` (field-local DoFs), `np` parts each: entry `(pr·|rows| + a, pc·|cols| + b)` is
+/// `z(rows[a], cols[b], pr, pc)`.
+fn z_block(
+    rows: &[usize],
+    cols: &[usize],
+    np: usize,
+    z: impl Fn(usize, usize, usize, usize) -> f64,
+) -> Mat<f64> {
+    let (nr, nc) = (rows.len(), cols.len());
+    Mat::from_fn(np * nr, np * nc, |r, c| {
+        z(rows[r % nr], cols[c % nc], r / nr, c / nc)
+    })
 }
 
 /// Coefficient index of (harmonic slot `hs`, part) with `nh` harmonics: `hs = 0` is the
