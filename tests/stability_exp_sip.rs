@@ -335,3 +335,60 @@ fn sweep_default_stability_matches_the_variational_equations_on_an_unstable_orbi
     let d = matched_distance(&got.multipliers, &reference.multipliers, 40);
     assert!(d < 5e-3, "largest 40 multipliers: distance {d:e}");
 }
+
+/// The modal propagation is the same product in the eigenvector coordinates of `B̄`'s
+/// blocks: on the reduced dual rotor (coupled network) it must take the modal path (both
+/// bases well conditioned) and give the dense path's monodromy matrix to rounding.
+#[test]
+fn modal_and_dense_products_agree_on_the_dual_rotor() {
+    let p = dual_rotor_point(450.0, true);
+    let (sys, orbit) = (&p.sys, &p.orbit);
+    let cb = CraigBampton::new(sys, 450.0, ReductionSettings::default()).expect("reduction");
+    let rs = cb.system(sys).expect("reduced system");
+    let view = ReducedOrbit::new(orbit, &cb);
+    let with = |modal: bool| ExpSip {
+        intervals: 128,
+        max_intervals: 0,
+        modal,
+        ..ExpSip::default()
+    };
+    let conds = with(true)
+        .modal_conditions(&rs, &view)
+        .expect("setup")
+        .expect("both blocks have a modal basis");
+    assert_eq!(conds.len(), 2, "mechanical and thermal blocks");
+    assert!(conds.iter().all(|&c| c < 1e4), "conditions {conds:?}");
+    assert!(
+        with(false)
+            .modal_conditions(&rs, &view)
+            .expect("setup")
+            .is_none()
+    );
+
+    let dense = with(false).monodromy(&rs, &view).expect("dense");
+    let modal = with(true).monodromy(&rs, &view).expect("modal");
+    let norm = |m: &faer::Mat<f64>| m.norm_l2();
+    let diff = norm(&(&modal - &dense)) / norm(&dense);
+    assert!(
+        diff < 1e-10,
+        "relative difference of the monodromy matrices {diff:e}"
+    );
+    assert!(diff > 0.0, "the two paths must not be the same computation");
+
+    let mu_dense = with(false)
+        .multipliers(&rs, &view)
+        .expect("dense")
+        .multipliers;
+    let mu_modal = with(true)
+        .multipliers(&rs, &view)
+        .expect("modal")
+        .multipliers;
+    let near: Vec<Complex64> = mu_dense
+        .iter()
+        .copied()
+        .filter(|m| m.norm() > 0.5)
+        .collect();
+    assert!(near.len() >= 66, "the thermal multipliers at least");
+    let d = matched_distance(&near, &mu_modal, near.len());
+    assert!(d < 1e-10, "multipliers above 1/2 differ by {d:e}");
+}

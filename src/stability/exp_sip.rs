@@ -26,14 +26,21 @@
 //! the product converges as `O(Δ²)`, the order of the interval means themselves (checked
 //! against the variational equations in `tests/stability_exp_sip.rs`).
 //!
-//! Cost per orbit: one `d × d` exponential plus, per interval, one dense `d × d` product
-//! and `N` low-rank products; the columns are split over the rayon threads.
+//! The product is propagated in the modal coordinates of `B̄`'s blocks ([`RealModal`],
+//! `modal`, the default): there `e^{ΔB̄}` is a set of scalings and plane rotations and the
+//! fluctuation a thin gather and spread, so an interval costs `(2p+q)·d + (p+q)·(2p+q) +
+//! d·(p+q)`-ish multiply–adds per column instead of the dense block product's `(2n)² + m²`
+//! (on the reduced dual rotor about 7.5 k against 13 k; measured on one evaluation at
+//! 500 rad/s, one thread: 114 → 95 ms including the orbit sampling and the
+//! eigenvalues). The dense exponentials remain the fallback for a block without a
+//! well-conditioned eigenvector basis. The columns are split over the rayon threads.
 
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use num_complex::Complex64;
 
 use super::expm::expm;
+use super::modal::{BlockDiagonal, MAX_CONDITION, RealModal};
 use super::sip::{axpy_derivs, by_column_blocks, gauss_legendre, interval_means, state_space_for};
 use super::{FloquetResult, StabilityError, StabilityMethod, all_finite, eigenvalues_checked};
 use crate::integrate::StateSpace;
@@ -62,6 +69,12 @@ pub struct ExpSip {
     /// intervals are doubled, up to this many. `max_intervals ≤ intervals`: no
     /// refinement. Default 4096.
     pub max_intervals: usize,
+    /// Propagate in the modal coordinates of `B̄`'s blocks ([`RealModal`]): the interval
+    /// exponentials become scalings and plane rotations and the fluctuation a thin gather
+    /// and spread, the same product in other coordinates. A block whose eigenvector basis
+    /// is ill-conditioned (`cond₁ > 1e6`) falls back to the dense exponential. Default
+    /// `true`.
+    pub modal: bool,
 }
 
 /// The constant part `B̄` of the splitting `B_k = B̄ + δB_k`.
@@ -104,6 +117,7 @@ impl Default for ExpSip {
             mean_split: MeanSplit::Fields,
             extrapolate: true,
             max_intervals: 4096,
+            modal: true,
         }
     }
 }
@@ -147,30 +161,9 @@ impl ExpSip {
                 reason: "extrapolation pairs the intervals: need an even number",
             });
         }
-        let (nodes, weights) =
-            gauss_legendre(self.gauss_points).ok_or(StabilityError::Setting {
-                field: "exp_sip.gauss_points",
-                value: self.gauss_points.to_string(),
-                reason: "supported: 1 to 5",
-            })?;
         let omega = orbit.omega();
         let d = space.dim();
-        let mut ws = space.workspace();
-        let delta = period / n_k as f64;
-        let means = interval_means(space, orbit, delta, n_k, nodes, weights, &mut ws);
-        // Orbit mean D̄ (the same for both products when extrapolating).
-        let mut mean = ws.eval.clone();
-        mean.clear();
-        for m in &means {
-            axpy_derivs(&mut mean, 1.0 / n_k as f64, m);
-        }
-        if self.mean_split == MeanSplit::Fields {
-            // the mean coupling between the fields goes with the fluctuation
-            for c in [&mut mean.df_dt, &mut mean.dg_dx, &mut mean.dg_dv] {
-                c.iter_mut().for_each(|v| *v = 0.0);
-            }
-        }
-        let b_bar = space.linearization_dense(&mean, &mut ws);
+        let (means, mean, b_bar, delta) = self.split_mean(space, orbit, period, n_k)?;
         if !self.extrapolate {
             return Ok((
                 self.product(space, &b_bar, &mean, means, delta, omega)?,
@@ -199,6 +192,74 @@ impl ExpSip {
         Ok((extrapolated, Some(fine)))
     }
 
+    /// The interval means on `n_k` intervals, their orbit mean `D̄` (without the mean
+    /// coupling between the fields with [`MeanSplit::Fields`]), the constant state matrix
+    /// `B̄` built from it, and the interval length.
+    fn split_mean(
+        &self,
+        space: &StateSpace<'_>,
+        orbit: &dyn PeriodicOrbit,
+        period: f64,
+        n_k: usize,
+    ) -> Result<(Vec<NonlinearEval>, NonlinearEval, Mat<f64>, f64), StabilityError> {
+        let (nodes, weights) =
+            gauss_legendre(self.gauss_points).ok_or(StabilityError::Setting {
+                field: "exp_sip.gauss_points",
+                value: self.gauss_points.to_string(),
+                reason: "supported: 1 to 5",
+            })?;
+        let mut ws = space.workspace();
+        let delta = period / n_k as f64;
+        let means = interval_means(space, orbit, delta, n_k, nodes, weights, &mut ws);
+        // Orbit mean D̄ (the same for both products when extrapolating).
+        let mut mean = ws.eval.clone();
+        mean.clear();
+        for m in &means {
+            axpy_derivs(&mut mean, 1.0 / n_k as f64, m);
+        }
+        if self.mean_split == MeanSplit::Fields {
+            // the mean coupling between the fields goes with the fluctuation
+            for c in [&mut mean.df_dt, &mut mean.dg_dx, &mut mean.dg_dv] {
+                c.iter_mut().for_each(|v| *v = 0.0);
+            }
+        }
+        let b_bar = space.linearization_dense(&mean, &mut ws);
+        Ok((means, mean, b_bar, delta))
+    }
+
+    /// Row ranges of the diagonal blocks of `B̄` taken exactly (see [`MeanSplit`]).
+    fn exact_blocks(&self, space: &StateSpace<'_>) -> Vec<(usize, usize)> {
+        let d = space.dim();
+        match self.mean_split {
+            MeanSplit::Coupled => vec![(0, d)],
+            MeanSplit::Fields => {
+                let dm = 2 * space.n_mech();
+                [(0, dm), (dm, d)]
+                    .into_iter()
+                    .filter(|b| b.1 > b.0)
+                    .collect()
+            }
+        }
+    }
+
+    /// `cond₁` of the (balanced) modal bases of `B̄`'s blocks on `orbit` at
+    /// [`ExpSip::intervals`], one per block; `None` when a block has no acceptable basis
+    /// and the product falls back to the dense exponentials (also when `modal` is off).
+    pub fn modal_conditions(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<Option<Vec<f64>>, StabilityError> {
+        if !self.modal {
+            return Ok(None);
+        }
+        let (space, _, period) = state_space_for(system, orbit)?;
+        let (_, _, b_bar, delta) = self.split_mean(&space, orbit, period, self.intervals)?;
+        let blocks = self.exact_blocks(&space);
+        Ok(ModalField::all(&space, &b_bar, &blocks, delta)
+            .map(|fields| fields.iter().map(|f| f.modal.condition).collect()))
+    }
+
     /// The split product over the intervals whose means are `means` (consumed: turned into
     /// the fluctuations about `mean`, whose state matrix is `b_bar`).
     fn product(
@@ -214,16 +275,33 @@ impl ExpSip {
         for m in &mut means {
             axpy_derivs(m, -1.0, mean);
         }
-        let blocks: Vec<(usize, usize)> = match self.mean_split {
-            MeanSplit::Coupled => vec![(0, d)],
-            MeanSplit::Fields => {
-                let dm = 2 * space.n_mech();
-                [(0, dm), (dm, d)]
-                    .into_iter()
-                    .filter(|b| b.1 > b.0)
-                    .collect()
+        let blocks = self.exact_blocks(space);
+        if self.modal
+            && let Some(fields) = ModalField::all(space, b_bar, &blocks, delta)
+        {
+            let factors = self.fluctuation_factors(space, &means, delta);
+            let prod = by_column_blocks(d, |c0, c1| {
+                Self::product_block_modal(space, &factors, &fields, c0, c1)
+            });
+            // back to the physical coordinates: M = V M̂ V⁻¹ (V block diagonal)
+            let mut v = Mat::<f64>::zeros(d, d);
+            let mut v_inv = Mat::<f64>::zeros(d, d);
+            for f in &fields {
+                let (r0, len) = (f.rows.0, f.rows.1 - f.rows.0);
+                v.as_mut()
+                    .submatrix_mut(r0, r0, len, len)
+                    .copy_from(&f.modal.v);
+                v_inv
+                    .as_mut()
+                    .submatrix_mut(r0, r0, len, len)
+                    .copy_from(&f.modal.v_inv);
             }
-        };
+            let prod = &v * &prod * &v_inv;
+            if !all_finite(prod.as_ref()) {
+                return Err(StabilityError::NonFinite { omega });
+            }
+            return Ok(prod);
+        }
         let mut e_half = Vec::with_capacity(blocks.len());
         let mut e_full = Vec::with_capacity(blocks.len());
         for &(r0, r1) in &blocks {
@@ -369,6 +447,144 @@ impl ExpSip {
             }
         }
         prod
+    }
+}
+
+impl ExpSip {
+    /// Columns `c0..c1` of the product in modal coordinates (see [`ModalField`]).
+    fn product_block_modal(
+        space: &StateSpace<'_>,
+        factors: &[Mat<f64>],
+        fields: &[ModalField],
+        c0: usize,
+        c1: usize,
+    ) -> Mat<f64> {
+        let d = space.dim();
+        let c = c1 - c0;
+        let (g, r) = space.low_rank_dims();
+        let mut prod = Mat::<f64>::zeros(d, c);
+        for f in fields {
+            // columns c0..c1 of the block-diagonal e^{ΔΛ/2}
+            let (r0, r1) = f.rows;
+            let (lo, hi) = (c0.max(r0), c1.min(r1));
+            if lo < hi {
+                f.half.columns_into(
+                    lo - r0,
+                    prod.as_mut().submatrix_mut(r0, lo - c0, r1 - r0, hi - lo),
+                );
+            }
+        }
+        let mut gathered = Mat::<f64>::zeros(g, c);
+        let mut mixed = Mat::<f64>::zeros(r, c);
+        let last = factors.len().saturating_sub(1);
+        for (k, gk) in factors.iter().enumerate() {
+            // prod ← T_N(Δ δB_k) prod = prod + L̂ G_k Ŝ prod
+            if r > 0 {
+                for f in fields.iter().filter(|f| f.gather.1 > f.gather.0) {
+                    matmul(
+                        gathered
+                            .as_mut()
+                            .subrows_mut(f.gather.0, f.gather.1 - f.gather.0),
+                        Accum::Replace,
+                        f.s_hat.as_ref(),
+                        prod.as_ref().subrows(f.rows.0, f.rows.1 - f.rows.0),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
+                matmul(
+                    mixed.as_mut(),
+                    Accum::Replace,
+                    gk.as_ref(),
+                    gathered.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                for f in fields.iter().filter(|f| f.spread.1 > f.spread.0) {
+                    matmul(
+                        prod.as_mut().subrows_mut(f.rows.0, f.rows.1 - f.rows.0),
+                        Accum::Add,
+                        f.l_hat.as_ref(),
+                        mixed.as_ref().subrows(f.spread.0, f.spread.1 - f.spread.0),
+                        1.0,
+                        Par::Seq,
+                    );
+                }
+            }
+            for f in fields {
+                let e = if k == last { &f.half } else { &f.full };
+                e.apply(prod.as_mut().subrows_mut(f.rows.0, f.rows.1 - f.rows.0));
+            }
+        }
+        prod
+    }
+}
+
+/// One diagonal block of `B̄` (a field, or the whole state with [`MeanSplit::Coupled`]) in
+/// its modal coordinates `z = V⁻¹ y`: the rows of the gathered operand `S y` and the
+/// columns of the spread `L` that belong to it, taken into the modal coordinates
+/// (`Ŝ = S V`, `L̂ = V⁻¹ L`), and the interval exponentials `e^{ΔΛ/2}`, `e^{ΔΛ}`.
+struct ModalField {
+    /// State rows `r0..r1`, gathered rows `g0..g1` and spread columns `s0..s1`.
+    rows: (usize, usize),
+    gather: (usize, usize),
+    spread: (usize, usize),
+    modal: RealModal,
+    s_hat: Mat<f64>,
+    l_hat: Mat<f64>,
+    half: BlockDiagonal,
+    full: BlockDiagonal,
+}
+
+impl ModalField {
+    /// The modal form of every block in `blocks` (row ranges of `b_bar`), or `None` when
+    /// one block has no well-conditioned eigenvector basis.
+    ///
+    /// The gathered rows are `[x_P, v_P, T_Q]` and the spread columns `[P, Q]`
+    /// ([`StateSpace::gather`], [`StateSpace::spread_add`]): with the field split, `x_P`,
+    /// `v_P` and `P` belong to the mechanical block and `T_Q`, `Q` to the thermal one.
+    fn all(
+        space: &StateSpace<'_>,
+        b_bar: &Mat<f64>,
+        blocks: &[(usize, usize)],
+        delta: f64,
+    ) -> Option<Vec<Self>> {
+        let d = space.dim();
+        let dm = 2 * space.n_mech();
+        let (p, q) = (space.dofs().mech.len(), space.dofs().therm.len());
+        let (g, r) = space.low_rank_dims();
+        let mut s = Mat::<f64>::zeros(g, d);
+        space.gather(Mat::<f64>::identity(d, d).as_ref(), s.as_mut());
+        let mut l = Mat::<f64>::zeros(d, r);
+        space.spread_add(Mat::<f64>::identity(r, r).as_ref(), l.as_mut());
+        blocks
+            .iter()
+            .map(|&(r0, r1)| {
+                let (gather, spread) = if (r0, r1) == (0, d) {
+                    ((0, g), (0, r))
+                } else if (r0, r1) == (0, dm) {
+                    ((0, 2 * p), (0, p))
+                } else {
+                    ((2 * p, 2 * p + q), (p, p + q))
+                };
+                let len = r1 - r0;
+                let modal =
+                    RealModal::new(b_bar.as_ref().submatrix(r0, r0, len, len), MAX_CONDITION)?;
+                let s_hat = s.as_ref().submatrix(gather.0, r0, gather.1 - gather.0, len) * &modal.v;
+                let l_hat =
+                    &modal.v_inv * l.as_ref().submatrix(r0, spread.0, len, spread.1 - spread.0);
+                Some(Self {
+                    rows: (r0, r1),
+                    gather,
+                    spread,
+                    half: modal.exp(0.5 * delta),
+                    full: modal.exp(delta),
+                    modal,
+                    s_hat,
+                    l_hat,
+                })
+            })
+            .collect()
     }
 }
 

@@ -38,7 +38,7 @@ fn norm1(a: &Mat<f64>) -> f64 {
 }
 
 /// Diagonal balancing with powers of two; returns the scale `d` with `A ← D⁻¹ A D`.
-fn balance(a: &mut Mat<f64>) -> Vec<f64> {
+pub(crate) fn balance(a: &mut Mat<f64>) -> Vec<f64> {
     let n = a.nrows();
     let mut d = vec![1.0; n];
     for _sweep in 0..32 {
