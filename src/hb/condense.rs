@@ -23,7 +23,10 @@
 //! instead (reference and benchmark).
 
 use faer::Mat;
-use faer::linalg::solvers::{PartialPivLu, Solve};
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
+use faer::perm::PermRef;
+use faer::{MatMut, get_global_parallelism};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -143,7 +146,7 @@ pub struct Factorization {
 }
 
 enum Factored {
-    Full(PartialPivLu<f64>),
+    Full(Lu),
     Condensed(Box<Condensed>),
 }
 
@@ -178,11 +181,7 @@ impl Factorization {
     }
 }
 
-fn full_lu(
-    hb: &HarmonicBalance<'_>,
-    parts: &JacobianParts,
-    border: Option<Border<'_>>,
-) -> PartialPivLu<f64> {
+fn full_lu(hb: &HarmonicBalance<'_>, parts: &JacobianParts, border: Option<Border<'_>>) -> Lu {
     let nu = hb.n_unknowns();
     let m = nu + usize::from(border.is_some());
     let jac = hb.dense_jacobian(parts);
@@ -197,7 +196,7 @@ fn full_lu(
         }
         a[(nu, nu)] = bd.corner;
     }
-    a.partial_piv_lu()
+    Lu::new(a)
 }
 
 /// One (field, harmonic slot) block of the linear dynamic stiffness, split into the
@@ -210,7 +209,7 @@ struct Block {
     hs: usize,
     parts: usize,
     /// `Z_LL`, factored (`None` when the block has no linear DoFs).
-    zll: Option<PartialPivLu<f64>>,
+    zll: Option<Lu>,
     /// `Z_NL` (`sn × sl`).
     znl: Mat<f64>,
     /// `W = Z_LL⁻¹ Z_LN` (`sl × sn`).
@@ -231,7 +230,7 @@ struct Condensed {
     /// The border row (global unknowns), when bordered.
     border_row: Option<Vec<f64>>,
     /// LU of the condensed matrix (`None` when it is empty).
-    lu: Option<PartialPivLu<f64>>,
+    lu: Option<Lu>,
 }
 
 impl Condensed {
@@ -333,7 +332,7 @@ impl Condensed {
                             }
                         }
                     }
-                    let lu = z_block(&lin, &lin, np, z).partial_piv_lu();
+                    let lu = Lu::new(z_block(&lin, &lin, np, z));
                     let x = lu.solve(&rhs);
                     check_finite(&x, "linear-DoF block", sl, omega)?;
                     let prod = &block.znl * &x; // sn × ncol
@@ -403,7 +402,7 @@ impl Condensed {
             pos,
             blocks,
             border_row: border.map(|bd| bd.row.to_vec()),
-            lu: (m > 0).then(|| a.partial_piv_lu()),
+            lu: (m > 0).then(|| Lu::new(a)),
         })
     }
 
@@ -504,6 +503,70 @@ fn z_block(
     Mat::from_fn(np * nr, np * nc, |r, c| {
         z(rows[r % nr], cols[c % nc], r / nr, c / nc)
     })
+}
+
+/// A partial-pivoting LU factorization kept in one matrix (unit lower part below the
+/// diagonal, upper part on and above it), factored in place: faer's `PartialPivLu` copies
+/// the matrix and splits the factors into two new ones, three passes over MB-sized
+/// matrices at every Newton iteration.
+struct Lu {
+    lu: Mat<f64>,
+    perm: Vec<usize>,
+    perm_inv: Vec<usize>,
+}
+
+impl Lu {
+    fn new(mut a: Mat<f64>) -> Self {
+        let n = a.nrows();
+        let par = get_global_parallelism();
+        let mut perm = vec![0usize; n];
+        let mut perm_inv = vec![0usize; n];
+        let mut mem = MemBuffer::new(lu_factor::lu_in_place_scratch::<usize, f64>(
+            n,
+            n,
+            par,
+            Default::default(),
+        ));
+        lu_factor::lu_in_place(
+            a.as_mut(),
+            &mut perm,
+            &mut perm_inv,
+            par,
+            MemStack::new(&mut mem),
+            Default::default(),
+        );
+        Self {
+            lu: a,
+            perm,
+            perm_inv,
+        }
+    }
+
+    /// `A⁻¹ B`.
+    fn solve(&self, b: &Mat<f64>) -> Mat<f64> {
+        let mut x = b.clone();
+        self.solve_in_place(x.as_mut());
+        x
+    }
+
+    fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
+        let n = self.lu.nrows();
+        let par = get_global_parallelism();
+        let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
+        let mut mem = MemBuffer::new(lu_solve::solve_in_place_scratch::<usize, f64>(
+            n,
+            rhs.ncols(),
+            par,
+        ));
+        lu_solve::solve_in_place(
+            self.lu.as_ref(),
+            self.lu.as_ref(),
+            perm,
+            rhs,
+            par,
+            MemStack::new(&mut mem),
+        );
+    }
 }
 
 /// Coefficient index of (harmonic slot `hs`, part) with `nh` harmonics: `hs = 0` is the
