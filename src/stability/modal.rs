@@ -77,41 +77,45 @@ impl RealModal {
         let mut v = Mat::<f64>::zeros(d, d);
         let mut blocks = Vec::with_capacity(d);
         let mut col = 0;
-        for k in 0..d {
-            let lam = s[k];
-            if !(lam.re.is_finite() && lam.im.is_finite()) {
-                return None;
-            }
-            if lam.im < 0.0 {
-                continue; // the conjugate of a pair already taken
-            }
-            let width = if lam.im > 0.0 { 2 } else { 1 };
-            if col + width > d {
-                return None;
-            }
-            let norm = (0..d).map(|i| u[(i, k)].norm_sqr()).sum::<f64>().sqrt();
-            if !(norm.is_finite() && norm > 0.0) {
-                return None;
-            }
-            for i in 0..d {
-                v[(i, col)] = u[(i, k)].re / norm;
-                if width == 2 {
-                    v[(i, col + 1)] = u[(i, k)].im / norm;
+        // real eigenvalues first, then the pairs: e^{tΛ} applies as one scaling of the
+        // leading rows and rotations of the trailing row pairs
+        for pairs in [false, true] {
+            for k in 0..d {
+                let lam = s[k];
+                if !(lam.re.is_finite() && lam.im.is_finite()) {
+                    return None;
                 }
+                if lam.im < 0.0 || (lam.im > 0.0) != pairs {
+                    continue; // a conjugate of a pair taken, or not this pass's kind
+                }
+                let width = if pairs { 2 } else { 1 };
+                if col + width > d {
+                    return None;
+                }
+                let norm = (0..d).map(|i| u[(i, k)].norm_sqr()).sum::<f64>().sqrt();
+                if !(norm.is_finite() && norm > 0.0) {
+                    return None;
+                }
+                for i in 0..d {
+                    v[(i, col)] = u[(i, k)].re / norm;
+                    if pairs {
+                        v[(i, col + 1)] = u[(i, k)].im / norm;
+                    }
+                }
+                blocks.push(if pairs {
+                    ModalBlock::Pair {
+                        row: col,
+                        re: lam.re,
+                        im: lam.im,
+                    }
+                } else {
+                    ModalBlock::Real {
+                        row: col,
+                        lambda: lam.re,
+                    }
+                });
+                col += width;
             }
-            blocks.push(if width == 2 {
-                ModalBlock::Pair {
-                    row: col,
-                    re: lam.re,
-                    im: lam.im,
-                }
-            } else {
-                ModalBlock::Real {
-                    row: col,
-                    lambda: lam.re,
-                }
-            });
-            col += width;
         }
         if col != d {
             return None;
@@ -174,52 +178,63 @@ impl RealModal {
 
     /// `e^{tΛ}` as scalings and plane rotations.
     pub fn exp(&self, t: f64) -> BlockDiagonal {
-        let entries = self
-            .blocks
-            .iter()
-            .map(|b| match *b {
-                ModalBlock::Real { row, lambda } => (row, 1, [(lambda * t).exp(), 0.0, 0.0, 0.0]),
-                ModalBlock::Pair { row, re, im } => {
+        let mut scale = Vec::new();
+        let mut rotations = Vec::new();
+        for b in &self.blocks {
+            match *b {
+                ModalBlock::Real { lambda, .. } => scale.push((lambda * t).exp()),
+                ModalBlock::Pair { re, im, .. } => {
                     let g = (re * t).exp();
                     let (s, c) = (im * t).sin_cos();
-                    (row, 2, [g * c, g * s, -g * s, g * c])
+                    rotations.push([g * c, g * s, -g * s, g * c]);
                 }
-            })
-            .collect();
-        BlockDiagonal {
-            dim: self.dim(),
-            entries,
+            }
         }
+        BlockDiagonal { scale, rotations }
     }
 }
 
-/// A real block-diagonal matrix of `1 × 1` and `2 × 2` blocks, such as `e^{tΛ}`.
+/// A real block-diagonal matrix such as `e^{tΛ}`: `1 × 1` blocks on the leading rows, then
+/// `2 × 2` blocks on consecutive row pairs.
 #[derive(Clone, Debug)]
 pub struct BlockDiagonal {
-    dim: usize,
-    /// `(first row, size, [e₁₁, e₁₂, e₂₁, e₂₂])` (only `e₁₁` for a `1 × 1` block).
-    entries: Vec<(usize, usize, [f64; 4])>,
+    /// The `1 × 1` blocks (rows `0..scale.len()`).
+    scale: Vec<f64>,
+    /// The `2 × 2` blocks `[e₁₁, e₁₂, e₂₁, e₂₂]`, row pairs after the scalings.
+    rotations: Vec<[f64; 4]>,
 }
 
 impl BlockDiagonal {
     /// Dimension of the matrix.
     pub fn dim(&self) -> usize {
-        self.dim
+        self.scale.len() + 2 * self.rotations.len()
     }
 
     /// `X ← E X` for `x` with `dim` rows.
     pub fn apply(&self, mut x: MatMut<'_, f64>) {
-        debug_assert_eq!(x.nrows(), self.dim);
+        debug_assert_eq!(x.nrows(), self.dim());
+        let nr = self.scale.len();
         for j in 0..x.ncols() {
-            let mut c = x.as_mut().col_mut(j);
-            for &(row, size, e) in &self.entries {
-                if size == 1 {
-                    c[row] *= e[0];
-                } else {
-                    let (a, b) = (c[row], c[row + 1]);
-                    c[row] = e[0] * a + e[1] * b;
-                    c[row + 1] = e[2] * a + e[3] * b;
+            let Some(c) = x.as_mut().col_mut(j).try_as_col_major_mut() else {
+                // strided rows: entry by entry
+                let mut c = x.as_mut().col_mut(j);
+                for (i, e) in self.scale.iter().enumerate() {
+                    c[i] *= e;
                 }
+                for (k, e) in self.rotations.iter().enumerate() {
+                    let (a, b) = (c[nr + 2 * k], c[nr + 2 * k + 1]);
+                    c[nr + 2 * k] = e[0] * a + e[1] * b;
+                    c[nr + 2 * k + 1] = e[2] * a + e[3] * b;
+                }
+                continue;
+            };
+            let c = c.as_slice_mut();
+            let (real, pairs) = c.split_at_mut(nr);
+            real.iter_mut().zip(&self.scale).for_each(|(v, e)| *v *= e);
+            for (p, e) in pairs.chunks_exact_mut(2).zip(&self.rotations) {
+                let (a, b) = (p[0], p[1]);
+                p[0] = e[0] * a + e[1] * b;
+                p[1] = e[2] * a + e[3] * b;
             }
         }
     }
@@ -228,14 +243,20 @@ impl BlockDiagonal {
     pub fn columns_into(&self, c0: usize, mut out: MatMut<'_, f64>) {
         out.fill(0.0);
         let c1 = c0 + out.ncols();
-        for &(row, size, e) in &self.entries {
-            for dc in 0..size {
+        let nr = self.scale.len();
+        for (i, &e) in self.scale.iter().enumerate() {
+            if (c0..c1).contains(&i) {
+                out[(i, i - c0)] = e;
+            }
+        }
+        for (k, e) in self.rotations.iter().enumerate() {
+            let row = nr + 2 * k;
+            for dc in 0..2 {
                 let j = row + dc;
-                if j < c0 || j >= c1 {
-                    continue;
-                }
-                for dr in 0..size {
-                    out[(row + dr, j - c0)] = e[dr * 2 + dc];
+                if (c0..c1).contains(&j) {
+                    for dr in 0..2 {
+                        out[(row + dr, j - c0)] = e[dr * 2 + dc];
+                    }
                 }
             }
         }
@@ -297,6 +318,10 @@ mod tests {
             let mut y = x.clone();
             modal.exp(t).apply(y.as_mut());
             assert!(max_abs_diff(y.as_ref(), (&e * &x).as_ref()) < 1e-14);
+            // …also on rows that are not contiguous (a transposed view)
+            let mut yt = x.transpose().to_owned();
+            modal.exp(t).apply(yt.as_mut().transpose_mut());
+            assert!(max_abs_diff(yt.transpose(), (&e * &x).as_ref()) < 1e-14);
         }
     }
 
