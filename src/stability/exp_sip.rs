@@ -164,11 +164,18 @@ impl ExpSip {
         let omega = orbit.omega();
         let d = space.dim();
         let (means, mean, b_bar, delta) = self.split_mean(space, orbit, period, n_k)?;
+        let modal = if self.modal {
+            ModalField::all(space, &b_bar, &self.exact_blocks(space))
+        } else {
+            None
+        };
+        let split = Split {
+            b_bar: &b_bar,
+            mean: &mean,
+            modal: modal.as_deref(),
+        };
         if !self.extrapolate {
-            return Ok((
-                self.product(space, &b_bar, &mean, means, delta, omega)?,
-                None,
-            ));
+            return Ok((self.product(space, &split, means, delta, omega)?, None));
         }
         let rough = match coarse {
             Some(rough) => rough,
@@ -184,10 +191,10 @@ impl ExpSip {
                         m
                     })
                     .collect();
-                self.product(space, &b_bar, &mean, coarse, 2.0 * delta, omega)?
+                self.product(space, &split, coarse, 2.0 * delta, omega)?
             }
         };
-        let fine = self.product(space, &b_bar, &mean, means, delta, omega)?;
+        let fine = self.product(space, &split, means, delta, omega)?;
         let extrapolated = Mat::from_fn(d, d, |i, j| (4.0 * fine[(i, j)] - rough[(i, j)]) / 3.0);
         Ok((extrapolated, Some(fine)))
     }
@@ -254,9 +261,9 @@ impl ExpSip {
             return Ok(None);
         }
         let (space, _, period) = state_space_for(system, orbit)?;
-        let (_, _, b_bar, delta) = self.split_mean(&space, orbit, period, self.intervals)?;
+        let (_, _, b_bar, _) = self.split_mean(&space, orbit, period, self.intervals)?;
         let blocks = self.exact_blocks(&space);
-        Ok(ModalField::all(&space, &b_bar, &blocks, delta)
+        Ok(ModalField::all(&space, &b_bar, &blocks)
             .map(|fields| fields.iter().map(|f| f.modal.condition).collect()))
     }
 
@@ -265,28 +272,30 @@ impl ExpSip {
     fn product(
         &self,
         space: &StateSpace<'_>,
-        b_bar: &Mat<f64>,
-        mean: &NonlinearEval,
+        split: &Split<'_>,
         mut means: Vec<NonlinearEval>,
         delta: f64,
         omega: f64,
     ) -> Result<Mat<f64>, StabilityError> {
         let d = space.dim();
+        let b_bar = split.b_bar;
         for m in &mut means {
-            axpy_derivs(m, -1.0, mean);
+            axpy_derivs(m, -1.0, split.mean);
         }
         let blocks = self.exact_blocks(space);
-        if self.modal
-            && let Some(fields) = ModalField::all(space, b_bar, &blocks, delta)
-        {
+        if let Some(fields) = split.modal {
             let factors = self.fluctuation_factors(space, &means, delta);
+            let exps: Vec<[BlockDiagonal; 2]> = fields
+                .iter()
+                .map(|f| [f.modal.exp(0.5 * delta), f.modal.exp(delta)])
+                .collect();
             let prod = by_column_blocks(d, |c0, c1| {
-                Self::product_block_modal(space, &factors, &fields, c0, c1)
+                Self::product_block_modal(space, &factors, fields, &exps, c0, c1)
             });
             // back to the physical coordinates: M = V M̂ V⁻¹ (V block diagonal)
             let mut v = Mat::<f64>::zeros(d, d);
             let mut v_inv = Mat::<f64>::zeros(d, d);
-            for f in &fields {
+            for f in fields {
                 let (r0, len) = (f.rows.0, f.rows.1 - f.rows.0);
                 v.as_mut()
                     .submatrix_mut(r0, r0, len, len)
@@ -350,11 +359,19 @@ impl ExpSip {
                 1.0,
                 Par::Seq,
             );
-            h.fill(0.0);
-            for i in 0..r {
-                h[(i, i)] = 1.0;
+            // innermost Horner factor I + (Δ/N)·Y without a product by the identity
+            let order = self.series_order;
+            for j in 0..r {
+                for i in 0..r {
+                    h[(i, j)] = if order >= 2 {
+                        delta / order as f64 * y[(i, j)]
+                    } else {
+                        0.0
+                    };
+                }
+                h[(j, j)] += 1.0;
             }
-            for i in (2..=self.series_order).rev() {
+            for i in (2..order).rev() {
                 matmul(
                     tmp.as_mut(),
                     Accum::Replace,
@@ -456,6 +473,7 @@ impl ExpSip {
         space: &StateSpace<'_>,
         factors: &[Mat<f64>],
         fields: &[ModalField],
+        exps: &[[BlockDiagonal; 2]],
         c0: usize,
         c1: usize,
     ) -> Mat<f64> {
@@ -463,12 +481,12 @@ impl ExpSip {
         let c = c1 - c0;
         let (g, r) = space.low_rank_dims();
         let mut prod = Mat::<f64>::zeros(d, c);
-        for f in fields {
+        for (f, [half, _]) in fields.iter().zip(exps) {
             // columns c0..c1 of the block-diagonal e^{ΔΛ/2}
             let (r0, r1) = f.rows;
             let (lo, hi) = (c0.max(r0), c1.min(r1));
             if lo < hi {
-                f.half.columns_into(
+                half.columns_into(
                     lo - r0,
                     prod.as_mut().submatrix_mut(r0, lo - c0, r1 - r0, hi - lo),
                 );
@@ -511,8 +529,8 @@ impl ExpSip {
                     );
                 }
             }
-            for f in fields {
-                let e = if k == last { &f.half } else { &f.full };
+            for (f, [half, full]) in fields.iter().zip(exps) {
+                let e = if k == last { half } else { full };
                 e.apply(prod.as_mut().subrows_mut(f.rows.0, f.rows.1 - f.rows.0));
             }
         }
@@ -523,7 +541,7 @@ impl ExpSip {
 /// One diagonal block of `B̄` (a field, or the whole state with [`MeanSplit::Coupled`]) in
 /// its modal coordinates `z = V⁻¹ y`: the rows of the gathered operand `S y` and the
 /// columns of the spread `L` that belong to it, taken into the modal coordinates
-/// (`Ŝ = S V`, `L̂ = V⁻¹ L`), and the interval exponentials `e^{ΔΛ/2}`, `e^{ΔΛ}`.
+/// (`Ŝ = S V`, `L̂ = V⁻¹ L`).
 struct ModalField {
     /// State rows `r0..r1`, gathered rows `g0..g1` and spread columns `s0..s1`.
     rows: (usize, usize),
@@ -532,8 +550,14 @@ struct ModalField {
     modal: RealModal,
     s_hat: Mat<f64>,
     l_hat: Mat<f64>,
-    half: BlockDiagonal,
-    full: BlockDiagonal,
+}
+
+/// The constant part of the splitting, shared by the products of one refinement level: `B̄`,
+/// the mean derivatives it was built from, and its modal form when taken.
+struct Split<'s> {
+    b_bar: &'s Mat<f64>,
+    mean: &'s NonlinearEval,
+    modal: Option<&'s [ModalField]>,
 }
 
 impl ModalField {
@@ -547,7 +571,6 @@ impl ModalField {
         space: &StateSpace<'_>,
         b_bar: &Mat<f64>,
         blocks: &[(usize, usize)],
-        delta: f64,
     ) -> Option<Vec<Self>> {
         let d = space.dim();
         let dm = 2 * space.n_mech();
@@ -577,8 +600,6 @@ impl ModalField {
                     rows: (r0, r1),
                     gather,
                     spread,
-                    half: modal.exp(0.5 * delta),
-                    full: modal.exp(delta),
                     modal,
                     s_hat,
                     l_hat,
@@ -613,15 +634,18 @@ impl StabilityMethod for ExpSip {
         let mut coarse = None;
         loop {
             let (mono, fine) = self.monodromy_pair(&space, orbit, period, n_k, coarse.take())?;
-            let mu = eigenvalues_checked(mono.as_ref(), omega)?;
-            let refine = n_k < self.max_intervals
-                && match &fine {
-                    Some(fine) => {
-                        let mu_fine = eigenvalues_checked(fine.as_ref(), omega)?;
-                        !clear_of_the_circle(&mu, &mu_fine)
+            // the two eigenvalue problems are independent: side by side
+            let (mu, mu_fine) = rayon::join(
+                || eigenvalues_checked(mono.as_ref(), omega),
+                || match &fine {
+                    Some(fine) if n_k < self.max_intervals => {
+                        eigenvalues_checked(fine.as_ref(), omega).map(Some)
                     }
-                    None => false,
-                };
+                    _ => Ok(None),
+                },
+            );
+            let (mu, mu_fine) = (mu?, mu_fine?);
+            let refine = mu_fine.is_some_and(|mu_fine| !clear_of_the_circle(&mu, &mu_fine));
             if !refine {
                 return Ok(FloquetResult::new(mu));
             }
