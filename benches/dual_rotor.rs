@@ -10,6 +10,10 @@
 //! Run: `cargo bench --bench dual_rotor`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+
+/// The allocator of the `tmrotor` binary, so the figures are the ones a sweep sees.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 use std::hint::black_box;
 use tmrotor::continuation::{Continuation, ContinuationOptions};
 use tmrotor::hb::{HarmonicBalance, HbSolution, LinearSolver, NewtonOptions, newton};
