@@ -622,7 +622,7 @@ impl StabilityMethod for ExpSip {
     /// to the unit circle than twice its error estimate, the intervals are doubled, up to
     /// `max_intervals` (see the field's docs). Each level's plain product is the next
     /// level's coarse one, so a refinement from `N` to `2N` costs one product on `2N`
-    /// intervals (measured on the default sweep: 70 → 62 s, the same stable flags and
+    /// intervals (measured on the default sweep when introduced: 70 → 62 s, the same stable flags and
     /// bifurcations, the located points within 0.005 rad/s).
     fn multipliers(
         &self,
