@@ -13,7 +13,7 @@ use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
 use tmrotor::hb::{Basis, HarmonicBalance, HbSolution, NewtonOptions, Ratio, newton};
 use tmrotor::model::Model;
 use tmrotor::stability::{
-    CraigBampton, ExpSip, Reduced, ReducedOrbit, ReductionSettings, Sip, StabilityError,
+    CraigBampton, ExpSip, MeanSplit, Reduced, ReducedOrbit, ReductionSettings, Sip, StabilityError,
     StabilityMethod, Variational, split_thermal, thermal_multiplier_estimates,
 };
 use tmrotor::system::{PeriodicOrbit, System};
@@ -391,4 +391,19 @@ fn modal_and_dense_products_agree_on_the_dual_rotor() {
     assert!(near.len() >= 66, "the thermal multipliers at least");
     let d = matched_distance(&near, &mu_modal, near.len());
     assert!(d < 1e-10, "multipliers above 1/2 differ by {d:e}");
+
+    // The coupled split (the whole mean state matrix taken exactly, one modal block)
+    let coupled = |modal: bool| ExpSip {
+        mean_split: MeanSplit::Coupled,
+        ..with(modal)
+    };
+    let conds = coupled(true)
+        .modal_conditions(&rs, &view)
+        .expect("setup")
+        .expect("the coupled mean matrix has a modal basis");
+    assert_eq!(conds.len(), 1);
+    let dense = coupled(false).monodromy(&rs, &view).expect("dense");
+    let modal = coupled(true).monodromy(&rs, &view).expect("modal");
+    let diff = norm(&(&modal - &dense)) / norm(&dense);
+    assert!(diff < 1e-10, "coupled split: relative difference {diff:e}");
 }
