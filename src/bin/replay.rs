@@ -1,5 +1,10 @@
 //! `replay`: inspect and re-derive tmrotor recordings; see `tmrotor::record::replay`.
 
+/// The allocator of `tmrotor` (see there): `replay stability` and `replay orbit` run the
+/// same solvers.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> std::process::ExitCode {
     tmrotor::record::replay::main()
 }
