@@ -277,40 +277,61 @@ impl ExpSip {
         delta: f64,
         omega: f64,
     ) -> Result<Mat<f64>, StabilityError> {
-        let d = space.dim();
-        let b_bar = split.b_bar;
         for m in &mut means {
             axpy_derivs(m, -1.0, split.mean);
         }
-        let blocks = self.exact_blocks(space);
-        if let Some(fields) = split.modal {
-            let factors = self.fluctuation_factors(space, &means, delta);
-            let exps: Vec<[BlockDiagonal; 2]> = fields
-                .iter()
-                .map(|f| [f.modal.exp(0.5 * delta), f.modal.exp(delta)])
-                .collect();
-            let prod = by_column_blocks(d, |c0, c1| {
-                Self::product_block_modal(space, &factors, fields, &exps, c0, c1)
-            });
-            // back to the physical coordinates: M = V M̂ V⁻¹ (V block diagonal)
-            let mut v = Mat::<f64>::zeros(d, d);
-            let mut v_inv = Mat::<f64>::zeros(d, d);
-            for f in fields {
-                let (r0, len) = (f.rows.0, f.rows.1 - f.rows.0);
-                v.as_mut()
-                    .submatrix_mut(r0, r0, len, len)
-                    .copy_from(&f.modal.v);
-                v_inv
-                    .as_mut()
-                    .submatrix_mut(r0, r0, len, len)
-                    .copy_from(&f.modal.v_inv);
-            }
-            let prod = &v * &prod * &v_inv;
-            if !all_finite(prod.as_ref()) {
-                return Err(StabilityError::NonFinite { omega });
-            }
-            return Ok(prod);
+        let factors = self.fluctuation_factors(space, &means, delta);
+        let prod = match split.modal {
+            Some(fields) => Self::modal_product(space, &factors, fields, delta),
+            None => self.dense_product(space, split.b_bar, &factors, delta, omega)?,
+        };
+        if !all_finite(prod.as_ref()) {
+            return Err(StabilityError::NonFinite { omega });
         }
+        Ok(prod)
+    }
+
+    /// The product in the modal coordinates of `fields`, returned in the physical ones:
+    /// `M = V M̂ V⁻¹` with `V` block diagonal.
+    fn modal_product(
+        space: &StateSpace<'_>,
+        factors: &[Mat<f64>],
+        fields: &[ModalField],
+        delta: f64,
+    ) -> Mat<f64> {
+        let d = space.dim();
+        let exps: Vec<[BlockDiagonal; 2]> = fields
+            .iter()
+            .map(|f| [f.modal.exp(0.5 * delta), f.modal.exp(delta)])
+            .collect();
+        let prod = by_column_blocks(d, |c0, c1| {
+            Self::product_block_modal(space, factors, fields, &exps, c0, c1)
+        });
+        let mut v = Mat::<f64>::zeros(d, d);
+        let mut v_inv = Mat::<f64>::zeros(d, d);
+        for f in fields {
+            let (r0, len) = (f.rows.0, f.rows.1 - f.rows.0);
+            v.as_mut()
+                .submatrix_mut(r0, r0, len, len)
+                .copy_from(&f.modal.v);
+            v_inv
+                .as_mut()
+                .submatrix_mut(r0, r0, len, len)
+                .copy_from(&f.modal.v_inv);
+        }
+        &v * &prod * &v_inv
+    }
+
+    /// The product with the dense exponentials of `B̄`'s blocks.
+    fn dense_product(
+        &self,
+        space: &StateSpace<'_>,
+        b_bar: &Mat<f64>,
+        factors: &[Mat<f64>],
+        delta: f64,
+        omega: f64,
+    ) -> Result<Mat<f64>, StabilityError> {
+        let blocks = self.exact_blocks(space);
         let mut e_half = Vec::with_capacity(blocks.len());
         let mut e_full = Vec::with_capacity(blocks.len());
         for &(r0, r1) in &blocks {
@@ -320,19 +341,14 @@ impl ExpSip {
             e_full.push(&eh * &eh);
             e_half.push(eh);
         }
-        let factors = self.fluctuation_factors(space, &means, delta);
         let exps = Exponentials {
             blocks: &blocks,
             half: &e_half,
             full: &e_full,
         };
-        let prod = by_column_blocks(d, |c0, c1| {
-            Self::product_block(space, &factors, &exps, c0, c1)
-        });
-        if !all_finite(prod.as_ref()) {
-            return Err(StabilityError::NonFinite { omega });
-        }
-        Ok(prod)
+        Ok(by_column_blocks(space.dim(), |c0, c1| {
+            Self::product_block(space, factors, &exps, c0, c1)
+        }))
     }
 
     /// `G_k` with `T_N(Δ L D_k S) = I + L G_k S` for every interval: since
