@@ -458,7 +458,7 @@ impl<'a> Continuation<'a> {
         let s = &self.scales;
         let (z, zeta) = match prev {
             Some(t) => {
-                let row: Vec<f64> = (0..nu).map(|i| t[i] / s[i]).collect();
+                let row = self.arc_row(t);
                 let border = Border {
                     column: &r_omega,
                     row: &row,
@@ -543,6 +543,12 @@ impl<'a> Continuation<'a> {
         })
     }
 
+    /// The arclength row of the unknowns for the scaled tangent `t`: `t_i / s_i`.
+    fn arc_row(&self, t: &[f64]) -> Vec<f64> {
+        let nu = self.hb.n_unknowns();
+        (0..nu).map(|i| t[i] / self.scales[i]).collect()
+    }
+
     /// `(a, ω)` in scaled units.
     fn scaled(&self, a: &[f64], omega: f64) -> Vec<f64> {
         let s = &self.scales;
@@ -563,7 +569,7 @@ impl<'a> Continuation<'a> {
         let t = &cur.tangent;
         let pred: Vec<f64> = (0..nu).map(|i| cur.a[i] + ds * t[i] * s[i]).collect();
         let w_pred = cur.omega + ds * t[nu] * s[nu];
-        let row: Vec<f64> = (0..nu).map(|i| t[i] / s[i]).collect();
+        let row = self.arc_row(t);
         let arc = ArcConstraint {
             anchor: &cur.a,
             anchor_omega: cur.omega,

@@ -366,11 +366,26 @@ impl<'a> StateSpace<'a> {
     /// `(L D S)ⁱ = L (D K)^{i−1} D S`.
     pub fn gather_of_spread(&self) -> Mat<f64> {
         let (g, r) = self.low_rank_dims();
+        let mut k = Mat::<f64>::zeros(g, r);
+        self.gather(self.spread_matrix().as_ref(), k.as_mut());
+        k
+    }
+
+    /// `S` as a dense `(2p+q) × d` selection matrix (see [`Self::gather`]).
+    pub fn gather_matrix(&self) -> Mat<f64> {
+        let (g, _) = self.low_rank_dims();
+        let d = self.dim();
+        let mut s = Mat::<f64>::zeros(g, d);
+        self.gather(Mat::<f64>::identity(d, d).as_ref(), s.as_mut());
+        s
+    }
+
+    /// `L` as a dense `d × (p+q)` matrix (see [`Self::spread_add`]).
+    pub fn spread_matrix(&self) -> Mat<f64> {
+        let (_, r) = self.low_rank_dims();
         let mut l = Mat::<f64>::zeros(self.dim(), r);
         self.spread_add(Mat::<f64>::identity(r, r).as_ref(), l.as_mut());
-        let mut k = Mat::<f64>::zeros(g, r);
-        self.gather(l.as_ref(), k.as_mut());
-        k
+        l
     }
 
     /// `ws.mixed = D S W` for the derivatives in `derivs` (see the module docs).

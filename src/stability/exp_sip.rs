@@ -441,8 +441,7 @@ impl ExpSip {
         let mut prod = Mat::<f64>::zeros(d, c);
         for (b, &(r0, r1)) in exps.blocks.iter().enumerate() {
             // columns c0..c1 of the block-diagonal e^{ΔB̄/2}
-            let (lo, hi) = (c0.max(r0), c1.min(r1));
-            if lo < hi {
+            if let Some((lo, hi)) = column_window((r0, r1), c0, c1) {
                 prod.as_mut()
                     .submatrix_mut(r0, lo - c0, r1 - r0, hi - lo)
                     .copy_from(exps.half[b].as_ref().subcols(lo - r0, hi - lo));
@@ -481,9 +480,7 @@ impl ExpSip {
         }
         prod
     }
-}
 
-impl ExpSip {
     /// Columns `c0..c1` of the product in modal coordinates (see [`ModalField`]).
     fn product_block_modal(
         space: &StateSpace<'_>,
@@ -500,8 +497,7 @@ impl ExpSip {
         for (f, [half, _]) in fields.iter().zip(exps) {
             // columns c0..c1 of the block-diagonal e^{ΔΛ/2}
             let (r0, r1) = f.rows;
-            let (lo, hi) = (c0.max(r0), c1.min(r1));
-            if lo < hi {
+            if let Some((lo, hi)) = column_window(f.rows, c0, c1) {
                 half.columns_into(
                     lo - r0,
                     prod.as_mut().submatrix_mut(r0, lo - c0, r1 - r0, hi - lo),
@@ -554,6 +550,13 @@ impl ExpSip {
     }
 }
 
+/// The columns `lo..hi` of `c0..c1` that fall in the diagonal block on rows (and
+/// columns) `r0..r1`, if any.
+fn column_window((r0, r1): (usize, usize), c0: usize, c1: usize) -> Option<(usize, usize)> {
+    let (lo, hi) = (c0.max(r0), c1.min(r1));
+    (lo < hi).then_some((lo, hi))
+}
+
 /// One diagonal block of `B̄` (a field, or the whole state with [`MeanSplit::Coupled`]) in
 /// its modal coordinates `z = V⁻¹ y`: the rows of the gathered operand `S y` and the
 /// columns of the spread `L` that belong to it, taken into the modal coordinates
@@ -592,10 +595,8 @@ impl ModalField {
         let dm = 2 * space.n_mech();
         let (p, q) = (space.dofs().mech.len(), space.dofs().therm.len());
         let (g, r) = space.low_rank_dims();
-        let mut s = Mat::<f64>::zeros(g, d);
-        space.gather(Mat::<f64>::identity(d, d).as_ref(), s.as_mut());
-        let mut l = Mat::<f64>::zeros(d, r);
-        space.spread_add(Mat::<f64>::identity(r, r).as_ref(), l.as_mut());
+        let s = space.gather_matrix();
+        let l = space.spread_matrix();
         blocks
             .iter()
             .map(|&(r0, r1)| {
