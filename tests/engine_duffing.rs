@@ -301,3 +301,39 @@ fn solutions_at_a_speed_inside_the_hysteresis_interval_match_the_three_roots() {
         );
     }
 }
+
+/// With a stability method the driver computes a point's multipliers alongside the next
+/// step's corrector and hands the point out one step later; the branch must be the one
+/// traced without stability, every point carrying the multipliers of its own solution,
+/// the last one (on the bound) included, and each located bifurcation numbered as the
+/// point after it.
+#[test]
+fn pipelined_stability_belongs_to_its_own_point_and_changes_no_point() {
+    let floquet = VariationalFloquet { steps: 400 };
+    let with = trace(11, 0.1, Some(&floquet));
+    let without = trace(11, 0.1, None);
+    assert_eq!(with.points.len(), without.points.len());
+    for (i, (p, q)) in with.points.iter().zip(&without.points).enumerate() {
+        assert_eq!(p.index, i);
+        assert_eq!(p.solution.omega, q.solution.omega, "point {i}");
+        assert_eq!(p.arclength, q.arclength, "point {i}");
+        let own = floquet
+            .multipliers(&Duffing::default(), &p.solution)
+            .expect("multipliers");
+        assert_eq!(
+            p.stability.as_ref().map(|f| &f.multipliers),
+            Some(&own.multipliers),
+            "point {i} at ω = {}",
+            p.solution.omega
+        );
+    }
+    assert_eq!(with.points.last().map(|p| p.solution.omega), Some(1.6));
+    assert_eq!(with.finish, without.finish);
+    assert_eq!(with.bifurcations.len(), 2);
+    for b in &with.bifurcations {
+        let after = &with.points[b.index];
+        let before = &with.points[b.index - 1];
+        assert!(before.arclength < b.arclength && b.arclength < after.arclength);
+        assert_ne!(before.stable(), after.stable());
+    }
+}

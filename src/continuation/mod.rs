@@ -335,6 +335,31 @@ pub struct Continuation<'a> {
     /// Accepted points in scaled units (unknowns, then ω) with their arclengths, for
     /// [`closing_point`].
     history: Vec<(Vec<f64>, f64)>,
+    /// With a stability method: the accepted point at `current`, not handed out yet (see
+    /// the module docs).
+    held: Option<Held>,
+    /// With a stability method: the accepted point before `current`, its stability known,
+    /// for locating a change between it and `current`.
+    previous: Option<Current>,
+}
+
+/// An accepted point waiting for its stability, or for the next step to hand it out.
+struct Held {
+    point: Box<BranchPoint>,
+    assessed: bool,
+    /// Located between the previous point and this one.
+    bifurcations: Vec<BranchPoint>,
+}
+
+/// A corrected point of a step, before it is accepted.
+struct Candidate {
+    a: Vec<f64>,
+    omega: f64,
+    stats: newton::NewtonStats,
+    tangent: Vec<f64>,
+    arclength: f64,
+    /// Set when the step left the ω range and the point was re-solved on this bound.
+    bound: Option<f64>,
 }
 
 impl<'a> Continuation<'a> {
@@ -395,6 +420,8 @@ impl<'a> Continuation<'a> {
             finished: None,
             finish_after: None,
             history: Vec::new(),
+            held: None,
+            previous: None,
         })
     }
 
@@ -420,22 +447,37 @@ impl<'a> Continuation<'a> {
         stats: &newton::NewtonStats,
         arclength: f64,
     ) -> BranchPoint {
-        let solution =
-            HbSolution::from_unknowns(omega, self.hb.basis(), self.hb.n_mech(), a, stats);
-        let (stability, stability_error) = match self.stability {
-            None => (None, None),
-            Some(m) => match m.multipliers(self.hb.system(), &solution) {
-                Ok(f) => (Some(f), None),
-                Err(e) => (None, Some(e.to_string())),
-            },
-        };
+        let mut point = self.bare_point(a, omega, stats, arclength);
+        (point.stability, point.stability_error) = self.assess(&point.solution);
+        point
+    }
+
+    /// The point without its stability.
+    fn bare_point(
+        &self,
+        a: &[f64],
+        omega: f64,
+        stats: &newton::NewtonStats,
+        arclength: f64,
+    ) -> BranchPoint {
         BranchPoint {
             index: self.n_points,
             arclength,
-            solution,
-            stability,
-            stability_error,
+            solution: HbSolution::from_unknowns(omega, self.hb.basis(), self.hb.n_mech(), a, stats),
+            stability: None,
+            stability_error: None,
             bifurcation: None,
+        }
+    }
+
+    /// The stability of `solution`, or the method's error message.
+    fn assess(&self, solution: &HbSolution) -> (Option<FloquetResult>, Option<String>) {
+        match self.stability {
+            None => (None, None),
+            Some(m) => match m.multipliers(self.hb.system(), solution) {
+                Ok(f) => (Some(f), None),
+                Err(e) => (None, Some(e.to_string())),
+            },
         }
     }
 
@@ -484,7 +526,8 @@ impl<'a> Continuation<'a> {
         Ok(t.into_iter().map(|v| sign * v / norm).collect())
     }
 
-    fn start(&mut self) -> Result<StepOutcome, ContinuationError> {
+    /// The start point: handed out at once without a stability method, held otherwise.
+    fn start(&mut self) -> Result<Option<StepOutcome>, ContinuationError> {
         let omega = self.opts.omega_start;
         let nu = self.hb.n_unknowns();
         let guess = match &self.opts.initial_guess {
@@ -527,20 +570,26 @@ impl<'a> Continuation<'a> {
         }
         self.scales.push(sw);
         let tangent = self.tangent(&a, omega, None)?;
-        let point = self.make_point(&a, omega, &stats, 0.0);
+        let point = self.bare_point(&a, omega, &stats, 0.0);
         self.history = vec![(self.scaled(&a, omega), 0.0)];
         self.current = Some(Current {
             a,
             omega,
             tangent,
             arclength: 0.0,
-            stability: point.stability.clone(),
+            stability: None,
         });
         self.n_points = 1;
-        Ok(StepOutcome::Accepted {
+        self.held = Some(Held {
             point: Box::new(point),
+            assessed: false,
             bifurcations: Vec::new(),
-        })
+        });
+        if self.stability.is_some() {
+            // handed out after the next corrector, which runs alongside its stability
+            return Ok(None);
+        }
+        Ok(self.hand_out())
     }
 
     /// The arclength row of the unknowns for the scaled tangent `t`: `t_i / s_i`.
@@ -596,121 +645,212 @@ impl<'a> Continuation<'a> {
         if let Some(f) = &self.finished {
             return Ok(StepOutcome::Finished(f.clone()));
         }
-        if let Some(f) = self.finish_after.take() {
-            self.finished = Some(f.clone());
-            return Ok(StepOutcome::Finished(f));
+        if self.finish_after.is_some() {
+            // the last accepted point first, then the reason
+            if self.held.is_some() {
+                self.settle_held();
+                if let Some(out) = self.hand_out() {
+                    return Ok(out);
+                }
+            }
+            if let Some(f) = self.finish_after.take() {
+                self.finished = Some(f.clone());
+                return Ok(StepOutcome::Finished(f));
+            }
         }
-        let Some(cur) = self.current.take() else {
-            return self.start();
+        if self.current.is_none()
+            && let Some(out) = self.start()?
+        {
+            return Ok(out);
+        }
+        let Some(mut cur) = self.current.take() else {
+            return Err(ContinuationError::Setting {
+                field: "current",
+                value: f64::NAN,
+                reason: "no start point",
+            });
         };
-        let outcome = self.advance(&cur);
-        if self.current.is_none() {
-            self.current = Some(cur);
+        let outcome = self.advance(&mut cur);
+        match self.current {
+            None => self.current = Some(cur),
+            Some(_) if self.stability.is_some() => self.previous = Some(cur),
+            Some(_) => {}
         }
         outcome
     }
 
-    fn advance(&mut self, cur: &Current) -> Result<StepOutcome, ContinuationError> {
-        let ds = self.ds;
-        let nu = self.hb.n_unknowns();
-        let (a, omega, stats) = match self.correct(cur, ds) {
-            Ok(v) => v,
-            Err(e) => {
-                return Ok(self.reject(
-                    RejectReason::Corrector {
-                        ds,
-                        message: e.to_string(),
-                    },
-                    cur.omega,
-                ));
-            }
+    /// The held point with its stability, and the change located between the previous
+    /// point and it (no-op when it is already assessed).
+    fn settle_held(&mut self) {
+        let Some(held) = self.held.as_ref().filter(|h| !h.assessed) else {
+            return;
         };
-        let distance = self.corrector_distance(cur, ds, &a, omega);
-        if distance > self.opts.max_corrector_distance * ds {
-            return Ok(self.reject(RejectReason::Distance { ds, distance }, cur.omega));
+        let result = self.assess(&held.point.solution);
+        if let Some(mut cur) = self.current.take() {
+            self.settle(&mut cur, result);
+            self.current = Some(cur);
         }
-        let tangent = match self.tangent(&a, omega, Some(&cur.tangent)) {
-            Ok(t) => t,
-            Err(e) => {
-                return Ok(self.reject(
-                    RejectReason::Corrector {
-                        ds,
-                        message: e.to_string(),
-                    },
-                    cur.omega,
-                ));
-            }
+    }
+
+    /// Stores the stability of the held point at `cur` and locates a change of stability
+    /// between the previous point and it.
+    fn settle(&mut self, cur: &mut Current, result: (Option<FloquetResult>, Option<String>)) {
+        let Some(mut held) = self.held.take() else {
+            return;
         };
-        let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
-        if cos_angle < 0.5 {
-            return Ok(self.reject(RejectReason::Turn { ds, cos_angle }, cur.omega));
+        cur.stability.clone_from(&result.0);
+        (held.point.stability, held.point.stability_error) = result;
+        held.assessed = true;
+        if let Some(prev) = &self.previous {
+            held.bifurcations
+                .extend(self.located_change(prev, cur, held.point.index));
         }
-        let (lo, hi) = self.lo_hi();
-        let mut arclength = cur.arclength + ds;
-        let (a, omega, stats, tangent) = if omega < lo || omega > hi {
-            // re-solve on the bound from the interpolation between the two points
-            let wb = if omega < lo { lo } else { hi };
-            let f = (wb - cur.omega) / (omega - cur.omega);
-            match self.solve_interpolated(&cur.a, cur.omega, &a, omega, wb) {
-                Ok((ab, st)) => {
-                    arclength = cur.arclength + f * ds;
-                    self.finish_after = Some(FinishReason::Bound { omega: wb });
-                    (ab, wb, st, tangent)
-                }
-                Err(e) => {
-                    return Ok(self.reject(
-                        RejectReason::Corrector {
-                            ds,
-                            message: e.to_string(),
-                        },
-                        cur.omega,
-                    ));
-                }
-            }
-        } else {
-            (a, omega, stats, tangent)
+        self.held = Some(held);
+    }
+
+    /// The bifurcation between the accepted points `from` and `to` (the latter numbered
+    /// `index`), when their numbers of unstable multipliers differ and it could be located.
+    fn located_change(&self, from: &Current, to: &Current, index: usize) -> Option<BranchPoint> {
+        let (Some(fa), Some(fb)) = (&from.stability, &to.stability) else {
+            return None;
         };
-        let point = self.make_point(&a, omega, &stats, arclength);
-        let mut bifurcations = Vec::new();
-        if let (Some(fa), Some(fb)) = (&cur.stability, &point.stability)
-            && fa.unstable_count() != fb.unstable_count()
-        {
-            let span = arclength - cur.arclength;
-            if let Some(b) = self.locate(cur, fa, span, fb) {
-                bifurcations.push(b);
-            }
+        if fa.unstable_count() == fb.unstable_count() {
+            return None;
         }
+        self.locate(from, fa, to.arclength - from.arclength, fb, index)
+    }
+
+    /// Hands out the held point with its bifurcations.
+    fn hand_out(&mut self) -> Option<StepOutcome> {
+        self.held.take().map(|h| StepOutcome::Accepted {
+            point: h.point,
+            bifurcations: h.bifurcations,
+        })
+    }
+
+    fn advance(&mut self, cur: &mut Current) -> Result<StepOutcome, ContinuationError> {
+        // the held point's stability alongside this step's corrector
+        let (assessed, candidate) = match self.held.as_ref().filter(|h| !h.assessed) {
+            Some(held) => {
+                let (result, candidate) =
+                    rayon::join(|| self.assess(&held.point.solution), || self.candidate(cur));
+                (Some(result), candidate)
+            }
+            None => (None, self.candidate(cur)),
+        };
+        if let Some(result) = assessed {
+            self.settle(cur, result);
+        }
+        let c = match candidate {
+            Ok(c) => c,
+            Err(reason) => return Ok(self.reject(reason, cur.omega)),
+        };
+        if let Some(wb) = c.bound {
+            self.finish_after = Some(FinishReason::Bound { omega: wb });
+        }
+        let mut point = self.bare_point(&c.a, c.omega, &c.stats, c.arclength);
         // step control
-        let factor = if stats.iterations == 0 {
+        let factor = if c.stats.iterations == 0 {
             2.0
         } else {
-            (self.opts.target_iterations as f64 / stats.iterations as f64)
+            (self.opts.target_iterations as f64 / c.stats.iterations as f64)
                 .sqrt()
                 .clamp(0.5, 2.0)
         };
         self.ds = (self.ds * factor).clamp(self.opts.ds_min, self.opts.ds_max);
         self.n_points += 1;
-        let x = self.scaled(&a, omega);
+        let x = self.scaled(&c.a, c.omega);
         if self.finish_after.is_none()
-            && let Some(earlier) = closing_point(&self.history, &x, arclength, &tangent)
+            && let Some(earlier) = closing_point(&self.history, &x, c.arclength, &c.tangent)
         {
-            self.finish_after = Some(FinishReason::Closed { omega, earlier });
+            self.finish_after = Some(FinishReason::Closed {
+                omega: c.omega,
+                earlier,
+            });
         }
-        self.history.push((x, arclength));
+        self.history.push((x, c.arclength));
         if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
             self.finish_after = Some(FinishReason::MaxPoints);
         }
-        debug_assert_eq!(tangent.len(), nu + 1);
-        self.current = Some(Current {
-            a,
-            omega,
-            tangent,
-            arclength,
-            stability: point.stability.clone(),
-        });
+        let mut next = Current {
+            a: c.a,
+            omega: c.omega,
+            tangent: c.tangent,
+            arclength: c.arclength,
+            stability: None,
+        };
+        if self.stability.is_some() {
+            if let Some(out) = self.hand_out() {
+                // the held point (assessed above) goes out; the new one is held
+                self.held = Some(Held {
+                    point: Box::new(point),
+                    assessed: false,
+                    bifurcations: Vec::new(),
+                });
+                self.current = Some(next);
+                return Ok(out);
+            }
+            // nothing was held (not reached): assessed and handed out at once
+            (point.stability, point.stability_error) = self.assess(&point.solution);
+            next.stability.clone_from(&point.stability);
+        }
+        let bifurcations = self
+            .located_change(cur, &next, point.index)
+            .into_iter()
+            .collect();
+        self.current = Some(next);
         Ok(StepOutcome::Accepted {
             point: Box::new(point),
             bifurcations,
+        })
+    }
+
+    /// The corrected point of a step of `self.ds` from `cur`, its tangent, and the
+    /// re-solve on the ω bound when the step left the range; or why the step is rejected.
+    fn candidate(&self, cur: &Current) -> Result<Candidate, RejectReason> {
+        let ds = self.ds;
+        let nu = self.hb.n_unknowns();
+        let corrector = |e: &dyn std::fmt::Display| RejectReason::Corrector {
+            ds,
+            message: e.to_string(),
+        };
+        let (a, omega, stats) = self.correct(cur, ds).map_err(|e| corrector(&e))?;
+        let distance = self.corrector_distance(cur, ds, &a, omega);
+        if distance > self.opts.max_corrector_distance * ds {
+            return Err(RejectReason::Distance { ds, distance });
+        }
+        let tangent = self
+            .tangent(&a, omega, Some(&cur.tangent))
+            .map_err(|e| corrector(&e))?;
+        let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
+        if cos_angle < 0.5 {
+            return Err(RejectReason::Turn { ds, cos_angle });
+        }
+        debug_assert_eq!(tangent.len(), nu + 1);
+        let (lo, hi) = self.lo_hi();
+        if omega >= lo && omega <= hi {
+            return Ok(Candidate {
+                a,
+                omega,
+                stats,
+                tangent,
+                arclength: cur.arclength + ds,
+                bound: None,
+            });
+        }
+        // re-solve on the bound from the interpolation between the two points
+        let wb = if omega < lo { lo } else { hi };
+        let f = (wb - cur.omega) / (omega - cur.omega);
+        let (ab, st) = self
+            .solve_interpolated(&cur.a, cur.omega, &a, omega, wb)
+            .map_err(|e| corrector(&e))?;
+        Ok(Candidate {
+            a: ab,
+            omega: wb,
+            stats: st,
+            tangent,
+            arclength: cur.arclength + f * ds,
+            bound: Some(wb),
         })
     }
 
@@ -729,6 +869,7 @@ impl<'a> Continuation<'a> {
         f_a: &FloquetResult,
         span: f64,
         f_b: &FloquetResult,
+        index: usize,
     ) -> Option<BranchPoint> {
         let n_a = f_a.unstable_count();
         // The crossing multiplier: the k-th largest modulus, k = min(n_a, n_b) + 1, is
@@ -791,7 +932,7 @@ impl<'a> Continuation<'a> {
         let kind = classify_crossing(&f_lo, &f_hi)?;
         let mut p = best?;
         p.bifurcation = Some(kind);
-        p.index = self.n_points;
+        p.index = index;
         Some(p)
     }
 
