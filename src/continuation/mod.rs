@@ -346,9 +346,22 @@ pub struct Continuation<'a> {
 /// An accepted point waiting for its stability, or for the next step to hand it out.
 struct Held {
     point: Box<BranchPoint>,
-    assessed: bool,
     /// Located between the previous point and this one.
     bifurcations: Vec<BranchPoint>,
+}
+
+impl Held {
+    fn new(point: BranchPoint) -> Self {
+        Self {
+            point: Box::new(point),
+            bifurcations: Vec::new(),
+        }
+    }
+
+    /// Whether the stability method has been applied (it gives multipliers or an error).
+    fn assessed(&self) -> bool {
+        self.point.stability.is_some() || self.point.stability_error.is_some()
+    }
 }
 
 /// A corrected point of a step, before it is accepted.
@@ -526,8 +539,8 @@ impl<'a> Continuation<'a> {
         Ok(t.into_iter().map(|v| sign * v / norm).collect())
     }
 
-    /// The start point: handed out at once without a stability method, held otherwise.
-    fn start(&mut self) -> Result<Option<StepOutcome>, ContinuationError> {
+    /// The start point and the state to continue from (sets the scales and the history).
+    fn start(&mut self) -> Result<(Current, BranchPoint), ContinuationError> {
         let omega = self.opts.omega_start;
         let nu = self.hb.n_unknowns();
         let guess = match &self.opts.initial_guess {
@@ -572,24 +585,15 @@ impl<'a> Continuation<'a> {
         let tangent = self.tangent(&a, omega, None)?;
         let point = self.bare_point(&a, omega, &stats, 0.0);
         self.history = vec![(self.scaled(&a, omega), 0.0)];
-        self.current = Some(Current {
+        self.n_points = 1;
+        let cur = Current {
             a,
             omega,
             tangent,
             arclength: 0.0,
             stability: None,
-        });
-        self.n_points = 1;
-        self.held = Some(Held {
-            point: Box::new(point),
-            assessed: false,
-            bifurcations: Vec::new(),
-        });
-        if self.stability.is_some() {
-            // handed out after the next corrector, which runs alongside its stability
-            return Ok(None);
-        }
-        Ok(self.hand_out())
+        };
+        Ok((cur, point))
     }
 
     /// The arclength row of the unknowns for the scaled tangent `t`: `t_i / s_i`.
@@ -658,17 +662,21 @@ impl<'a> Continuation<'a> {
                 return Ok(StepOutcome::Finished(f));
             }
         }
-        if self.current.is_none()
-            && let Some(out) = self.start()?
-        {
-            return Ok(out);
-        }
-        let Some(mut cur) = self.current.take() else {
-            return Err(ContinuationError::Setting {
-                field: "current",
-                value: f64::NAN,
-                reason: "no start point",
-            });
+        let mut cur = match self.current.take() {
+            Some(cur) => cur,
+            None => {
+                let (cur, point) = self.start()?;
+                if self.stability.is_none() {
+                    self.current = Some(cur);
+                    return Ok(StepOutcome::Accepted {
+                        point: Box::new(point),
+                        bifurcations: Vec::new(),
+                    });
+                }
+                // handed out after the next corrector, which runs alongside its stability
+                self.held = Some(Held::new(point));
+                cur
+            }
         };
         let outcome = self.advance(&mut cur);
         match self.current {
@@ -682,7 +690,7 @@ impl<'a> Continuation<'a> {
     /// The held point with its stability, and the change located between the previous
     /// point and it (no-op when it is already assessed).
     fn settle_held(&mut self) {
-        let Some(held) = self.held.as_ref().filter(|h| !h.assessed) else {
+        let Some(held) = self.held.as_ref().filter(|h| !h.assessed()) else {
             return;
         };
         let result = self.assess(&held.point.solution);
@@ -700,7 +708,6 @@ impl<'a> Continuation<'a> {
         };
         cur.stability.clone_from(&result.0);
         (held.point.stability, held.point.stability_error) = result;
-        held.assessed = true;
         if let Some(prev) = &self.previous {
             held.bifurcations
                 .extend(self.located_change(prev, cur, held.point.index));
@@ -730,7 +737,7 @@ impl<'a> Continuation<'a> {
 
     fn advance(&mut self, cur: &mut Current) -> Result<StepOutcome, ContinuationError> {
         // the held point's stability alongside this step's corrector
-        let (assessed, candidate) = match self.held.as_ref().filter(|h| !h.assessed) {
+        let (assessed, candidate) = match self.held.as_ref().filter(|h| !h.assessed()) {
             Some(held) => {
                 let (result, candidate) =
                     rayon::join(|| self.assess(&held.point.solution), || self.candidate(cur));
@@ -782,11 +789,7 @@ impl<'a> Continuation<'a> {
         if self.stability.is_some() {
             if let Some(out) = self.hand_out() {
                 // the held point (assessed above) goes out; the new one is held
-                self.held = Some(Held {
-                    point: Box::new(point),
-                    assessed: false,
-                    bifurcations: Vec::new(),
-                });
+                self.held = Some(Held::new(point));
                 self.current = Some(next);
                 return Ok(out);
             }
