@@ -337,3 +337,48 @@ fn pipelined_stability_belongs_to_its_own_point_and_changes_no_point() {
         assert_ne!(before.stable(), after.stable());
     }
 }
+
+/// Saddle-nodes are located as folds of the branch (the zero of the tangent's
+/// ω-component), not by the multiplier through +1: a crude Floquet method (RK4 with few
+/// steps per period, whose multipliers near +1 are off) puts them on the same speeds as
+/// an accurate one, and both on the folds of a finely traced branch without stability.
+#[test]
+fn saddle_nodes_sit_on_the_folds_whatever_the_multiplier_accuracy() {
+    let folds = {
+        let fine = trace(11, 0.005, None);
+        let mut f = fold_frequencies(&fine);
+        f.sort_by(f64::total_cmp);
+        f
+    };
+    assert_eq!(folds.len(), 2);
+    let sn = |steps: usize| {
+        let floquet = VariationalFloquet { steps };
+        let branch = trace(11, 0.1, Some(&floquet));
+        let mut w: Vec<f64> = branch
+            .bifurcations
+            .iter()
+            .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
+            .map(|b| b.solution.omega)
+            .collect();
+        w.sort_by(f64::total_cmp);
+        let flips: Vec<f64> = branch
+            .points
+            .windows(2)
+            .filter(|p| p[0].stable() != p[1].stable())
+            .map(|p| p[1].solution.omega)
+            .collect();
+        eprintln!("{steps} steps: saddle-nodes {w:?}, stable flag changes before {flips:?}");
+        (w, flips)
+    };
+    let (accurate, flips_accurate) = sn(400);
+    let (crude, flips_crude) = sn(12);
+    eprintln!("folds {folds:?}");
+    // the crude multipliers do move the stability changes
+    assert_ne!(flips_accurate, flips_crude);
+    assert_eq!(accurate.len(), 2);
+    assert_eq!(crude.len(), 2);
+    for ((a, c), f) in accurate.iter().zip(&crude).zip(&folds) {
+        assert!((a - c).abs() < 1e-9 * f, "{a} vs {c}");
+        assert!((a - f).abs() < 1e-7 * f, "saddle-node at {a}, fold at {f}");
+    }
+}

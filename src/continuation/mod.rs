@@ -24,13 +24,27 @@
 //!   traced round and round until `max_points`).
 //!
 //! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
-//! [`HbSolution`]. When the number of multipliers outside the unit circle differs between
-//! neighbours, the change is located in arclength (re-correcting from the earlier point at
-//! intermediate arclength) by a safeguarded regula falsi (Illinois) on the modulus of the
-//! crossing multiplier, until the bracket is shorter than `bifurcation_tol_arclength` or
-//! that modulus is within `bifurcation_tol_modulus` of the circle; it is classified with
-//! [`classify_crossing`] and emitted as a labelled point. One change per step is located
-//! (the first along the step).
+//! [`HbSolution`], and the bifurcations between neighbouring points are located in
+//! arclength (re-correcting from the earlier point at intermediate arclength) and emitted
+//! as labelled points:
+//!
+//! * **saddle-nodes at folds.** Where the ω-component of the tangent changes sign, the
+//!   branch turns in ω; a real multiplier passes through +1 exactly there. The fold is
+//!   located as the zero of that component (a test function needing a corrector and a
+//!   tangent per search step, no multipliers) by safeguarded regula falsi (Illinois); the
+//!   located point carries no multipliers (one of them is +1 there). Locating it by the multiplier
+//!   instead would put it where the product resolves the crossing: near folds the crossing
+//!   multiplier converges slowly with the intervals (see [`crate::stability::ExpSip`]), and
+//!   on the dual rotor the multiplier-located points lagged the turning points by up to two
+//!   points, and one fold was counted twice. A real multiplier that crosses +1 away from a
+//!   fold (a branch point, not generic in one parameter, or that same lag) is left to the
+//!   points' stable flags.
+//! * **Neimark–Sacker and period doubling.** When the number of multipliers outside the
+//!   unit circle differs between neighbours and [`classify_crossing`] calls it a complex
+//!   pair or a multiplier through −1, the change is located by a safeguarded regula falsi
+//!   on the modulus of the crossing multiplier, until the bracket is shorter than
+//!   `bifurcation_tol_arclength` or that modulus is within `bifurcation_tol_modulus` of
+//!   the circle. One such change per step is located (the first along the step).
 //!
 //! Solutions at given speeds (a truncation study at fixed ω, say): watch consecutive
 //! accepted points with [`crosses`] and re-solve on the speed with
@@ -48,6 +62,11 @@ use crate::hb::{HarmonicBalance, HbError, HbSolution, LinearSolver, SolveError, 
 use crate::stability::{
     BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL, classify_crossing,
 };
+
+/// A fold is located until the ω-component of the unit tangent is this fraction of its
+/// larger value at the two points around it: near a fold `ω(σ) ≈ ω_f − κ(σ − σ_f)²/2`,
+/// so the located ω is then off by about `1e-6` of the ω change over the step.
+const FOLD_SLOPE_TOL: f64 = 1e-2;
 
 /// Continuation settings. Every default is given in the field's doc.
 #[derive(Clone, Debug)]
@@ -710,21 +729,101 @@ impl<'a> Continuation<'a> {
         (held.point.stability, held.point.stability_error) = result;
         if let Some(prev) = &self.previous {
             held.bifurcations
-                .extend(self.located_change(prev, cur, held.point.index));
+                .extend(self.located_changes(prev, cur, held.point.index));
         }
         self.held = Some(held);
     }
 
-    /// The bifurcation between the accepted points `from` and `to` (the latter numbered
-    /// `index`), when their numbers of unstable multipliers differ and it could be located.
-    fn located_change(&self, from: &Current, to: &Current, index: usize) -> Option<BranchPoint> {
+    /// The bifurcations between the accepted points `from` and `to` (the latter numbered
+    /// `index`), in arclength order (see the module docs): a saddle-node where the
+    /// tangent's ω-component changes sign (a fold), and a Neimark–Sacker or period-doubling
+    /// point where the numbers of unstable multipliers differ and the crossing is not a
+    /// real multiplier through +1 (that one belongs to a fold).
+    fn located_changes(&self, from: &Current, to: &Current, index: usize) -> Vec<BranchPoint> {
         let (Some(fa), Some(fb)) = (&from.stability, &to.stability) else {
-            return None;
+            return Vec::new();
         };
-        if fa.unstable_count() == fb.unstable_count() {
-            return None;
+        let span = to.arclength - from.arclength;
+        let nu = self.hb.n_unknowns();
+        let mut found = Vec::new();
+        if from.tangent[nu] * to.tangent[nu] < 0.0 {
+            found.extend(self.locate_fold(from, span, to.tangent[nu], index));
         }
-        self.locate(from, fa, to.arclength - from.arclength, fb, index)
+        let multiplier_change = fa.unstable_count() != fb.unstable_count()
+            && !matches!(
+                classify_crossing(fa, fb),
+                Some(BifurcationKind::SaddleNode) | None
+            );
+        if multiplier_change {
+            found.extend(
+                self.locate(from, fa, span, fb, index)
+                    .filter(|p| p.bifurcation != Some(BifurcationKind::SaddleNode)),
+            );
+        }
+        found.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
+        found
+    }
+
+    /// The fold between `from` (σ = 0, tangent ω-component `τ_ω(0)`) and the point at
+    /// σ = `span` (tangent ω-component `t_end`, of the other sign): the zero of `τ_ω(σ)`,
+    /// the ω-component of the unit tangent of the point corrected at σ, by safeguarded
+    /// regula falsi (Illinois), until the bracket is shorter than
+    /// `bifurcation_tol_arclength` or `|τ_ω|` has fallen below `FOLD_SLOPE_TOL` times its
+    /// larger end value. Returned as a saddle-node without multipliers: one of them is +1
+    /// there, which puts the point where a refining stability method is at its most
+    /// expensive (up to its finest product) for nothing the fold does not already say.
+    fn locate_fold(
+        &self,
+        from: &Current,
+        span: f64,
+        t_end: f64,
+        index: usize,
+    ) -> Option<BranchPoint> {
+        let nu = self.hb.n_unknowns();
+        let (mut lo, mut hi) = (0.0, span);
+        let (mut g_lo, mut g_hi) = (from.tangent[nu], t_end);
+        let stop = FOLD_SLOPE_TOL * g_lo.abs().max(g_hi.abs());
+        let mut kept = 0i8;
+        let mut best = None;
+        for _ in 0..self.opts.max_bisections {
+            let width = hi - lo;
+            if width <= self.opts.bifurcation_tol_arclength {
+                break;
+            }
+            let guard = 0.01 * width;
+            let mid = (lo - g_lo * width / (g_hi - g_lo)).clamp(lo + guard, hi - guard);
+            let Ok((a, w, st)) = self.correct(from, mid) else {
+                break;
+            };
+            let Ok(t) = self.tangent(&a, w, Some(&from.tangent)) else {
+                break;
+            };
+            let g_mid = t[nu];
+            best = Some((a, w, st, mid));
+            if g_mid.abs() <= stop {
+                break;
+            }
+            if (g_mid > 0.0) == (g_lo > 0.0) {
+                lo = mid;
+                g_lo = g_mid;
+                if kept == 1 {
+                    g_hi *= 0.5;
+                }
+                kept = 1;
+            } else {
+                hi = mid;
+                g_hi = g_mid;
+                if kept == -1 {
+                    g_lo *= 0.5;
+                }
+                kept = -1;
+            }
+        }
+        let (a, w, st, mid) = best?;
+        let mut p = self.bare_point(&a, w, &st, from.arclength + mid);
+        p.bifurcation = Some(BifurcationKind::SaddleNode);
+        p.index = index;
+        Some(p)
     }
 
     /// Hands out the held point with its bifurcations.
@@ -797,10 +896,7 @@ impl<'a> Continuation<'a> {
             (point.stability, point.stability_error) = self.assess(&point.solution);
             next.stability.clone_from(&point.stability);
         }
-        let bifurcations = self
-            .located_change(cur, &next, point.index)
-            .into_iter()
-            .collect();
+        let bifurcations = self.located_changes(cur, &next, point.index);
         self.current = Some(next);
         Ok(StepOutcome::Accepted {
             point: Box::new(point),
