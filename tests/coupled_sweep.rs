@@ -176,3 +176,82 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
         .expect("odd count refused");
     assert!(err.to_string().contains("sip_intervals"), "{err}");
 }
+
+/// Stands in for a Floquet method where only the folds are under test: saddle-nodes are
+/// located from the tangent, which needs no multipliers.
+struct NoMultipliers;
+
+impl tmrotor::stability::StabilityMethod for NoMultipliers {
+    fn multipliers(
+        &self,
+        _system: &dyn tmrotor::system::System,
+        _orbit: &dyn tmrotor::system::PeriodicOrbit,
+    ) -> Result<tmrotor::stability::FloquetResult, tmrotor::stability::StabilityError> {
+        Ok(tmrotor::stability::FloquetResult::new(Vec::new()))
+    }
+}
+
+/// The 5 L/min branch turns twice between 658 and 661 rad/s. Continued from 650 rad/s
+/// with the default sweep's ω scale and a first step of 0.15, one step jumps over both
+/// turns (ω falls over it while the tangent rises at both ends); that step must be
+/// rejected, and the two folds come out as two saddle-nodes on the turning points of a
+/// branch traced 30 times finer.
+#[test]
+fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
+    use tmrotor::continuation::{Continuation, ContinuationOptions, RejectReason, StepOutcome};
+    use tmrotor::stability::BifurcationKind;
+    let settings = StudySettings {
+        flow_l_min: 5.0,
+        ..StudySettings::default()
+    };
+    let p = SweepProblem::new(&settings).expect("problem");
+    let trace = |ds: f64, stability: Option<&dyn tmrotor::stability::StabilityMethod>| {
+        let hb = HarmonicBalance::new(&p.system, &p.basis, None).expect("hb");
+        let mut opts = ContinuationOptions::new(650.0, 665.0);
+        opts.ds_max = ds;
+        opts.ds_initial = ds;
+        opts.scale_omega = Some(400.0);
+        opts.initial_guess = Some(p.system.initial_guess(p.basis.n_coeffs()));
+        let mut cont = Continuation::new(hb, opts, stability).expect("continuation");
+        let (mut omegas, mut folds, mut fold_pairs) = (Vec::new(), Vec::new(), 0);
+        loop {
+            match cont.step().expect("step") {
+                StepOutcome::Accepted {
+                    point,
+                    bifurcations,
+                } => {
+                    omegas.push(point.solution.omega);
+                    for b in bifurcations {
+                        assert_eq!(b.bifurcation, Some(BifurcationKind::SaddleNode));
+                        folds.push(b.solution.omega);
+                    }
+                }
+                StepOutcome::Rejected(RejectReason::FoldPair { omega_change, .. }) => {
+                    assert!(omega_change < 0.0);
+                    fold_pairs += 1;
+                }
+                StepOutcome::Rejected(_) => {}
+                StepOutcome::Finished(_) => break,
+            }
+        }
+        (omegas, folds, fold_pairs)
+    };
+    let (_, folds, fold_pairs) = trace(0.15, Some(&NoMultipliers));
+    let (fine, _, _) = trace(0.005, None);
+    let turns: Vec<f64> = fine
+        .windows(3)
+        .filter(|w| (w[1] - w[0]) * (w[2] - w[1]) < 0.0)
+        .map(|w| w[1])
+        .collect();
+    eprintln!("saddle-nodes {folds:?}, fine turning points {turns:?}, {fold_pairs} steps refused");
+    assert!(fold_pairs >= 1);
+    assert_eq!(turns.len(), 2);
+    assert_eq!(folds.len(), 2);
+    for (f, t) in folds.iter().zip(&turns) {
+        // the fine branch's extreme point lies within its own step of the fold
+        assert!(
+            (f - t).abs() < 0.01,
+            "saddle-node at {f}, fine turning point at {t}"
+        );
+    }
+}

@@ -14,8 +14,10 @@
 //! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
 //!   orientation (`τ_prev·t > 0`), i.e. direction control;
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
-//!   after a failed corrector, a turn of the tangent by more than 60°, or a corrected point
-//!   farther than `max_corrector_distance · ds` from the predictor;
+//!   after a failed corrector, a turn of the tangent by more than 60°, a corrected point
+//!   farther than `max_corrector_distance · ds` from the predictor, or a step over which ω
+//!   moved against the tangent at both ends (a fold pair inside one step, which the fold
+//!   search between the two points could not see);
 //! * the start point is Newton at `ω_start` from zero coefficients (its first iterate is the
 //!   linear response) or from [`ContinuationOptions::initial_guess`]; its tangent is oriented towards `ω_end`;
 //! * stops when ω leaves `[min(ω_start, ω_end), max(…)]` (the last point is re-solved on the
@@ -67,6 +69,11 @@ use crate::stability::{
 /// larger value at the two points around it: near a fold `ω(σ) ≈ ω_f − κ(σ − σ_f)²/2`,
 /// so the located ω is then off by about `1e-6` of the ω change over the step.
 const FOLD_SLOPE_TOL: f64 = 1e-2;
+
+/// A step is taken to hold a fold pair (see [`RejectReason::FoldPair`]) only when ω moved
+/// against both tangents by more than this fraction of the step (scaled units), so that
+/// rounding on a branch that runs at constant ω cannot halve the step away.
+const FOLD_PAIR_MIN_CHANGE: f64 = 1e-6;
 
 /// Continuation settings. Every default is given in the field's doc.
 #[derive(Clone, Debug)]
@@ -219,6 +226,10 @@ pub enum RejectReason {
     /// The corrected point lies farther than `max_corrector_distance · ds` from the
     /// predictor (scaled norm); the step is halved.
     Distance { ds: f64, distance: f64 },
+    /// The tangent's ω-component has the same sign at both ends of the step, but ω moved
+    /// the other way (`omega_change`, rad/s): the branch turned twice within the step, a
+    /// fold pair that neither end can see; the step is halved.
+    FoldPair { ds: f64, omega_change: f64 },
 }
 
 /// Why the continuation stopped.
@@ -924,6 +935,14 @@ impl<'a> Continuation<'a> {
         let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
         if cos_angle < 0.5 {
             return Err(RejectReason::Turn { ds, cos_angle });
+        }
+        // ω(σ) rising at both ends (say) but lower at the end: it fell in between
+        let omega_change = omega - cur.omega;
+        if tangent[nu] * cur.tangent[nu] > 0.0
+            && omega_change * cur.tangent[nu] < 0.0
+            && omega_change.abs() > FOLD_PAIR_MIN_CHANGE * ds * self.scales[nu]
+        {
+            return Err(RejectReason::FoldPair { ds, omega_change });
         }
         debug_assert_eq!(tangent.len(), nu + 1);
         let (lo, hi) = self.lo_hi();
