@@ -270,6 +270,13 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
             bif
         );
     }
+    let _ = writeln!(
+        s,
+        "\nω-turning points are the points where ω changes direction between neighbouring \
+         points; saddle-nodes are the folds located from the branch tangent (SN), so a fold \
+         pair narrower than the point spacing adds saddle-nodes but no turning point. A \
+         point's stable flag comes from its own multipliers."
+    );
     let _ = writeln!(s, "\n## Findings (SPEC §6)\n");
     let _ = writeln!(s, "| paper | ours | verdict |");
     let _ = writeln!(s, "|---|---|---|");
@@ -508,11 +515,13 @@ these findings most:
   its Eq. 3 disagree), Rayleigh damping ζ = 0.02, the 1e8 N/m support at node 4: they set
   peak heights and how far the folds bend.
 * **Stability method** — multipliers come from a Craig–Bampton reduction of the rotor
-  (cut-off 20 000 rad/s) with the exponential-split SIP product (256 intervals); on the
-  default sweep every located saddle-node lies within one continuation step of an
-  ω-turning point of the branch. The branch has more folds than the paper reports (the
-  resonances bend over further in this model), so it has more saddle-nodes; Neimark–Sacker
-  points appear from 2 L/min down and multiply at 1 L/min.
+  (cut-off 20 000 rad/s) with the exponential-split SIP product (512 intervals
+  extrapolated with 256, refined up to 4096 near the unit circle). Saddle-nodes are the
+  folds of the branch, located where the ω-component of its tangent vanishes (so they sit
+  on the ω-turning points); Neimark–Sacker and period-doubling points are located by the
+  crossing multiplier. The branch has more folds than the paper reports (the resonances
+  bend over further in this model), so it has more saddle-nodes; Neimark–Sacker points
+  appear from 2 L/min down and multiply at 1 L/min.
 ";
 
 /// One row of the truncation study's CSV (`tmrotor truncation --csv FILE`).

@@ -415,8 +415,8 @@ impl SweepProblem {
                 } => {
                     for b in &bifurcations {
                         if let Some(kind) = b.bifurcation {
-                            n_bif += 1;
                             let rec = BifurcationRecord {
+                                // 0, 1, … (the schema's running number)
                                 number: n_bif,
                                 kind,
                                 omega_rad_s: b.solution.omega,
@@ -430,6 +430,7 @@ impl SweepProblem {
                                     .unwrap_or_default(),
                             };
                             sink.write_bifurcation(&rec)?;
+                            n_bif += 1;
                             bifs.push((b.solution.omega, kind.label().to_string()));
                         }
                     }

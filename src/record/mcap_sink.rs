@@ -350,7 +350,7 @@ impl Sink for McapSink {
         let text = format!(
             "{} bifurcation #{} at ω = {:.4} rad/s (between points {} and {})",
             b.kind.label(),
-            b.number,
+            u64::from(b.number) + 1,
             b.omega_rad_s,
             b.after_point,
             b.after_point.saturating_add(1)

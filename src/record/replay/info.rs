@@ -89,7 +89,7 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
         writeln!(
             out,
             "  #{} {} at ω = {:.4} rad/s (after point {})",
-            b.number,
+            u64::from(b.number) + 1,
             b.kind.label(),
             b.omega_rad_s,
             b.after_point
