@@ -137,6 +137,38 @@ impl Series {
     }
 }
 
+/// A marker label's extent on the canvas, pixels (`x0 ≤ x1`, `y0 ≤ y1`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LabelBox {
+    pub x0: i32,
+    pub y0: i32,
+    pub x1: i32,
+    pub y1: i32,
+}
+
+impl LabelBox {
+    fn overlaps(&self, o: &Self) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+}
+
+/// Which labels to draw, in order: each one unless it overlaps a label kept before it
+/// (where bifurcations crowd, their circles are all drawn but only the first of
+/// overlapping labels).
+pub fn labels_to_draw(boxes: &[LabelBox]) -> Vec<bool> {
+    let mut kept: Vec<LabelBox> = Vec::new();
+    boxes
+        .iter()
+        .map(|b| {
+            let free = kept.iter().all(|k| !k.overlaps(b));
+            if free {
+                kept.push(*b);
+            }
+            free
+        })
+        .collect()
+}
+
 /// A labelled circle, e.g. a bifurcation point.
 #[derive(Clone, Debug)]
 pub struct Marker {
@@ -324,14 +356,37 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
             .map(|m| Circle::new((m.x, m.y), 6, m.colour.stroke_width(2))),
     )?;
     if text {
-        ctx.draw_series(chart.markers.iter().map(|m| {
-            EmptyElement::at((m.x, m.y))
-                + Text::new(
-                    m.label.clone(),
-                    (8, -(chart.font_px as i32) - 2),
-                    (FONT, chart.font_px).into_font().color(&m.colour),
-                )
-        }))?;
+        // a label that would cover one already placed is left out (its circle stays)
+        let font = (FONT, chart.font_px).into_font();
+        let offset = (8, -(chart.font_px as i32) - 2);
+        let boxes: Vec<LabelBox> = chart
+            .markers
+            .iter()
+            .map(|m| {
+                let (px, py) = ctx.backend_coord(&(m.x, m.y));
+                let (w, h) = area
+                    .estimate_text_size(&m.label, &TextStyle::from(font.clone()))
+                    .unwrap_or((0, chart.font_px));
+                LabelBox {
+                    x0: px + offset.0,
+                    y0: py + offset.1,
+                    x1: px + offset.0 + w as i32,
+                    y1: py + offset.1 + h as i32,
+                }
+            })
+            .collect();
+        let keep = labels_to_draw(&boxes);
+        ctx.draw_series(
+            chart
+                .markers
+                .iter()
+                .zip(keep)
+                .filter(|(_, k)| *k)
+                .map(|(m, _)| {
+                    EmptyElement::at((m.x, m.y))
+                        + Text::new(m.label.clone(), offset, font.color(&m.colour))
+                }),
+        )?;
         if categories {
             let style = TextStyle::from((FONT, chart.font_px).into_font())
                 .pos(Pos::new(HPos::Center, VPos::Top));
@@ -531,4 +586,23 @@ pub fn render_png(
     w.write_image_data(&buf).map_err(encode)?;
     w.finish().map_err(encode)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{LabelBox, labels_to_draw};
+
+    #[test]
+    fn overlapping_labels_after_the_first_are_left_out() {
+        let b = |x0, y0| LabelBox {
+            x0,
+            y0,
+            x1: x0 + 40,
+            y1: y0 + 12,
+        };
+        // the second overlaps the first; the third touches the first's edge only; the
+        // fourth overlaps the third; the fifth overlaps only the second, which was left out
+        let boxes = [b(0, 0), b(30, 5), b(40, 0), b(70, 11), b(30, 16)];
+        assert_eq!(labels_to_draw(&boxes), vec![true, false, true, false, true]);
+    }
 }
