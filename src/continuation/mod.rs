@@ -394,6 +394,67 @@ impl Held {
     }
 }
 
+/// An arclength bracket `[lo, hi]` on whose ends a test function `g` has opposite signs,
+/// narrowed by safeguarded regula falsi with the Illinois modification (the fold and the
+/// multiplier-crossing searches).
+struct Bracket {
+    lo: f64,
+    hi: f64,
+    g_lo: f64,
+    g_hi: f64,
+    /// Which end moved last (+1 `lo`, −1 `hi`, 0 none yet).
+    moved: i8,
+}
+
+impl Bracket {
+    fn new(span: f64, g_lo: f64, g_hi: f64) -> Self {
+        Self {
+            lo: 0.0,
+            hi: span,
+            g_lo,
+            g_hi,
+            moved: 0,
+        }
+    }
+
+    fn width(&self) -> f64 {
+        self.hi - self.lo
+    }
+
+    /// The next trial: the secant's zero, kept at least `guard` times the width from
+    /// either end; the midpoint when `g` gives no usable slope.
+    fn trial(&self, guard: f64) -> f64 {
+        let (lo, hi, width) = (self.lo, self.hi, self.width());
+        if self.g_lo.is_finite() && self.g_hi.is_finite() && self.g_lo != self.g_hi {
+            let margin = guard * width;
+            (lo - self.g_lo * width / (self.g_hi - self.g_lo)).clamp(lo + margin, hi - margin)
+        } else {
+            0.5 * (lo + hi)
+        }
+    }
+
+    /// Moves the `lo` end (when `lo_side`: `g(mid)` is on `lo`'s side) or the `hi` end to
+    /// `mid`; when the same end moves twice in a row the other end's `g` is halved
+    /// (Illinois), so that the secant does not stall against it.
+    fn narrow(&mut self, mid: f64, g_mid: f64, lo_side: bool) {
+        if lo_side {
+            self.lo = mid;
+            self.g_lo = g_mid;
+            if self.moved == 1 {
+                self.g_hi *= 0.5;
+            }
+            self.moved = 1;
+        } else {
+            self.hi = mid;
+            self.g_hi = g_mid;
+            if self.moved == -1 {
+                self.g_lo *= 0.5;
+            }
+            self.moved = -1;
+        }
+    }
+}
+
 /// A corrected point of a step, before it is accepted.
 struct Candidate {
     a: Vec<f64>,
@@ -791,18 +852,16 @@ impl<'a> Continuation<'a> {
         index: usize,
     ) -> Option<BranchPoint> {
         let nu = self.hb.n_unknowns();
-        let (mut lo, mut hi) = (0.0, span);
-        let (mut g_lo, mut g_hi) = (from.tangent[nu], t_end);
-        let stop = FOLD_SLOPE_TOL * g_lo.abs().max(g_hi.abs());
-        let mut kept = 0i8;
+        let g_start = from.tangent[nu];
+        let mut bracket = Bracket::new(span, g_start, t_end);
+        let stop = FOLD_SLOPE_TOL * g_start.abs().max(t_end.abs());
         let mut best = None;
         for _ in 0..self.opts.max_bisections {
-            let width = hi - lo;
-            if width <= self.opts.bifurcation_tol_arclength {
+            if bracket.width() <= self.opts.bifurcation_tol_arclength {
                 break;
             }
-            let guard = 0.01 * width;
-            let mid = (lo - g_lo * width / (g_hi - g_lo)).clamp(lo + guard, hi - guard);
+            // τ_ω is smooth through the fold: the secant is trusted to 1 % of the ends
+            let mid = bracket.trial(0.01);
             let Ok((a, w, st)) = self.correct(from, mid) else {
                 break;
             };
@@ -814,21 +873,7 @@ impl<'a> Continuation<'a> {
             if g_mid.abs() <= stop {
                 break;
             }
-            if (g_mid > 0.0) == (g_lo > 0.0) {
-                lo = mid;
-                g_lo = g_mid;
-                if kept == 1 {
-                    g_hi *= 0.5;
-                }
-                kept = 1;
-            } else {
-                hi = mid;
-                g_hi = g_mid;
-                if kept == -1 {
-                    g_lo *= 0.5;
-                }
-                kept = -1;
-            }
+            bracket.narrow(mid, g_mid, (g_mid > 0.0) == (g_start > 0.0));
         }
         let (a, w, st, mid) = best?;
         let mut p = self.bare_point(&a, w, &st, from.arclength + mid);
@@ -999,47 +1044,27 @@ impl<'a> Continuation<'a> {
             m.sort_by(|x, y| y.total_cmp(x));
             m.get(k).map_or(0.0, |v| v - (1.0 + UNIT_CIRCLE_TOL))
         };
-        let (mut lo, mut hi) = (0.0, span);
-        let (mut g_lo, mut g_hi) = (g(f_a), g(f_b));
+        let mut bracket = Bracket::new(span, g(f_a), g(f_b));
         let (mut f_lo, mut f_hi) = (f_a.clone(), f_b.clone());
-        // which end was kept last (−1 lo, +1 hi), for the Illinois modification
-        let mut kept = 0i8;
         let mut best: Option<BranchPoint> = None;
         for _ in 0..self.opts.max_bisections {
-            let width = hi - lo;
-            if width <= self.opts.bifurcation_tol_arclength {
+            if bracket.width() <= self.opts.bifurcation_tol_arclength {
                 break;
             }
-            // regula falsi on g, kept at least a tenth of the bracket from either end
-            // (bisection when g gives no usable slope)
-            let guard = 0.1 * width;
-            let mid = if g_lo.is_finite() && g_hi.is_finite() && g_lo != g_hi {
-                (lo - g_lo * width / (g_hi - g_lo)).clamp(lo + guard, hi - guard)
-            } else {
-                0.5 * (lo + hi)
-            };
+            // kept at least a tenth of the bracket from either end
+            let mid = bracket.trial(0.1);
             let Ok((a, w, st)) = self.correct(cur, mid) else {
                 break;
             };
             let p = self.make_point(&a, w, &st, cur.arclength + mid);
             let Some(fm) = p.stability.clone() else { break };
             let g_mid = g(&fm);
-            if fm.unstable_count() == n_a {
-                lo = mid;
-                g_lo = g_mid;
+            let lo_side = fm.unstable_count() == n_a;
+            bracket.narrow(mid, g_mid, lo_side);
+            if lo_side {
                 f_lo = fm;
-                if kept == 1 {
-                    g_hi *= 0.5;
-                }
-                kept = 1;
             } else {
-                hi = mid;
-                g_hi = g_mid;
                 f_hi = fm;
-                if kept == -1 {
-                    g_lo *= 0.5;
-                }
-                kept = -1;
             }
             best = Some(p);
             // the crossing is found to the accuracy the multipliers themselves have
