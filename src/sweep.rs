@@ -68,7 +68,9 @@ pub struct StudySettings {
     pub max_points: usize,
     /// Solve the thermal network together with the vibration (two-way coupling).
     pub thermal: bool,
-    /// Compute Floquet multipliers at every point (and locate bifurcations).
+    /// Compute Floquet multipliers at every point (and locate the Neimark–Sacker and
+    /// period-doubling points; saddle-nodes, the folds of the branch, are located either
+    /// way).
     pub stability: bool,
     /// Floquet method (see [`StabilityChoice`]).
     pub stability_method: StabilityChoice,

@@ -177,25 +177,11 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
     assert!(err.to_string().contains("sip_intervals"), "{err}");
 }
 
-/// Stands in for a Floquet method where only the folds are under test: saddle-nodes are
-/// located from the tangent, which needs no multipliers.
-struct NoMultipliers;
-
-impl tmrotor::stability::StabilityMethod for NoMultipliers {
-    fn multipliers(
-        &self,
-        _system: &dyn tmrotor::system::System,
-        _orbit: &dyn tmrotor::system::PeriodicOrbit,
-    ) -> Result<tmrotor::stability::FloquetResult, tmrotor::stability::StabilityError> {
-        Ok(tmrotor::stability::FloquetResult::new(Vec::new()))
-    }
-}
-
 /// The 5 L/min branch turns twice between 658 and 661 rad/s. Continued from 650 rad/s
 /// with the default sweep's ω scale and a first step of 0.15, one step jumps over both
 /// turns (ω falls over it while the tangent rises at both ends); that step must be
 /// rejected, and the two folds come out as two saddle-nodes on the turning points of a
-/// branch traced 30 times finer.
+/// branch traced 30 times finer (folds are located from the tangent, without multipliers).
 #[test]
 fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
     use tmrotor::continuation::{Continuation, ContinuationOptions, RejectReason, StepOutcome};
@@ -205,14 +191,14 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
         ..StudySettings::default()
     };
     let p = SweepProblem::new(&settings).expect("problem");
-    let trace = |ds: f64, stability: Option<&dyn tmrotor::stability::StabilityMethod>| {
+    let trace = |ds: f64| {
         let hb = HarmonicBalance::new(&p.system, &p.basis, None).expect("hb");
         let mut opts = ContinuationOptions::new(650.0, 665.0);
         opts.ds_max = ds;
         opts.ds_initial = ds;
         opts.scale_omega = Some(400.0);
         opts.initial_guess = Some(p.system.initial_guess(p.basis.n_coeffs()));
-        let mut cont = Continuation::new(hb, opts, stability).expect("continuation");
+        let mut cont = Continuation::new(hb, opts, None).expect("continuation");
         let (mut omegas, mut folds, mut fold_pairs) = (Vec::new(), Vec::new(), 0);
         loop {
             match cont.step().expect("step") {
@@ -236,8 +222,8 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
         }
         (omegas, folds, fold_pairs)
     };
-    let (_, folds, fold_pairs) = trace(0.15, Some(&NoMultipliers));
-    let (fine, _, _) = trace(0.005, None);
+    let (_, folds, fold_pairs) = trace(0.15);
+    let (fine, _, _) = trace(0.005);
     let turns: Vec<f64> = fine
         .windows(3)
         .filter(|w| (w[1] - w[0]) * (w[2] - w[1]) < 0.0)

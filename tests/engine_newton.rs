@@ -147,7 +147,11 @@ fn continuation_steps_finish_on_the_bound_and_csv_lists_every_point() {
             .expect("header")
             .starts_with("omega,amplitude,stable,bifurcation")
     );
-    assert_eq!(lines.count(), accepted);
+    // one row per point and per located bifurcation: without a stability method the two
+    // folds still come out as saddle-nodes (they need no multipliers)
+    assert_eq!(branch.bifurcations.len(), 2);
+    assert_eq!(lines.count(), accepted + 2);
+    assert_eq!(csv.matches(",saddle-node").count(), 2);
     // no stability method: the stable column is empty, not guessed
     for row in csv.lines().skip(2) {
         assert_eq!(row.split(',').nth(2), Some(""));

@@ -70,7 +70,8 @@ pub struct SweepArgs {
     /// Mechanical model only (no thermal network, clearances fixed at δ0).
     #[arg(long)]
     pub no_thermal: bool,
-    /// Skip Floquet stability (faster; no stable flags or bifurcations).
+    /// Skip Floquet stability (faster; no stable flags, and of the bifurcations only the
+    /// saddle-nodes, which are the folds of the branch and need no multipliers).
     #[arg(long)]
     pub no_stability: bool,
     /// Floquet method: exp-sip (exponential-split SIP, default) or sip (the paper's

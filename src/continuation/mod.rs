@@ -26,9 +26,10 @@
 //!   traced round and round until `max_points`).
 //!
 //! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
-//! [`HbSolution`], and the bifurcations between neighbouring points are located in
-//! arclength (re-correcting from the earlier point at intermediate arclength) and emitted
-//! as labelled points:
+//! [`HbSolution`]. The bifurcations between neighbouring points are located in arclength
+//! (re-correcting from the earlier point at intermediate arclength) and emitted as
+//! labelled points; the saddle-nodes need no multipliers and are located without a
+//! stability method too:
 //!
 //! * **saddle-nodes at folds.** Where the ω-component of the tangent changes sign, the
 //!   branch turns in ω; a real multiplier passes through +1 exactly there. The fold is
@@ -812,15 +813,15 @@ impl<'a> Continuation<'a> {
     /// point where the numbers of unstable multipliers differ and the crossing is not a
     /// real multiplier through +1 (that one belongs to a fold).
     fn located_changes(&self, from: &Current, to: &Current, index: usize) -> Vec<BranchPoint> {
-        let (Some(fa), Some(fb)) = (&from.stability, &to.stability) else {
-            return Vec::new();
-        };
         let span = to.arclength - from.arclength;
         let nu = self.hb.n_unknowns();
         let mut found = Vec::new();
         if from.tangent[nu] * to.tangent[nu] < 0.0 {
             found.extend(self.locate_fold(from, span, to.tangent[nu], index));
         }
+        let (Some(fa), Some(fb)) = (&from.stability, &to.stability) else {
+            return found;
+        };
         let multiplier_change = fa.unstable_count() != fb.unstable_count()
             && !matches!(
                 classify_crossing(fa, fb),
