@@ -139,11 +139,11 @@ impl Series {
 
 /// A marker label's extent on the canvas, pixels (`x0 ≤ x1`, `y0 ≤ y1`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct LabelBox {
-    pub x0: i32,
-    pub y0: i32,
-    pub x1: i32,
-    pub y1: i32,
+struct LabelBox {
+    x0: i32,
+    y0: i32,
+    x1: i32,
+    y1: i32,
 }
 
 impl LabelBox {
@@ -155,7 +155,7 @@ impl LabelBox {
 /// Which labels to draw, in order: each one unless it overlaps a label kept before it
 /// (where bifurcations crowd, their circles are all drawn but only the first of
 /// overlapping labels).
-pub fn labels_to_draw(boxes: &[LabelBox]) -> Vec<bool> {
+fn labels_to_draw(boxes: &[LabelBox]) -> Vec<bool> {
     let mut kept: Vec<LabelBox> = Vec::new();
     boxes
         .iter()
@@ -358,6 +358,7 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
     if text {
         // a label that would cover one already placed is left out (its circle stays)
         let font = (FONT, chart.font_px).into_font();
+        let measure = TextStyle::from(font.clone());
         let offset = (8, -(chart.font_px as i32) - 2);
         let boxes: Vec<LabelBox> = chart
             .markers
@@ -365,7 +366,7 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
             .map(|m| {
                 let (px, py) = ctx.backend_coord(&(m.x, m.y));
                 let (w, h) = area
-                    .estimate_text_size(&m.label, &TextStyle::from(font.clone()))
+                    .estimate_text_size(&m.label, &measure)
                     .unwrap_or((0, chart.font_px));
                 LabelBox {
                     x0: px + offset.0,

@@ -68,7 +68,8 @@ use crate::stability::{
 
 /// A fold is located until the ω-component of the unit tangent is this fraction of its
 /// larger value at the two points around it: near a fold `ω(σ) ≈ ω_f − κ(σ − σ_f)²/2`,
-/// so the located ω is then off by about `1e-6` of the ω change over the step.
+/// so the located ω is then off by about `(1e-2)² = 1e-4` of the ω change between the
+/// fold and the farther of the two points.
 const FOLD_SLOPE_TOL: f64 = 1e-2;
 
 /// A step is taken to hold a fold pair (see [`RejectReason::FoldPair`]) only when ω moved
