@@ -13,8 +13,8 @@ use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
 use tmrotor::hb::{Basis, HarmonicBalance, HbSolution, NewtonOptions, Ratio, newton};
 use tmrotor::model::Model;
 use tmrotor::stability::{
-    CraigBampton, ExpSip, MeanSplit, Reduced, ReducedOrbit, ReductionSettings, Sip, StabilityError,
-    StabilityMethod, Variational, split_thermal, thermal_multiplier_estimates,
+    CraigBampton, ExpSip, IntervalMap, MeanSplit, Reduced, ReducedOrbit, ReductionSettings, Sip,
+    StabilityError, StabilityMethod, Variational, split_thermal, thermal_multiplier_estimates,
 };
 use tmrotor::system::{PeriodicOrbit, System};
 use tmrotor::systems::chain::Chain;
@@ -297,7 +297,8 @@ fn exp_sip_matches_the_variational_equations_with_thermal_coupling() {
 /// are stiff, so the product needs fine intervals here: the reference (the variational
 /// equations on the same reduced model, Dormand–Prince, rtol 1e-6) has one real
 /// multiplier of modulus 1.320 (measured 1.31994; 1.31999 at rtol 1e-9), which a plain
-/// product on 256 intervals misses entirely.
+/// Strang product on 256 intervals misses entirely; the exponential interval map (the
+/// default) is checked against it for its order and against Strang's at 512 intervals.
 #[test]
 fn sweep_default_stability_matches_the_variational_equations_on_an_unstable_orbit() {
     use tmrotor::sweep::{StudySettings, SweepProblem, stability_method};
@@ -334,11 +335,52 @@ fn sweep_default_stability_matches_the_variational_equations_on_an_unstable_orbi
     // the largest 40 (the 66 thermal ones lie between 0.84 and 1)
     let d = matched_distance(&got.multipliers, &reference.multipliers, 40);
     assert!(d < 5e-3, "largest 40 multipliers: distance {d:e}");
+
+    // The two interval maps against the reference, without refinement. Measured (plain
+    // products on 256 / 512 / 1024 intervals): exponential 1.2361 / 1.2986 / 1.3150,
+    // Strang 1.0000 / 1.0712 / 1.2559; extrapolated from 512: 1.3165 against 1.2013.
+    let cb = || CraigBampton::new(sys, 500.0, ReductionSettings::default()).expect("reduction");
+    let top_with = |interval_map: IntervalMap, intervals: usize, extrapolate: bool| {
+        let m = Reduced {
+            reduction: cb(),
+            method: ExpSip {
+                intervals,
+                max_intervals: 0,
+                extrapolate,
+                interval_map,
+                ..ExpSip::default()
+            },
+        };
+        top(&m.multipliers(sys, &orbit).expect("product").multipliers)
+    };
+    let errors: Vec<f64> = [256, 512, 1024]
+        .iter()
+        .map(|&n| (top_with(IntervalMap::Exponential, n, false) - r).abs())
+        .collect();
+    for pair in errors.windows(2) {
+        assert!(
+            pair[1] < pair[0] / 3.0,
+            "exponential map: errors {errors:?} do not fall at second order"
+        );
+    }
+    let strang = (top_with(IntervalMap::Strang, 512, false) - r).abs();
+    assert!(
+        errors[1] < strang / 5.0,
+        "512 intervals: exponential error {:e} against Strang's {strang:e}",
+        errors[1]
+    );
+    let ext_exp = (top_with(IntervalMap::Exponential, 512, true) - r).abs();
+    let ext_strang = (top_with(IntervalMap::Strang, 512, true) - r).abs();
+    assert!(
+        ext_exp < 5e-3 && ext_exp < ext_strang / 10.0,
+        "extrapolated from 512: exponential error {ext_exp:e}, Strang {ext_strang:e}"
+    );
 }
 
 /// The modal propagation is the same product in the eigenvector coordinates of `B̄`'s
 /// blocks: on the reduced dual rotor (coupled network) it must take the modal path (both
-/// bases well conditioned) and give the dense path's monodromy matrix to rounding.
+/// bases well conditioned) and give the dense path's monodromy matrix to rounding. Both
+/// with Strang's interval map, the only one the dense path has.
 #[test]
 fn modal_and_dense_products_agree_on_the_dual_rotor() {
     let p = dual_rotor_point(450.0, true);
@@ -350,6 +392,7 @@ fn modal_and_dense_products_agree_on_the_dual_rotor() {
         intervals: 128,
         max_intervals: 0,
         modal,
+        interval_map: IntervalMap::Strang,
         ..ExpSip::default()
     };
     let conds = with(true)

@@ -15,6 +15,7 @@
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatMut, MatRef};
+use num_complex::Complex64;
 
 use super::expm::balance;
 
@@ -176,6 +177,25 @@ impl RealModal {
         }
     }
 
+    /// `f(Λ)` for a function `f` analytic on the eigenvalues and real on the real axis:
+    /// `f(λ)` on a real block, `[[Re f, Im f], [−Im f, Re f]]` at `α + iβ` on a pair block.
+    pub fn function(&self, f: impl Fn(Complex64) -> Complex64) -> BlockDiagonal {
+        let mut scale = Vec::new();
+        let mut rotations = Vec::new();
+        for b in &self.blocks {
+            match *b {
+                ModalBlock::Real { lambda, .. } => {
+                    scale.push(f(Complex64::new(lambda, 0.0)).re);
+                }
+                ModalBlock::Pair { re, im, .. } => {
+                    let v = f(Complex64::new(re, im));
+                    rotations.push([v.re, v.im, -v.im, v.re]);
+                }
+            }
+        }
+        BlockDiagonal { scale, rotations }
+    }
+
     /// `e^{tΛ}` as scalings and plane rotations.
     pub fn exp(&self, t: f64) -> BlockDiagonal {
         let mut scale = Vec::new();
@@ -237,6 +257,13 @@ impl BlockDiagonal {
                 p[1] = e[2] * a + e[3] * b;
             }
         }
+    }
+
+    /// The matrix as a dense one.
+    pub fn to_dense(&self) -> Mat<f64> {
+        let mut m = Mat::zeros(self.dim(), self.dim());
+        self.columns_into(0, m.as_mut());
+        m
     }
 
     /// Columns `c0..c0 + out.ncols()` of the matrix, written into `out` (`dim` rows).
