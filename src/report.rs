@@ -515,8 +515,9 @@ these findings most:
   its Eq. 3 disagree), Rayleigh damping ζ = 0.02, the 1e8 N/m support at node 4: they set
   peak heights and how far the folds bend.
 * **Stability method** — multipliers come from a Craig–Bampton reduction of the rotor
-  (cut-off 20 000 rad/s) with the exponential-split SIP product (512 intervals
-  extrapolated with 256, refined up to 4096 near the unit circle). Saddle-nodes are the
+  (cut-off 20 000 rad/s) with the exponential-split SIP product (exponential interval
+  map, 512 intervals extrapolated with 256, refined up to 4096 near the unit circle).
+  Saddle-nodes are the
   folds of the branch, located where the ω-component of its tangent vanishes (so they sit
   on the ω-turning points); Neimark–Sacker and period-doubling points are located by the
   crossing multiplier. The branch has more folds than the paper reports (the resonances

@@ -128,8 +128,9 @@ pub const DEFAULT_INTERVALS: usize = 512;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum StabilityChoice {
-    /// Exponential-split SIP ([`ExpSip`]): interval exponentials with the orbit-mean state
-    /// matrix taken exactly; works for stiff finite-element models. Default.
+    /// Exponential-split SIP ([`ExpSip`]): the orbit-mean state matrix taken exactly, the
+    /// fluctuation through the exponential interval map; works for stiff finite-element
+    /// models. Default.
     ExpSip,
     /// The paper's explicit SIP product ([`Sip`], Eq. 33), with the interval count raised
     /// until `Δ·ρ(B) ≤ 1`; refuses models that would need more than 200 000 intervals.
