@@ -142,22 +142,21 @@ pub enum MeanSplit {
 
 impl Default for ExpSip {
     /// 512 intervals extrapolated with 256 and refined up to 4096 where a multiplier is
-    /// close to the circle; series order 4, 2 Gauss points, field split.
+    /// close to the circle; the exponential interval map, series order 4, 2 Gauss points,
+    /// field split.
     ///
     /// Why: on the built-in dual rotor the interval count is set by the bearing stiffness,
     /// which varies with every rolling-element pass while the bearing-local modes are
     /// stiff (eigenvalues to −1.1e5 1/s and −1.6e4 ± 3.0e4i 1/s). At ω = 500 rad/s on the
-    /// unstable branch the variational equations give a multiplier of modulus 1.3200; the
-    /// plain product gives 0.99999 (the instability missed) at 256 intervals, 1.071 at 512,
-    /// 1.256 at 1024 and 1.303 at 2048 (clean second order), and the extrapolation
-    /// 1.2005 / 1.3168 / 1.3184 from 512 / 1024 / 2048. The refinement goes from 512 to
-    /// 1024 there (error estimate 0.13 at 512 against a distance of 0.20 from the circle;
-    /// 0.061 against 0.32 at 1024) and gives 1.3168, 3e-3 from the reference
-    /// (`tests/stability_exp_sip.rs`). Points whose multipliers are all clearly inside or
-    /// outside stay at 512; the product costs about half as much there as at 1024. Near
-    /// folds the crossing multiplier converges slowly (at 447.5 rad/s of the default sweep:
-    /// 1.108 / 1.224 / 1.250 / 1.255 / 1.256 extrapolated from 1024 … 16384), which the
-    /// refinement follows up to 4096. Gauss points 1, 2, 3 give the same figures to 3e-3.
+    /// unstable branch the variational equations give a multiplier of modulus 1.3200. With
+    /// the exponential map the plain product gives 1.236 / 1.299 / 1.315 / 1.319 on
+    /// 256 / 512 / 1024 / 2048 intervals (second order) and the extrapolation from 512
+    /// 1.3165, 3.5e-3 from the reference; the error estimate there (0.018) is far below the
+    /// distance from the circle, so the product stays at 512 (on the default sweep 315 of
+    /// 320 evaluations do). Strang's map gives 0.99999 (the instability missed) / 1.071 /
+    /// 1.256 / 1.303 and 1.2013 extrapolated from 512, and needed the refinement to 1024 at
+    /// such points (`tests/stability_exp_sip.rs`). Gauss points 1, 2, 3 gave the same
+    /// figures to 3e-3 (Strang's map).
     fn default() -> Self {
         Self {
             intervals: 512,
