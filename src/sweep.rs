@@ -32,7 +32,8 @@ use crate::record::types::{
 };
 use crate::record::{RecordError, Sink};
 use crate::stability::{
-    CraigBampton, ExpSip, Reduced, ReductionSettings, Sip, StabilityError, StabilityMethod,
+    CraigBampton, ExpSip, IntervalMap, Reduced, ReductionSettings, Sip, StabilityError,
+    StabilityMethod,
 };
 
 /// Samples per period used for the recorded orbits, bearing loads and temperature ranges.
@@ -79,6 +80,10 @@ pub struct StudySettings {
     /// circle (doubled up to 4096); the explicit `sip` method raises it automatically for
     /// stiff systems.
     pub sip_intervals: usize,
+    /// Interval map of the `exp-sip` product: `exponential` (default) or `strang`, the
+    /// map of earlier versions (see [`IntervalMap`]). Recordings whose embedded settings
+    /// lack this field were made with `strang`, and are re-derived with it.
+    pub interval_map: IntervalMap,
     /// Cut-off (rad/s) of the Craig–Bampton reduction the stability is computed on
     /// (interior modes of the rotor with its bearing DoFs held, up to this frequency);
     /// 0 computes on the full model.
@@ -103,6 +108,7 @@ impl Default for StudySettings {
             stability: true,
             stability_method: StabilityChoice::ExpSip,
             sip_intervals: DEFAULT_INTERVALS,
+            interval_map: IntervalMap::Exponential,
             reduction_cutoff_rad_s: ReductionSettings::default().cutoff_rad_s,
             aft_samples: None,
         }
@@ -156,6 +162,7 @@ pub fn stability_method(
 ) -> Result<Box<dyn StabilityMethod>, StabilityError> {
     let exp = ExpSip {
         intervals: settings.sip_intervals,
+        interval_map: settings.interval_map,
         ..ExpSip::default()
     };
     let sip = Sip {
@@ -760,6 +767,10 @@ fn run_info(
             settings.sip_intervals.to_string(),
         ),
         (
+            "interval_map".to_string(),
+            settings.interval_map.label().to_string(),
+        ),
+        (
             "reduction_cutoff_rad_s".to_string(),
             settings.reduction_cutoff_rad_s.to_string(),
         ),
@@ -821,6 +832,15 @@ impl CoupledRederive {
                     "embedded settings are not readable by this version"
                 },
             })?;
+        // settings embedded before the interval map was a setting: Strang's map, the only
+        // one then
+        let has_map = run
+            .settings_toml
+            .parse::<toml::Table>()
+            .is_ok_and(|t| t.contains_key("interval_map"));
+        if !has_map {
+            settings.interval_map = IntervalMap::Strang;
+        }
         let model = Model::from_str(&run.model_text, &run.model_name)?;
         settings.model = None;
         if let Some(n) = sip_intervals {

@@ -175,6 +175,42 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
         .err()
         .expect("odd count refused");
     assert!(err.to_string().contains("sip_intervals"), "{err}");
+
+    // The interval map is recorded; settings embedded before it was a setting (no
+    // `interval_map` line) are re-derived with Strang's map, the one they were made with.
+    assert!(
+        run.settings_toml.contains("interval_map = \"exponential\""),
+        "{}",
+        run.settings_toml
+    );
+    let strang = StudySettings {
+        interval_map: tmrotor::stability::IntervalMap::Strang,
+        ..settings.clone()
+    };
+    let mut sink_strang = MemorySink::new();
+    SweepProblem::new(&strang)
+        .expect("problem")
+        .run(&mut sink_strang, None, |_| {})
+        .expect("sweep");
+    let p_strang = &sink_strang.points[0];
+    let maps_differ = multiplier_deviation(&p.multipliers, &p_strang.multipliers).expect("count");
+    assert!(maps_differ > 0.0, "the two maps are different products");
+    let mut older = run.clone();
+    older.settings_toml = run
+        .settings_toml
+        .lines()
+        .filter(|l| !l.starts_with("interval_map"))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let again = CoupledRederive::from_run(&older)
+        .expect("rebuilds")
+        .multipliers(p_strang)
+        .expect("recomputes");
+    let dev = multiplier_deviation(&p_strang.multipliers, &again).expect("same count");
+    assert!(
+        dev < 1e-12,
+        "older recording re-derived with Strang's map: {dev:e}"
+    );
 }
 
 /// The 5 L/min branch turns twice between 658 and 661 rad/s. Continued from 650 rad/s

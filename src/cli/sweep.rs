@@ -82,6 +82,11 @@ pub struct SweepArgs {
     /// doubled up to 4096 where a multiplier is close to the unit circle) [default: 512].
     #[arg(long, value_name = "N")]
     pub sip_intervals: Option<usize>,
+    /// Interval map of the exp-sip product: exponential (default; exact for the
+    /// quasi-static response of stiff modes) or strang (the midpoint split of earlier
+    /// versions).
+    #[arg(long, value_name = "MAP", value_parser = ["exponential", "strang"])]
+    pub interval_map: Option<String>,
     /// Cut-off (rad/s) of the Craig–Bampton reduction used for stability; 0 = full model
     /// [default: 20000].
     #[arg(long, value_name = "RAD_S")]
@@ -124,6 +129,12 @@ impl SweepArgs {
         }
         if let Some(v) = self.sip_intervals {
             s.sip_intervals = v;
+        }
+        if let Some(m) = &self.interval_map {
+            s.interval_map = match m.as_str() {
+                "strang" => crate::stability::IntervalMap::Strang,
+                _ => crate::stability::IntervalMap::Exponential,
+            };
         }
         if let Some(v) = self.reduction_cutoff {
             s.reduction_cutoff_rad_s = v;

@@ -116,7 +116,8 @@ pub struct ExpSip {
 }
 
 /// How one interval's map combines the exact mean part and the fluctuation (module docs).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum IntervalMap {
     /// `e^{ΔB̄/2} T_N(Δ δB_k) e^{ΔB̄/2}`: the fluctuation acts at the interval's midpoint.
     Strang,
@@ -124,6 +125,16 @@ pub enum IntervalMap {
     /// stiff limit of `B̄`'s modes.
     #[default]
     Exponential,
+}
+
+impl IntervalMap {
+    /// The name used in settings files and on the command line.
+    pub fn label(self) -> &'static str {
+        match self {
+            IntervalMap::Strang => "strang",
+            IntervalMap::Exponential => "exponential",
+        }
+    }
 }
 
 /// The constant part `B̄` of the splitting `B_k = B̄ + δB_k`.
