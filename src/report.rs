@@ -518,9 +518,10 @@ these findings most:
   (cut-off 20 000 rad/s) with the exponential-split SIP product (exponential interval
   map, 512 intervals extrapolated with 256, refined up to 4096 near the unit circle).
   Saddle-nodes are the folds of the branch, located where the ω-component of its
-  tangent vanishes (so they sit on the ω-turning points); Neimark–Sacker and period-doubling points are located by the
-  crossing multiplier. The branch has more folds than the paper reports (the resonances
-  bend over further in this model), so it has more saddle-nodes; Neimark–Sacker points
+  tangent vanishes (so they sit on the ω-turning points); Neimark–Sacker and
+  period-doubling points are located by the crossing multiplier. The branch has more
+  folds than the paper reports (the resonances bend over further in this model), so it
+  has more saddle-nodes; Neimark–Sacker points
   appear from 2 L/min down and multiply at 1 L/min, and at 20 L/min a pair of them
   bounds a short unstable stretch on the second peak (checked with 8192 intervals), where
   the paper reports no bifurcation above 2 L/min.
