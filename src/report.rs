@@ -521,10 +521,10 @@ these findings most:
   tangent vanishes (so they sit on the ω-turning points); Neimark–Sacker and
   period-doubling points are located by the crossing multiplier. The branch has more
   folds than the paper reports (the resonances bend over further in this model), so it
-  has more saddle-nodes; Neimark–Sacker points
-  appear from 2 L/min down and multiply at 1 L/min, and at 20 L/min a pair of them
-  bounds a short unstable stretch on the second peak (checked with 8192 intervals), where
-  the paper reports no bifurcation above 2 L/min.
+  has more saddle-nodes; Neimark–Sacker points appear from 2 L/min down and multiply at
+  1 L/min, and at 20 L/min a pair of them bounds a short unstable stretch on the second
+  peak (checked with 8192 intervals), where the paper reports no bifurcation above
+  2 L/min.
 ";
 
 /// One row of the truncation study's CSV (`tmrotor truncation --csv FILE`).
