@@ -859,12 +859,8 @@ impl<'a> Continuation<'a> {
         let stop = FOLD_SLOPE_TOL * g_start.abs().max(t_end.abs());
         let mut best = None;
         for _ in 0..self.opts.max_bisections {
-            if bracket.width() <= self.opts.bifurcation_tol_arclength {
-                break;
-            }
             // τ_ω is smooth through the fold: the secant is trusted to 1 % of the ends
-            let mid = bracket.trial(0.01);
-            let Ok((a, w, st)) = self.correct(from, mid) else {
+            let Some((mid, a, w, st)) = self.bracket_trial(from, &bracket, 0.01) else {
                 break;
             };
             let Ok(t) = self.tangent(&a, w, Some(&from.tangent)) else {
@@ -882,6 +878,23 @@ impl<'a> Continuation<'a> {
         p.bifurcation = Some(BifurcationKind::SaddleNode);
         p.index = index;
         Some(p)
+    }
+
+    /// The next trial of a bracket search from `from` (guard as [`Bracket::trial`]): its
+    /// arclength offset and corrected point, or `None` when the bracket is already narrower
+    /// than `bifurcation_tol_arclength` or the corrector fails there.
+    fn bracket_trial(
+        &self,
+        from: &Current,
+        bracket: &Bracket,
+        guard: f64,
+    ) -> Option<(f64, Vec<f64>, f64, newton::NewtonStats)> {
+        if bracket.width() <= self.opts.bifurcation_tol_arclength {
+            return None;
+        }
+        let mid = bracket.trial(guard);
+        let (a, w, st) = self.correct(from, mid).ok()?;
+        Some((mid, a, w, st))
     }
 
     /// Hands out the held point with its bifurcations.
@@ -1050,12 +1063,8 @@ impl<'a> Continuation<'a> {
         let (mut f_lo, mut f_hi) = (f_a.clone(), f_b.clone());
         let mut best: Option<BranchPoint> = None;
         for _ in 0..self.opts.max_bisections {
-            if bracket.width() <= self.opts.bifurcation_tol_arclength {
-                break;
-            }
             // kept at least a tenth of the bracket from either end
-            let mid = bracket.trial(0.1);
-            let Ok((a, w, st)) = self.correct(cur, mid) else {
+            let Some((mid, a, w, st)) = self.bracket_trial(cur, &bracket, 0.1) else {
                 break;
             };
             let p = self.make_point(&a, w, &st, cur.arclength + mid);

@@ -733,38 +733,32 @@ impl Kicks {
             exps: Vec::with_capacity(fields.len()),
             gather: Vec::with_capacity(fields.len()),
             spread: Vec::with_capacity(fields.len()),
-            k: Mat::zeros(g, r),
+            // Strang: K = S L as it is; exponential: assembled per field below
+            k: match map {
+                IntervalMap::Strang => space.gather_of_spread(),
+                IntervalMap::Exponential => Mat::zeros(g, r),
+            },
         };
         for f in fields {
             let full = f.modal.exp(delta);
-            let (start, s, l, k_f) = match map {
-                IntervalMap::Strang => (
-                    f.modal.exp(0.5 * delta),
-                    f.s_hat.clone(),
-                    f.l_hat.clone(),
-                    &f.s_hat * &f.l_hat,
-                ),
+            let (start, s, l) = match map {
+                IntervalMap::Strang => (f.modal.exp(0.5 * delta), f.s_hat.clone(), f.l_hat.clone()),
                 IntervalMap::Exponential => {
                     let p1 = f.modal.function(|z| phi1(z * delta)).to_dense();
                     let w2 = f.modal.function(|z| 2.0 * phi2(z * delta)).to_dense();
-                    (
-                        f.modal.exp(0.0),
-                        &f.s_hat * &p1,
-                        &p1 * &f.l_hat,
-                        &f.s_hat * &w2 * &f.l_hat,
-                    )
+                    // K is block diagonal in the fields: a field's gathered rows see only
+                    // its own spread columns
+                    let (gn, sn) = (f.gather.1 - f.gather.0, f.spread.1 - f.spread.0);
+                    if gn > 0 && sn > 0 {
+                        kicks
+                            .k
+                            .as_mut()
+                            .submatrix_mut(f.gather.0, f.spread.0, gn, sn)
+                            .copy_from(&f.s_hat * &w2 * &f.l_hat);
+                    }
+                    (f.modal.exp(0.0), &f.s_hat * &p1, &p1 * &f.l_hat)
                 }
             };
-            // K is block diagonal in the fields: a field's gathered rows see only its
-            // own spread columns
-            let (gn, sn) = (f.gather.1 - f.gather.0, f.spread.1 - f.spread.0);
-            if gn > 0 && sn > 0 {
-                kicks
-                    .k
-                    .as_mut()
-                    .submatrix_mut(f.gather.0, f.spread.0, gn, sn)
-                    .copy_from(&k_f);
-            }
             kicks.exps.push([start, full]);
             kicks.gather.push(s);
             kicks.spread.push(l);

@@ -198,19 +198,7 @@ impl RealModal {
 
     /// `e^{tΛ}` as scalings and plane rotations.
     pub fn exp(&self, t: f64) -> BlockDiagonal {
-        let mut scale = Vec::new();
-        let mut rotations = Vec::new();
-        for b in &self.blocks {
-            match *b {
-                ModalBlock::Real { lambda, .. } => scale.push((lambda * t).exp()),
-                ModalBlock::Pair { re, im, .. } => {
-                    let g = (re * t).exp();
-                    let (s, c) = (im * t).sin_cos();
-                    rotations.push([g * c, g * s, -g * s, g * c]);
-                }
-            }
-        }
-        BlockDiagonal { scale, rotations }
+        self.function(|z| (z * t).exp())
     }
 }
 
