@@ -61,7 +61,10 @@ pub mod csv;
 use thiserror::Error;
 
 use crate::hb::newton::{self, ArcConstraint, NewtonError, NewtonOptions};
-use crate::hb::{HarmonicBalance, HbError, HbSolution, LinearSolver, SolveError, condense::Border};
+use crate::hb::{
+    Factorization, HarmonicBalance, HbError, HbSolution, JacobianParts, LinearSolver,
+    SolveError, condense::Border,
+};
 use crate::stability::{
     BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL, classify_crossing,
 };
@@ -76,6 +79,7 @@ const FOLD_SLOPE_TOL: f64 = 1e-2;
 /// against both tangents by more than this fraction of the step (scaled units), so that
 /// rounding on a branch that runs at constant ω cannot halve the step away.
 const FOLD_PAIR_MIN_CHANGE: f64 = 1e-6;
+
 
 /// Continuation settings. Every default is given in the field's doc.
 #[derive(Clone, Debug)]
@@ -93,6 +97,14 @@ pub struct ContinuationOptions {
     pub ds_max: f64,
     /// Newton iterations the step control aims at (default 4).
     pub target_iterations: usize,
+    /// Most corrector iterations of an accepted step (default 4); a step that needs more
+    /// is rejected and halved. The corrector takes Keller's step from the start point's
+    /// factorization and then Newton steps, three iterations on a smooth branch at the
+    /// default step cap. A corrector that labours has usually started between nearby
+    /// branch segments: on the default sweep near 615 rad/s three segments lie within
+    /// 0.5 % of each other in amplitude (the fold pair at 612.9 and 618.0 rad/s), and a
+    /// step that needed five iterations landed on the third one, passing over both folds.
+    pub max_step_iterations: usize,
     /// Maximum number of accepted points (default 2000).
     pub max_points: usize,
     /// Newton settings of the corrector (defaults of [`NewtonOptions`]).
@@ -145,6 +157,7 @@ impl ContinuationOptions {
             ds_min: 1e-7,
             ds_max: 0.1,
             target_iterations: 4,
+            max_step_iterations: 4,
             max_points: 2000,
             newton: NewtonOptions::default(),
             scale_mech: None,
@@ -232,6 +245,9 @@ pub enum RejectReason {
     /// the other way (`omega_change`, rad/s): the branch turned twice within the step, a
     /// fold pair that neither end can see; the step is halved.
     FoldPair { ds: f64, omega_change: f64 },
+    /// The corrector needed more than `max_step_iterations` iterations; the step is
+    /// halved.
+    Iterations { ds: f64, iterations: usize },
 }
 
 /// Why the continuation stopped.
@@ -351,6 +367,10 @@ struct Current {
     tangent: Vec<f64>, // scaled, unknowns then ω, unit length
     arclength: f64,
     stability: Option<FloquetResult>,
+    /// The Jacobian at this point, factored and bordered with the arclength row of
+    /// `tangent`: the corrector's starting matrix for steps from here (`None` at the
+    /// start point, whose tangent comes from the unbordered matrix).
+    chord: Option<Factorization>,
 }
 
 /// The continuation driver.
@@ -463,6 +483,7 @@ struct Candidate {
     omega: f64,
     stats: newton::NewtonStats,
     tangent: Vec<f64>,
+    chord: Option<Factorization>,
     arclength: f64,
     /// Set when the step left the ω range and the point was re-solved on this bound.
     bound: Option<f64>,
@@ -594,17 +615,50 @@ impl<'a> Continuation<'a> {
         a: &[f64],
         omega: f64,
         prev: Option<&[f64]>,
+        jacobian: Option<(JacobianParts, Vec<f64>)>,
+        corrector: Option<Factorization>,
     ) -> Result<Vec<f64>, ContinuationError> {
+        self.tangent_factored(a, omega, prev, jacobian, corrector, false)
+            .map(|(t, _)| t)
+    }
+
+    /// [`Self::tangent`] (from `jacobian`, `∂R/∂A` and `R` at the point, when the
+    /// corrector left them) and, with `prev` and `keep`, the Jacobian's factorization
+    /// bordered with the new tangent's arclength row: the corrector's first matrix for a
+    /// step from this point (`None` when that row makes it singular).
+    ///
+    /// `corrector`: the corrector's last factored matrix, when its last iteration was a
+    /// Newton step; bordered with `prev`'s row, it is the tangent's matrix but for the
+    /// Jacobian, taken one Newton step before the point (see the module docs).
+    fn tangent_factored(
+        &self,
+        a: &[f64],
+        omega: f64,
+        prev: Option<&[f64]>,
+        jacobian: Option<(JacobianParts, Vec<f64>)>,
+        corrector: Option<Factorization>,
+        keep: bool,
+    ) -> Result<(Vec<f64>, Option<Factorization>), ContinuationError> {
         let nu = self.hb.n_unknowns();
-        let mut r = vec![0.0; nu];
-        let parts = self.hb.residual_jacobian(a, omega, &mut r)?;
+        if let (Some(fact), Some(_)) = (corrector, prev) {
+            let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
+            return Ok(self.oriented(&z, zeta, prev, keep.then_some(fact)));
+        }
+        let (parts, r) = match jacobian {
+            Some(j) => j,
+            None => {
+                let mut r = vec![0.0; nu];
+                (self.hb.residual_jacobian(a, omega, &mut r)?, r)
+            }
+        };
         let mut r_omega = vec![0.0; nu];
-        self.hb.d_residual_d_omega(a, omega, &mut r_omega)?;
+        self.hb
+            .d_residual_d_omega_from(a, omega, &r, &mut r_omega)?;
         let solver = LinearSolver {
             condense: self.opts.newton.condense,
         };
         let s = &self.scales;
-        let (z, zeta) = match prev {
+        let (z, zeta, fact) = match prev {
             Some(t) => {
                 let row = self.arc_row(t);
                 let border = Border {
@@ -612,14 +666,32 @@ impl<'a> Continuation<'a> {
                     row: &row,
                     corner: t[nu] / s[nu],
                 };
-                solver.solve(&self.hb, &parts, Some(border), &vec![0.0; nu], 1.0)?
+                let fact = solver.factor(&self.hb, &parts, Some(border))?;
+                let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
+                (z, zeta, keep.then_some(fact))
             }
             None => {
                 let neg: Vec<f64> = r_omega.iter().map(|v| -v).collect();
                 let (z, _) = solver.solve(&self.hb, &parts, None, &neg, 0.0)?;
-                (z, 1.0)
+                (z, 1.0, None)
             }
         };
+        Ok(self.oriented(&z, zeta, prev, fact))
+    }
+
+    /// The unit tangent from the solution `(z, ζ)` of the tangent system, oriented along
+    /// `prev` (or towards `omega_end`), and `fact` (the tangent's matrix, factored with
+    /// the arclength row of `prev`, whose solve `(z, ζ)` is) with its row replaced by the
+    /// new tangent's.
+    fn oriented(
+        &self,
+        z: &[f64],
+        zeta: f64,
+        prev: Option<&[f64]>,
+        fact: Option<Factorization>,
+    ) -> (Vec<f64>, Option<Factorization>) {
+        let nu = self.hb.n_unknowns();
+        let s = &self.scales;
         let mut t: Vec<f64> = z.iter().zip(s).map(|(v, si)| v / si).collect();
         t.push(zeta / s[nu]);
         let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
@@ -629,7 +701,14 @@ impl<'a> Continuation<'a> {
         } else {
             1.0
         };
-        Ok(t.into_iter().map(|v| sign * v / norm).collect())
+        let t: Vec<f64> = t.into_iter().map(|v| sign * v / norm).collect();
+        // the tangent's own solve is `A⁻¹ e` of the row replacement
+        let fact = fact.and_then(|mut f| {
+            f.replace_border_row(&self.arc_row(&t), t[nu] / s[nu], Some((z, zeta)))
+                .ok()
+                .map(|()| f)
+        });
+        (t, fact)
     }
 
     /// The start point and the state to continue from (sets the scales and the history).
@@ -675,7 +754,7 @@ impl<'a> Continuation<'a> {
             }
         }
         self.scales.push(sw);
-        let tangent = self.tangent(&a, omega, None)?;
+        let tangent = self.tangent(&a, omega, None, None, None)?;
         let point = self.bare_point(&a, omega, &stats, 0.0);
         self.history = vec![(self.scaled(&a, omega), 0.0)];
         self.n_points = 1;
@@ -685,6 +764,7 @@ impl<'a> Continuation<'a> {
             tangent,
             arclength: 0.0,
             stability: None,
+            chord: None,
         };
         Ok((cur, point))
     }
@@ -709,7 +789,7 @@ impl<'a> Continuation<'a> {
         &self,
         cur: &Current,
         ds: f64,
-    ) -> Result<(Vec<f64>, f64, newton::NewtonStats), NewtonError> {
+    ) -> Result<newton::Converged, NewtonError> {
         let nu = self.hb.n_unknowns();
         let s = &self.scales;
         let t = &cur.tangent;
@@ -723,7 +803,14 @@ impl<'a> Continuation<'a> {
             corner: t[nu] / s[nu],
             ds,
         };
-        newton::solve_arclength(&self.hb, &pred, w_pred, &arc, &self.opts.newton)
+        newton::solve_arclength_from(
+            &self.hb,
+            &pred,
+            w_pred,
+            &arc,
+            cur.chord.as_ref(),
+            &self.opts.newton,
+        )
     }
 
     /// Scaled distance of `(a, omega)` from the predictor `cur + ds·τ`.
@@ -860,10 +947,17 @@ impl<'a> Continuation<'a> {
         let mut best = None;
         for _ in 0..self.opts.max_bisections {
             // τ_ω is smooth through the fold: the secant is trusted to 1 % of the ends
-            let Some((mid, a, w, st)) = self.bracket_trial(from, &bracket, 0.01) else {
+            let Some((mid, c)) = self.bracket_trial(from, &bracket, 0.01) else {
                 break;
             };
-            let Ok(t) = self.tangent(&a, w, Some(&from.tangent)) else {
+            let (a, w, st) = (c.a, c.omega, c.stats);
+            let Ok(t) = self.tangent(
+                &a,
+                w,
+                Some(&from.tangent),
+                c.jacobian,
+                c.last_factorization,
+            ) else {
                 break;
             };
             let g_mid = t[nu];
@@ -888,13 +982,12 @@ impl<'a> Continuation<'a> {
         from: &Current,
         bracket: &Bracket,
         guard: f64,
-    ) -> Option<(f64, Vec<f64>, f64, newton::NewtonStats)> {
+    ) -> Option<(f64, newton::Converged)> {
         if bracket.width() <= self.opts.bifurcation_tol_arclength {
             return None;
         }
         let mid = bracket.trial(guard);
-        let (a, w, st) = self.correct(from, mid).ok()?;
-        Some((mid, a, w, st))
+        Some((mid, self.correct(from, mid).ok()?))
     }
 
     /// Hands out the held point with its bifurcations.
@@ -955,6 +1048,7 @@ impl<'a> Continuation<'a> {
             tangent: c.tangent,
             arclength: c.arclength,
             stability: None,
+            chord: c.chord,
         };
         if self.stability.is_some() {
             if let Some(out) = self.hand_out() {
@@ -984,13 +1078,33 @@ impl<'a> Continuation<'a> {
             ds,
             message: e.to_string(),
         };
-        let (a, omega, stats) = self.correct(cur, ds).map_err(|e| corrector(&e))?;
+        let newton::Converged {
+            a,
+            omega,
+            stats,
+            jacobian,
+            last_factorization,
+        } = self.correct(cur, ds).map_err(|e| corrector(&e))?;
+        if stats.iterations > self.opts.max_step_iterations {
+            return Err(RejectReason::Iterations {
+                ds,
+                iterations: stats.iterations,
+            });
+        }
         let distance = self.corrector_distance(cur, ds, &a, omega);
+
         if distance > self.opts.max_corrector_distance * ds {
             return Err(RejectReason::Distance { ds, distance });
         }
-        let tangent = self
-            .tangent(&a, omega, Some(&cur.tangent))
+        let (tangent, chord) = self
+            .tangent_factored(
+                &a,
+                omega,
+                Some(&cur.tangent),
+                jacobian,
+                last_factorization,
+                true,
+            )
             .map_err(|e| corrector(&e))?;
         let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
         if cos_angle < 0.5 {
@@ -1012,6 +1126,7 @@ impl<'a> Continuation<'a> {
                 omega,
                 stats,
                 tangent,
+                chord,
                 arclength: cur.arclength + ds,
                 bound: None,
             });
@@ -1022,11 +1137,14 @@ impl<'a> Continuation<'a> {
         let (ab, st) = self
             .solve_interpolated(&cur.a, cur.omega, &a, omega, wb)
             .map_err(|e| corrector(&e))?;
+        // the tangent and its matrix stay those of the corrected point: the bound ends
+        // the run, and the point is not stepped from
         Ok(Candidate {
             a: ab,
             omega: wb,
             stats: st,
             tangent,
+            chord,
             arclength: cur.arclength + f * ds,
             bound: Some(wb),
         })
@@ -1064,9 +1182,10 @@ impl<'a> Continuation<'a> {
         let mut best: Option<BranchPoint> = None;
         for _ in 0..self.opts.max_bisections {
             // kept at least a tenth of the bracket from either end
-            let Some((mid, a, w, st)) = self.bracket_trial(cur, &bracket, 0.1) else {
+            let Some((mid, c)) = self.bracket_trial(cur, &bracket, 0.1) else {
                 break;
             };
+            let (a, w, st) = (c.a, c.omega, c.stats);
             let p = self.make_point(&a, w, &st, cur.arclength + mid);
             let Some(fm) = p.stability.clone() else { break };
             let g_mid = g(&fm);

@@ -26,7 +26,7 @@ use faer::Mat;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::perm::PermRef;
-use faer::{MatMut, get_global_parallelism};
+use faer::MatMut;
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -132,7 +132,8 @@ impl LinearSolver {
             inner,
             omega: parts.omega,
             n_unknowns: hb.n_unknowns(),
-            bordered: border.is_some(),
+            border: border.map(|bd| (bd.row.to_vec(), bd.corner)),
+            row_update: None,
         })
     }
 }
@@ -142,7 +143,24 @@ pub struct Factorization {
     inner: Factored,
     omega: f64,
     n_unknowns: usize,
-    bordered: bool,
+    /// The border row and corner the matrix was factored with.
+    border: Option<(Vec<f64>, f64)>,
+    /// Set by [`Factorization::replace_border_row`].
+    row_update: Option<RowUpdate>,
+}
+
+/// A replaced border row `(r', d')`, applied by Sherman–Morrison: the new matrix is
+/// `A' = A + e vᵀ` with `e` the border's unit vector and `v = (r' − r, d' − d)`, so
+/// `A'⁻¹ b = y − u (vᵀ y) / (1 + vᵀ u)` with `y = A⁻¹ b` and `u = A⁻¹ e`.
+struct RowUpdate {
+    /// `u = A⁻¹ e`: unknowns, then the border component.
+    u: Vec<f64>,
+    u_mu: f64,
+    /// `v = (r' − r, d' − d)`.
+    v: Vec<f64>,
+    v_corner: f64,
+    /// `1 + vᵀ u`.
+    denom: f64,
 }
 
 enum Factored {
@@ -153,27 +171,90 @@ enum Factored {
 impl Factorization {
     /// Whether the matrix carries a border row and column.
     pub fn bordered(&self) -> bool {
-        self.bordered
+        self.border.is_some()
+    }
+
+    /// Replaces the border row and corner by `row` and `corner` (the Jacobian and the
+    /// border column stay), without a new factorization: later solves apply the change
+    /// as a rank-one (Sherman–Morrison) correction, one extra solve now and a dot product
+    /// per solve. This is how the continuation corrects with the matrix factored for its
+    /// tangent: the tangent's matrix is bordered with the previous tangent, the
+    /// corrector's with the new one. Fails without a border, on a length mismatch, or
+    /// when the new matrix is singular (`1 + vᵀ u` vanishes). `u`, when given, is the
+    /// solution `(x, μ)` for `b = 0, e = 1` with the current row (a tangent's own solve).
+    pub fn replace_border_row(
+        &mut self,
+        row: &[f64],
+        corner: f64,
+        u: Option<(&[f64], f64)>,
+    ) -> Result<(), SolveError> {
+        let singular = SolveError::Singular {
+            what: "bordered Jacobian with its border row replaced",
+            size: self.n_unknowns + 1,
+            omega: self.omega,
+        };
+        let Some((old_row, old_corner)) = &self.border else {
+            return Err(singular);
+        };
+        if row.len() != old_row.len() {
+            return Err(singular);
+        }
+        let v: Vec<f64> = row.iter().zip(old_row).map(|(n, o)| n - o).collect();
+        let v_corner = corner - old_corner;
+        let (u, u_mu) = match u {
+            Some((x, mu)) if self.row_update.is_none() && x.len() == self.n_unknowns => {
+                (x.to_vec(), mu)
+            }
+            _ => {
+                self.row_update = None;
+                self.solve(&vec![0.0; self.n_unknowns], 1.0)?
+            }
+        };
+        let denom = 1.0 + dot(&v, &u) + v_corner * u_mu;
+        // 1 + vᵀu = det(A') / det(A): relative to the sizes of its terms
+        let size = 1.0 + dot(row, &u).abs() + (corner * u_mu).abs();
+        if !denom.is_finite() || denom.abs() <= 1e-12 * size {
+            return Err(singular);
+        }
+        self.row_update = Some(RowUpdate {
+            u,
+            u_mu,
+            v,
+            v_corner,
+            denom,
+        });
+        Ok(())
     }
 
     /// Solves for right-hand side `b` (and `e` for the border row; ignored without
     /// border). Returns `(x, μ)` (`μ = 0` without border).
     pub fn solve(&self, b: &[f64], e: f64) -> Result<(Vec<f64>, f64), SolveError> {
+        let (mut x, mut mu) = self.solve_factored(b, e)?;
+        if let Some(ru) = &self.row_update {
+            let f = (dot(&ru.v, &x) + ru.v_corner * mu) / ru.denom;
+            x.iter_mut().zip(&ru.u).for_each(|(xi, ui)| *xi -= f * ui);
+            mu -= f * ru.u_mu;
+        }
+        Ok((x, mu))
+    }
+
+    fn solve_factored(&self, b: &[f64], e: f64) -> Result<(Vec<f64>, f64), SolveError> {
         let nu = self.n_unknowns;
+        let bordered = self.bordered();
         match &self.inner {
             Factored::Full(lu) => {
-                let m = nu + usize::from(self.bordered);
+                let m = nu + usize::from(bordered);
                 let mut rhs = Mat::<f64>::zeros(m, 1);
                 for i in 0..nu {
                     rhs[(i, 0)] = b[i];
                 }
-                if self.bordered {
+                if bordered {
                     rhs[(nu, 0)] = e;
                 }
                 let x = lu.solve(&rhs);
                 check_finite(&x, "Jacobian", m, self.omega)?;
                 let sol = (0..nu).map(|i| x[(i, 0)]).collect();
-                let mu = if self.bordered { x[(nu, 0)] } else { 0.0 };
+                let mu = if bordered { x[(nu, 0)] } else { 0.0 };
                 Ok((sol, mu))
             }
             Factored::Condensed(c) => c.solve(b, e, self.omega),
@@ -518,7 +599,7 @@ struct Lu {
 impl Lu {
     fn new(mut a: Mat<f64>) -> Self {
         let n = a.nrows();
-        let par = get_global_parallelism();
+        let par = faer::get_global_parallelism();
         let mut perm = vec![0usize; n];
         let mut perm_inv = vec![0usize; n];
         let mut mem = MemBuffer::new(lu_factor::lu_in_place_scratch::<usize, f64>(
@@ -551,7 +632,7 @@ impl Lu {
 
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let n = self.lu.nrows();
-        let par = get_global_parallelism();
+        let par = faer::get_global_parallelism();
         let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
         let mut mem = MemBuffer::new(lu_solve::solve_in_place_scratch::<usize, f64>(
             n,
@@ -567,6 +648,10 @@ impl Lu {
             MemStack::new(&mut mem),
         );
     }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Coefficient index of (harmonic slot `hs`, part) with `nh` harmonics: `hs = 0` is the

@@ -23,8 +23,8 @@
 
 use thiserror::Error;
 
-use super::condense::{Border, LinearSolver, SolveError};
-use super::residual::{HarmonicBalance, HbError, ResidualNorms};
+use super::condense::{Border, Factorization, LinearSolver, SolveError};
+use super::residual::{HarmonicBalance, HbError, JacobianParts, ResidualNorms};
 
 /// Newton settings. Every field's default is given in its doc.
 #[derive(Clone, Copy, Debug)]
@@ -112,6 +112,34 @@ impl ArcConstraint<'_> {
     }
 }
 
+/// The convergence test and the line-search merit (see the module docs).
+struct Test {
+    tol_mech: f64,
+    tol_therm: f64,
+}
+
+impl Test {
+    fn new(opts: &NewtonOptions) -> Self {
+        Self {
+            tol_mech: opts.tol_mech,
+            tol_therm: opts.tol_therm,
+        }
+    }
+
+    fn merit(&self, m: &Measure) -> f64 {
+        (m.rel.mech / self.tol_mech).powi(2) + (m.rel.therm / self.tol_therm).powi(2)
+    }
+
+    fn converged(&self, m: &Measure) -> bool {
+        m.rel.mech <= self.tol_mech && m.rel.therm <= self.tol_therm
+    }
+
+    /// The arclength constraint's value `g` is zero to rounding.
+    fn arc_ok(&self, arc: &ArcConstraint<'_>, g: f64) -> bool {
+        g.abs() <= 1e-10 * arc.ds.abs().max(1e-12)
+    }
+}
+
 struct Measure {
     rel: ResidualNorms,
     abs: ResidualNorms,
@@ -145,8 +173,8 @@ pub fn solve_fixed(
     a0: &[f64],
     opts: &NewtonOptions,
 ) -> Result<(Vec<f64>, NewtonStats), NewtonError> {
-    let (a, _, st) = solve(hb, a0, omega, None, opts)?;
-    Ok((a, st))
+    let c = solve(hb, a0, omega, None, None, opts)?;
+    Ok((c.a, c.stats))
 }
 
 /// Newton on `(A, ω)` with the arclength constraint. Returns `(A, ω, stats)`.
@@ -157,7 +185,38 @@ pub fn solve_arclength(
     arc: &ArcConstraint<'_>,
     opts: &NewtonOptions,
 ) -> Result<(Vec<f64>, f64, NewtonStats), NewtonError> {
-    solve(hb, a0, omega0, Some(arc), opts)
+    let c = solve_arclength_from(hb, a0, omega0, arc, None, opts)?;
+    Ok((c.a, c.omega, c.stats))
+}
+
+/// A converged Newton solve, with the Jacobian at the solution when the last iteration
+/// computed it (see [`solve_arclength_from`]).
+pub struct Converged {
+    pub a: Vec<f64>,
+    pub omega: f64,
+    pub stats: NewtonStats,
+    /// `∂R/∂A` and `R` at `(a, omega)`.
+    pub jacobian: Option<(JacobianParts, Vec<f64>)>,
+    /// The factored matrix of the last iteration when it was a Newton step (bordered
+    /// with the arclength row): the Jacobian one step before `(a, omega)`.
+    pub last_factorization: Option<Factorization>,
+}
+
+/// [`solve_arclength`] whose first iteration, when `first` is given, solves with that
+/// factored bordered matrix instead of a new Jacobian and factorization: in the
+/// continuation, the Jacobian at the step's start point bordered with the step's
+/// arclength row (Keller's corrector), which the tangent there has already factored. The
+/// later iterations are Newton's. The returned [`Converged::jacobian`] is the one a
+/// following tangent at the solution needs.
+pub fn solve_arclength_from(
+    hb: &HarmonicBalance<'_>,
+    a0: &[f64],
+    omega0: f64,
+    arc: &ArcConstraint<'_>,
+    first: Option<&Factorization>,
+    opts: &NewtonOptions,
+) -> Result<Converged, NewtonError> {
+    solve(hb, a0, omega0, Some(arc), first, opts)
 }
 
 fn solve(
@@ -165,8 +224,9 @@ fn solve(
     a0: &[f64],
     omega0: f64,
     arc: Option<&ArcConstraint<'_>>,
+    first: Option<&Factorization>,
     opts: &NewtonOptions,
-) -> Result<(Vec<f64>, f64, NewtonStats), NewtonError> {
+) -> Result<Converged, NewtonError> {
     let solver = LinearSolver {
         condense: opts.condense,
     };
@@ -176,45 +236,76 @@ fn solve(
     let mut r = vec![0.0; nu];
     let mut r_omega = vec![0.0; nu];
     let mut refs = reference_norms(hb, omega);
-    let merit =
-        |m: &Measure| (m.rel.mech / opts.tol_mech).powi(2) + (m.rel.therm / opts.tol_therm).powi(2);
-    let converged = |m: &Measure| m.rel.mech <= opts.tol_mech && m.rel.therm <= opts.tol_therm;
-    let mut parts = hb.residual_jacobian(&a, omega, &mut r)?;
-    let mut meas = measure(hb, &r, refs);
-    let arc_ok = |a: &[f64], w: f64| {
-        arc.is_none_or(|c| c.value(a, w).abs() <= 1e-10 * c.ds.abs().max(1e-12))
+    let test = Test::new(opts);
+    let merit = |m: &Measure| test.merit(m);
+    let converged = |m: &Measure| test.converged(m);
+    // Keller's first step: the Jacobian at the iterate is not computed for it
+    let keller = first.zip(arc);
+    let mut parts = match keller {
+        Some(_) => {
+            hb.residual(&a, omega, &mut r)?;
+            None
+        }
+        None => Some(hb.residual_jacobian(&a, omega, &mut r)?),
     };
+    let mut meas = measure(hb, &r, refs);
+    let arc_ok = |a: &[f64], w: f64| arc.is_none_or(|c| test.arc_ok(c, c.value(a, w)));
+    let done = |a: Vec<f64>,
+                omega,
+                it,
+                meas: &Measure,
+                parts: Option<JacobianParts>,
+                r: Vec<f64>,
+                last_factorization| Converged {
+        a,
+        omega,
+        stats: NewtonStats {
+            iterations: it,
+            residual: meas.abs,
+            relative: meas.rel,
+        },
+        jacobian: parts.map(|p| (p, r)),
+        last_factorization,
+    };
+    let mut last = None;
     for it in 0..=opts.max_iterations {
         if converged(&meas) && arc_ok(&a, omega) {
-            return Ok((
-                a,
-                omega,
-                NewtonStats {
-                    iterations: it,
-                    residual: meas.abs,
-                    relative: meas.rel,
-                },
-            ));
+            return Ok(done(a, omega, it, &meas, parts, r, last));
         }
         if it == opts.max_iterations {
             break;
         }
         let neg_r: Vec<f64> = r.iter().map(|v| -v).collect();
-        let (delta, d_omega) = match arc {
-            None => solver.solve(hb, &parts, None, &neg_r, 0.0)?,
-            Some(c) => {
-                hb.d_residual_d_omega(&a, omega, &mut r_omega)?;
-                let border = Border {
-                    column: &r_omega,
-                    row: c.row,
-                    corner: c.corner,
+        last = None;
+        let (delta, d_omega) = match keller.filter(|_| it == 0) {
+            Some((f, c)) => f.solve(&neg_r, -c.value(&a, omega))?,
+            None => {
+                // due after a damped step, whose trial had no Jacobian
+                let p = match parts.take() {
+                    Some(p) => p,
+                    None => hb.residual_jacobian(&a, omega, &mut r)?,
                 };
-                solver.solve(hb, &parts, Some(border), &neg_r, -c.value(&a, omega))?
+                match arc {
+                    Some(c) => {
+                        hb.d_residual_d_omega_from(&a, omega, &r, &mut r_omega)?;
+                        let border = Border {
+                            column: &r_omega,
+                            row: c.row,
+                            corner: c.corner,
+                        };
+                        let f = solver.factor(hb, &p, Some(border))?;
+                        let step = f.solve(&neg_r, -c.value(&a, omega))?;
+                        last = Some(f);
+                        step
+                    }
+                    None => solver.solve(hb, &p, None, &neg_r, 0.0)?,
+                }
             }
         };
         let phi0 = merit(&meas);
         let mut lambda = 1.0;
         let mut accepted = None;
+        let mut r_trial = vec![0.0; nu];
         for _ in 0..=opts.max_backtracks {
             let trial: Vec<f64> = a.iter().zip(&delta).map(|(x, d)| x + lambda * d).collect();
             let w_trial = omega + lambda * d_omega;
@@ -223,18 +314,24 @@ fn solve(
             } else {
                 refs
             };
-            if hb.residual(&trial, w_trial, &mut r).is_ok() {
-                let m = measure(hb, &r, refs_trial);
+            // the full step is usually taken: its Jacobian is computed with its residual
+            let evaluated = if lambda == 1.0 {
+                hb.residual_jacobian(&trial, w_trial, &mut r_trial).map(Some)
+            } else {
+                hb.residual(&trial, w_trial, &mut r_trial).map(|()| None)
+            };
+            if let Ok(trial_parts) = evaluated {
+                let m = measure(hb, &r_trial, refs_trial);
                 if merit(&m).is_finite()
                     && (merit(&m) < (1.0 - 1e-4 * lambda) * phi0 || converged(&meas))
                 {
-                    accepted = Some((trial, w_trial, m, refs_trial));
+                    accepted = Some((trial, w_trial, m, refs_trial, trial_parts));
                     break;
                 }
             }
             lambda *= 0.5;
         }
-        let Some((trial, w_trial, m, refs_trial)) = accepted else {
+        let Some((trial, w_trial, m, refs_trial, trial_parts)) = accepted else {
             return Err(NewtonError::NoDescent {
                 iteration: it + 1,
                 backtracks: opts.max_backtracks,
@@ -246,19 +343,11 @@ fn solve(
         omega = w_trial;
         refs = refs_trial;
         meas = m;
+        std::mem::swap(&mut r, &mut r_trial);
+        parts = trial_parts;
         if converged(&meas) && arc_ok(&a, omega) {
-            return Ok((
-                a,
-                omega,
-                NewtonStats {
-                    iterations: it + 1,
-                    residual: meas.abs,
-                    relative: meas.rel,
-                },
-            ));
+            return Ok(done(a, omega, it + 1, &meas, parts, r, last));
         }
-        parts = hb.residual_jacobian(&a, omega, &mut r)?;
-        meas = measure(hb, &r, refs);
     }
     Err(NewtonError::Diverged {
         iterations: opts.max_iterations,

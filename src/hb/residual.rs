@@ -509,6 +509,29 @@ impl<'a> HarmonicBalance<'a> {
         Ok(())
     }
 
+    /// `∂R/∂ω` at `(A, ω)` by a forward difference from `r_at = R(A, ω)`, with step
+    /// `h = 1.5e-8·|ω|` (`√ε`): one residual instead of the central difference's two,
+    /// truncation and rounding errors both about `1e-8` relative. For the Newton border
+    /// column and the tangent, where it changes only the convergence rate and the
+    /// predictor.
+    pub fn d_residual_d_omega_from(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+        r_at: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), HbError> {
+        self.check_len("residual vector", r_at.len())?;
+        let h = 1.5e-8 * omega.abs().max(1e-6);
+        // the step as represented, so that the quotient divides by what was added
+        let h = (omega + h) - omega;
+        self.residual(coeffs, omega + h, out)?;
+        for (o, r) in out.iter_mut().zip(r_at) {
+            *o = (*o - r) / h;
+        }
+        Ok(())
+    }
+
     /// Dense `∂R/∂A` (all unknowns, row-major): used by the uncondensed solver and tests.
     pub fn dense_jacobian(&self, parts: &JacobianParts) -> Vec<f64> {
         let nu = self.n_unknowns();
