@@ -169,3 +169,88 @@ fn jacobian_matches_finite_differences_several_contacts_and_hot_nodes() {
     let basis = Basis::paper(1, Ratio::new(6, 5).expect("ratio")).expect("basis");
     check_jacobian(&Chain::with_contacts(7, 5, 3, 2), &basis, 1.3, 0.4);
 }
+
+/// A factored bordered matrix whose border row is replaced (Sherman–Morrison) solves like
+/// a fresh factorization with the new row, condensed or not, with or without the
+/// replacement's `A⁻¹ e` handed in, and a second replacement starts from the factored row.
+#[test]
+fn replaced_border_row_solves_like_a_fresh_factorization() {
+    let basis = Basis::paper(1, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    let sys = Chain::with_contacts(7, 5, 3, 2);
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let nu = hb.n_unknowns();
+    let a: Vec<f64> = pseudo_random(nu, 21).iter().map(|v| 0.3 * v).collect();
+    let mut r = vec![0.0; nu];
+    let parts = hb.residual_jacobian(&a, 1.1, &mut r).expect("jacobian");
+    let col = pseudo_random(nu, 5);
+    let (row, row2, row3) = (
+        pseudo_random(nu, 9),
+        pseudo_random(nu, 17),
+        pseudo_random(nu, 19),
+    );
+    let b = pseudo_random(nu, 3);
+    let border = |row| Border {
+        column: &col,
+        row,
+        corner: 0.7,
+    };
+    for condense in [true, false] {
+        let solver = LinearSolver { condense };
+        let mut fact = solver
+            .factor(&hb, &parts, Some(border(&row)))
+            .expect("factor");
+        let u = fact.solve(&vec![0.0; nu], 1.0).expect("u");
+        for (k, (new_row, corner)) in [(&row2, -0.4), (&row3, 1.9)].into_iter().enumerate() {
+            let given = (k == 0).then_some((u.0.as_slice(), u.1));
+            fact.replace_border_row(new_row, corner, given)
+                .expect("replaced");
+            let fresh = Border {
+                column: &col,
+                row: new_row,
+                corner,
+            };
+            let (xf, muf) = LinearSolver { condense: false }
+                .solve(&hb, &parts, Some(fresh), &b, 0.4)
+                .expect("fresh");
+            let (x, mu) = fact.solve(&b, 0.4).expect("solve");
+            let scale = xf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (p, q) in x.iter().zip(&xf) {
+                assert!((p - q).abs() < 1e-10 * scale, "{p} vs {q}");
+            }
+            assert!((mu - muf).abs() < 1e-10 * muf.abs().max(1.0), "{mu} vs {muf}");
+        }
+    }
+    // without a border there is no row to replace
+    let mut plain = LinearSolver::default()
+        .factor(&hb, &parts, None)
+        .expect("factor");
+    assert!(plain.replace_border_row(&row2, 0.1, None).is_err());
+}
+
+/// `∂R/∂ω` by the forward difference from the residual at the point agrees with the
+/// central difference to the forward difference's own error (about 1e-8 relative).
+#[test]
+fn forward_omega_derivative_matches_the_central_one() {
+    let basis = Basis::paper(2, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    let sys = Chain::with_contacts(7, 5, 3, 2);
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let nu = hb.n_unknowns();
+    let a: Vec<f64> = pseudo_random(nu, 23).iter().map(|v| 0.4 * v).collect();
+    let omega = 1.3;
+    let mut r = vec![0.0; nu];
+    hb.residual(&a, omega, &mut r).expect("residual");
+    let (mut fwd, mut central) = (vec![0.0; nu], vec![0.0; nu]);
+    hb.d_residual_d_omega_from(&a, omega, &r, &mut fwd)
+        .expect("forward");
+    hb.d_residual_d_omega(&a, omega, &mut central)
+        .expect("central");
+    let scale = central.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    assert!(scale > 0.0);
+    let err = fwd
+        .iter()
+        .zip(&central)
+        .fold(0.0f64, |m, (f, c)| m.max((f - c).abs()));
+    assert!(err < 1e-6 * scale, "max deviation {err:e} of {scale:e}");
+    // a residual of the wrong length is refused
+    assert!(hb.d_residual_d_omega_from(&a, omega, &r[1..], &mut fwd).is_err());
+}

@@ -270,3 +270,66 @@ fn per_dof_scaling_changes_the_steps_not_the_solutions() {
     assert!(diff < 1e-8, "end points differ by {diff:e}");
     assert_ne!(global.points.len(), per_dof.points.len());
 }
+
+/// Keller's corrector (first iteration with a factored matrix from the start point)
+/// converges to the same point as Newton from the same predictor, and hands back the
+/// Jacobian at the solution and its last Newton factorization.
+#[test]
+fn keller_corrector_lands_where_newton_does() {
+    use tmrotor::hb::newton::{ArcConstraint, solve_arclength, solve_arclength_from};
+    use tmrotor::hb::{Border, LinearSolver};
+    let sys = Chain::with_contacts(7, 5, 3, 2);
+    let basis = Basis::paper(1, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let nu = hb.n_unknowns();
+    let opts = NewtonOptions::default();
+    let w0 = 0.9;
+    let (a0, _) = solve_fixed(&hb, w0, &vec![0.0; nu], &opts).expect("start");
+    // natural-parameter constraint ω − ω0 = ds, bordered into the start point's matrix
+    let row = vec![0.0; nu];
+    let mut r = vec![0.0; nu];
+    let parts = hb.residual_jacobian(&a0, w0, &mut r).expect("jacobian");
+    let mut r_omega = vec![0.0; nu];
+    hb.d_residual_d_omega(&a0, w0, &mut r_omega).expect("dR/dω");
+    let fact = LinearSolver::default()
+        .factor(
+            &hb,
+            &parts,
+            Some(Border {
+                column: &r_omega,
+                row: &row,
+                corner: 1.0,
+            }),
+        )
+        .expect("factor");
+    let ds = 0.03;
+    let arc = ArcConstraint {
+        anchor: &a0,
+        anchor_omega: w0,
+        row: &row,
+        corner: 1.0,
+        ds,
+    };
+    let (an, wn, sn) = solve_arclength(&hb, &a0, w0 + ds, &arc, &opts).expect("newton");
+    let k = solve_arclength_from(&hb, &a0, w0 + ds, &arc, Some(&fact), &opts).expect("keller");
+    assert!((wn - (w0 + ds)).abs() < 1e-12 && (k.omega - (w0 + ds)).abs() < 1e-12);
+    let scale = an.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let dev = an
+        .iter()
+        .zip(&k.a)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+    // both meet the tolerance 1e-8 on the residual; the points agree to that order
+    assert!(dev < 1e-6 * scale, "deviation {dev:e} of {scale:e}");
+    assert!(k.stats.relative.mech <= opts.tol_mech && k.stats.relative.therm <= opts.tol_therm);
+    assert!(k.stats.iterations >= 1 && sn.iterations >= 1);
+    // the Jacobian at the solution comes back with the full-step trial that converged
+    let (jp, jr) = k.jacobian.expect("jacobian at the solution");
+    let mut r_check = vec![0.0; nu];
+    let fresh = hb
+        .residual_jacobian(&k.a, k.omega, &mut r_check)
+        .expect("fresh");
+    assert_eq!(jr, r_check);
+    assert_eq!(jp.nonlinear, fresh.nonlinear);
+    // a Newton step after Keller's leaves its factorization; Keller's alone leaves none
+    assert_eq!(k.last_factorization.is_some(), k.stats.iterations >= 2);
+}

@@ -10,11 +10,20 @@
 //!
 //! * predictor `X + ds·τ`; corrector: damped Newton ([`crate::hb::newton`]) on
 //!   `R(A, ω) = 0` plus `τ·(X − X_prev) = ds` (the bordered system stays regular at folds,
-//!   so folds are passed and unstable parts traced);
+//!   so folds are passed and unstable parts traced). Its first iteration is Keller's: it
+//!   solves with the matrix factored for the tangent at `X_prev`, whose border row is
+//!   switched from the previous tangent to `τ` by a rank-one (Sherman–Morrison) update
+//!   ([`crate::hb::Factorization::replace_border_row`]); the later ones are Newton's, each
+//!   with the Jacobian its full-step trial computed along with the residual;
 //! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
-//!   orientation (`τ_prev·t > 0`), i.e. direction control;
+//!   orientation (`τ_prev·t > 0`), i.e. direction control. The matrix is the corrector's
+//!   last factored one (the Jacobian one Newton step before the point, its residual below
+//!   the tolerance after that step, so the tangent is off by about that step's relative
+//!   size), or, when Keller's step alone converged, the Jacobian at the point. `∂R/∂ω` is
+//!   a forward difference from the point's residual;
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
-//!   after a failed corrector, a turn of the tangent by more than 60°, a corrected point
+//!   after a failed corrector, a corrector that needed more than `max_step_iterations`
+//!   iterations, a turn of the tangent by more than 60°, a corrected point
 //!   farther than `max_corrector_distance · ds` from the predictor, or a step over which ω
 //!   moved against the tangent at both ends (a fold pair inside one step, which the fold
 //!   search between the two points could not see);
@@ -98,12 +107,12 @@ pub struct ContinuationOptions {
     /// Newton iterations the step control aims at (default 4).
     pub target_iterations: usize,
     /// Most corrector iterations of an accepted step (default 4); a step that needs more
-    /// is rejected and halved. The corrector takes Keller's step from the start point's
-    /// factorization and then Newton steps, three iterations on a smooth branch at the
-    /// default step cap. A corrector that labours has usually started between nearby
-    /// branch segments: on the default sweep near 615 rad/s three segments lie within
-    /// 0.5 % of each other in amplitude (the fold pair at 612.9 and 618.0 rad/s), and a
-    /// step that needed five iterations landed on the third one, passing over both folds.
+    /// is rejected and halved. The corrector takes Keller's step and then Newton steps,
+    /// three iterations on a smooth branch at the default step cap. A corrector that
+    /// labours has usually started across a turn of the branch: on the 5 L/min branch
+    /// the step over the fold pair at 658–661 rad/s needs five (test
+    /// `a_step_over_a_fold_pair_is_refused_and_both_folds_are_located`). It does not catch
+    /// every such step (see the README on the fold pair at 612.9 and 618.0 rad/s).
     pub max_step_iterations: usize,
     /// Maximum number of accepted points (default 2000).
     pub max_points: usize,
