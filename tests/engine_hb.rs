@@ -217,7 +217,10 @@ fn replaced_border_row_solves_like_a_fresh_factorization() {
             for (p, q) in x.iter().zip(&xf) {
                 assert!((p - q).abs() < 1e-10 * scale, "{p} vs {q}");
             }
-            assert!((mu - muf).abs() < 1e-10 * muf.abs().max(1.0), "{mu} vs {muf}");
+            assert!(
+                (mu - muf).abs() < 1e-10 * muf.abs().max(1.0),
+                "{mu} vs {muf}"
+            );
         }
     }
     // without a border there is no row to replace
@@ -252,5 +255,8 @@ fn forward_omega_derivative_matches_the_central_one() {
         .fold(0.0f64, |m, (f, c)| m.max((f - c).abs()));
     assert!(err < 1e-6 * scale, "max deviation {err:e} of {scale:e}");
     // a residual of the wrong length is refused
-    assert!(hb.d_residual_d_omega_from(&a, omega, &r[1..], &mut fwd).is_err());
+    assert!(
+        hb.d_residual_d_omega_from(&a, omega, &r[1..], &mut fwd)
+            .is_err()
+    );
 }

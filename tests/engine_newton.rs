@@ -273,7 +273,7 @@ fn per_dof_scaling_changes_the_steps_not_the_solutions() {
 
 /// Keller's corrector (first iteration with a factored matrix from the start point)
 /// converges to the same point as Newton from the same predictor, and hands back the
-/// Jacobian at the solution and its last Newton factorization.
+/// Jacobian at the solution.
 #[test]
 fn keller_corrector_lands_where_newton_does() {
     use tmrotor::hb::newton::{ArcConstraint, solve_arclength, solve_arclength_from};
@@ -330,6 +330,4 @@ fn keller_corrector_lands_where_newton_does() {
         .expect("fresh");
     assert_eq!(jr, r_check);
     assert_eq!(jp.nonlinear, fresh.nonlinear);
-    // a Newton step after Keller's leaves its factorization; Keller's alone leaves none
-    assert_eq!(k.last_factorization.is_some(), k.stats.iterations >= 2);
 }

@@ -16,11 +16,10 @@
 //!   ([`crate::hb::Factorization::replace_border_row`]); the later ones are Newton's, each
 //!   with the Jacobian its full-step trial computed along with the residual;
 //! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
-//!   orientation (`τ_prev·t > 0`), i.e. direction control. The matrix is the corrector's
-//!   last factored one (the Jacobian one Newton step before the point, its residual below
-//!   the tolerance after that step, so the tangent is off by about that step's relative
-//!   size), or, when Keller's step alone converged, the Jacobian at the point. `∂R/∂ω` is
-//!   a forward difference from the point's residual;
+//!   orientation (`τ_prev·t > 0`), i.e. direction control. The Jacobian at the point is
+//!   the one the corrector's last trial computed with its residual, and `∂R/∂ω` a forward
+//!   difference from that residual. Its factorization is kept for the next step's
+//!   Keller iteration;
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
 //!   after a failed corrector, a corrector that needed more than `max_step_iterations`
 //!   iterations, a turn of the tangent by more than 60°, a corrected point
@@ -71,8 +70,8 @@ use thiserror::Error;
 
 use crate::hb::newton::{self, ArcConstraint, NewtonError, NewtonOptions};
 use crate::hb::{
-    Factorization, HarmonicBalance, HbError, HbSolution, JacobianParts, LinearSolver,
-    SolveError, condense::Border,
+    Factorization, HarmonicBalance, HbError, HbSolution, JacobianParts, LinearSolver, SolveError,
+    condense::Border,
 };
 use crate::stability::{
     BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL, classify_crossing,
@@ -88,7 +87,6 @@ const FOLD_SLOPE_TOL: f64 = 1e-2;
 /// against both tangents by more than this fraction of the step (scaled units), so that
 /// rounding on a branch that runs at constant ω cannot halve the step away.
 const FOLD_PAIR_MIN_CHANGE: f64 = 1e-6;
-
 
 /// Continuation settings. Every default is given in the field's doc.
 #[derive(Clone, Debug)]
@@ -625,9 +623,8 @@ impl<'a> Continuation<'a> {
         omega: f64,
         prev: Option<&[f64]>,
         jacobian: Option<(JacobianParts, Vec<f64>)>,
-        corrector: Option<Factorization>,
     ) -> Result<Vec<f64>, ContinuationError> {
-        self.tangent_factored(a, omega, prev, jacobian, corrector, false)
+        self.tangent_factored(a, omega, prev, jacobian, false)
             .map(|(t, _)| t)
     }
 
@@ -635,24 +632,15 @@ impl<'a> Continuation<'a> {
     /// corrector left them) and, with `prev` and `keep`, the Jacobian's factorization
     /// bordered with the new tangent's arclength row: the corrector's first matrix for a
     /// step from this point (`None` when that row makes it singular).
-    ///
-    /// `corrector`: the corrector's last factored matrix, when its last iteration was a
-    /// Newton step; bordered with `prev`'s row, it is the tangent's matrix but for the
-    /// Jacobian, taken one Newton step before the point (see the module docs).
     fn tangent_factored(
         &self,
         a: &[f64],
         omega: f64,
         prev: Option<&[f64]>,
         jacobian: Option<(JacobianParts, Vec<f64>)>,
-        corrector: Option<Factorization>,
         keep: bool,
     ) -> Result<(Vec<f64>, Option<Factorization>), ContinuationError> {
         let nu = self.hb.n_unknowns();
-        if let (Some(fact), Some(_)) = (corrector, prev) {
-            let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
-            return Ok(self.oriented(&z, zeta, prev, keep.then_some(fact)));
-        }
         let (parts, r) = match jacobian {
             Some(j) => j,
             None => {
@@ -763,7 +751,7 @@ impl<'a> Continuation<'a> {
             }
         }
         self.scales.push(sw);
-        let tangent = self.tangent(&a, omega, None, None, None)?;
+        let tangent = self.tangent(&a, omega, None, None)?;
         let point = self.bare_point(&a, omega, &stats, 0.0);
         self.history = vec![(self.scaled(&a, omega), 0.0)];
         self.n_points = 1;
@@ -794,11 +782,7 @@ impl<'a> Continuation<'a> {
     }
 
     /// Corrects from `cur` at arclength offset `ds` along its tangent.
-    fn correct(
-        &self,
-        cur: &Current,
-        ds: f64,
-    ) -> Result<newton::Converged, NewtonError> {
+    fn correct(&self, cur: &Current, ds: f64) -> Result<newton::Converged, NewtonError> {
         let nu = self.hb.n_unknowns();
         let s = &self.scales;
         let t = &cur.tangent;
@@ -960,13 +944,7 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
-            let Ok(t) = self.tangent(
-                &a,
-                w,
-                Some(&from.tangent),
-                c.jacobian,
-                c.last_factorization,
-            ) else {
+            let Ok(t) = self.tangent(&a, w, Some(&from.tangent), c.jacobian) else {
                 break;
             };
             let g_mid = t[nu];
@@ -1092,7 +1070,6 @@ impl<'a> Continuation<'a> {
             omega,
             stats,
             jacobian,
-            last_factorization,
         } = self.correct(cur, ds).map_err(|e| corrector(&e))?;
         if stats.iterations > self.opts.max_step_iterations {
             return Err(RejectReason::Iterations {
@@ -1106,14 +1083,7 @@ impl<'a> Continuation<'a> {
             return Err(RejectReason::Distance { ds, distance });
         }
         let (tangent, chord) = self
-            .tangent_factored(
-                &a,
-                omega,
-                Some(&cur.tangent),
-                jacobian,
-                last_factorization,
-                true,
-            )
+            .tangent_factored(&a, omega, Some(&cur.tangent), jacobian, true)
             .map_err(|e| corrector(&e))?;
         let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
         if cos_angle < 0.5 {

@@ -23,10 +23,10 @@
 //! instead (reference and benchmark).
 
 use faer::Mat;
+use faer::MatMut;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::perm::PermRef;
-use faer::MatMut;
 use rayon::prelude::*;
 use thiserror::Error;
 

@@ -197,9 +197,6 @@ pub struct Converged {
     pub stats: NewtonStats,
     /// `∂R/∂A` and `R` at `(a, omega)`.
     pub jacobian: Option<(JacobianParts, Vec<f64>)>,
-    /// The factored matrix of the last iteration when it was a Newton step (bordered
-    /// with the arclength row): the Jacobian one step before `(a, omega)`.
-    pub last_factorization: Option<Factorization>,
 }
 
 /// [`solve_arclength`] whose first iteration, when `first` is given, solves with that
@@ -250,33 +247,25 @@ fn solve(
     };
     let mut meas = measure(hb, &r, refs);
     let arc_ok = |a: &[f64], w: f64| arc.is_none_or(|c| test.arc_ok(c, c.value(a, w)));
-    let done = |a: Vec<f64>,
-                omega,
-                it,
-                meas: &Measure,
-                parts: Option<JacobianParts>,
-                r: Vec<f64>,
-                last_factorization| Converged {
-        a,
-        omega,
-        stats: NewtonStats {
-            iterations: it,
-            residual: meas.abs,
-            relative: meas.rel,
-        },
-        jacobian: parts.map(|p| (p, r)),
-        last_factorization,
-    };
-    let mut last = None;
+    let done =
+        |a: Vec<f64>, omega, it, meas: &Measure, parts: Option<JacobianParts>, r| Converged {
+            a,
+            omega,
+            stats: NewtonStats {
+                iterations: it,
+                residual: meas.abs,
+                relative: meas.rel,
+            },
+            jacobian: parts.map(|p| (p, r)),
+        };
     for it in 0..=opts.max_iterations {
         if converged(&meas) && arc_ok(&a, omega) {
-            return Ok(done(a, omega, it, &meas, parts, r, last));
+            return Ok(done(a, omega, it, &meas, parts, r));
         }
         if it == opts.max_iterations {
             break;
         }
         let neg_r: Vec<f64> = r.iter().map(|v| -v).collect();
-        last = None;
         let (delta, d_omega) = match keller.filter(|_| it == 0) {
             Some((f, c)) => f.solve(&neg_r, -c.value(&a, omega))?,
             None => {
@@ -293,10 +282,7 @@ fn solve(
                             row: c.row,
                             corner: c.corner,
                         };
-                        let f = solver.factor(hb, &p, Some(border))?;
-                        let step = f.solve(&neg_r, -c.value(&a, omega))?;
-                        last = Some(f);
-                        step
+                        solver.solve(hb, &p, Some(border), &neg_r, -c.value(&a, omega))?
                     }
                     None => solver.solve(hb, &p, None, &neg_r, 0.0)?,
                 }
@@ -316,7 +302,8 @@ fn solve(
             };
             // the full step is usually taken: its Jacobian is computed with its residual
             let evaluated = if lambda == 1.0 {
-                hb.residual_jacobian(&trial, w_trial, &mut r_trial).map(Some)
+                hb.residual_jacobian(&trial, w_trial, &mut r_trial)
+                    .map(Some)
             } else {
                 hb.residual(&trial, w_trial, &mut r_trial).map(|()| None)
             };
@@ -346,7 +333,7 @@ fn solve(
         std::mem::swap(&mut r, &mut r_trial);
         parts = trial_parts;
         if converged(&meas) && arc_ok(&a, omega) {
-            return Ok(done(a, omega, it + 1, &meas, parts, r, last));
+            return Ok(done(a, omega, it + 1, &meas, parts, r));
         }
     }
     Err(NewtonError::Diverged {
