@@ -242,6 +242,9 @@ pub struct SweepReport {
     pub total_seconds: f64,
     /// Why stability was not assessed, when it was switched off during the sweep.
     pub stability_note: Option<String>,
+    /// Continuation steps refused and retried with half the step (a failed or laboured
+    /// corrector, a sharp turn, a fold pair inside the step).
+    pub rejected_steps: usize,
 }
 
 /// A stability method that stops trying after a *setting* error (a system too stiff for
@@ -474,6 +477,7 @@ impl SweepProblem {
                     finish,
                     total_seconds: start.elapsed().as_secs_f64(),
                     stability_note: None,
+                    rejected_steps: prog.rejected_steps,
                 })
             }
             Err(e) => {

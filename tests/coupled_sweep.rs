@@ -107,9 +107,14 @@ fn short_sweep_records_points_and_replay_rederives_bearings() {
     };
     let problem = SweepProblem::new(&settings).expect("problem");
     let mut sink = MemorySink::new();
-    let report = problem.run(&mut sink, None, |_| {}).expect("sweep");
+    let mut refused = usize::MAX;
+    let report = problem
+        .run(&mut sink, None, |p| refused = p.rejected_steps)
+        .expect("sweep");
     assert_eq!(report.points, sink.points.len());
     assert!(report.points >= 2);
+    // the report's refused steps are the progress's last count
+    assert_eq!(report.rejected_steps, refused);
     let run = sink.run.as_ref().expect("run info");
     assert_eq!(run.n_mech, 72);
     assert_eq!(run.n_therm, 66);

@@ -214,6 +214,13 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     if let Some(finish) = &report.finish {
         writeln!(out, "  the branch {finish}")?;
     }
+    if report.rejected_steps > 0 {
+        writeln!(
+            out,
+            "  {} steps refused and retried with half the step",
+            report.rejected_steps
+        )?;
+    }
     if let Some(note) = &report.stability_note {
         writeln!(out, "  stability not assessed: {note}")?;
     }
