@@ -57,7 +57,21 @@ fn campaign_runs_resumes_shards_and_merges() {
     for (x, y) in m.runs.iter().zip(&again.runs) {
         assert_eq!(x.seconds, y.seconds, "run {} was redone", x.name);
         assert_eq!(x.ended, y.ended, "read back from the manifest");
+        assert_eq!(
+            x.refused_steps, y.refused_steps,
+            "read back from the manifest"
+        );
     }
+    // A manifest written before refused steps were recorded still reads (0 refused).
+    let text = std::fs::read_to_string(out.join("manifest.toml")).expect("manifest");
+    assert!(text.contains("refused_steps"), "{text}");
+    let older: String = text
+        .lines()
+        .filter(|l| !l.starts_with("refused_steps"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let older: campaign::Manifest = toml::from_str(&older).expect("older manifest");
+    assert!(older.runs.iter().all(|r| r.refused_steps == 0));
     // A damaged recording is redone.
     std::fs::write(out.join("b.mcap"), b"garbage").expect("damage");
     let redo = campaign::run(&file, Some(2), None, None, &quiet).expect("redo");

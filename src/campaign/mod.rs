@@ -100,6 +100,10 @@ pub struct ManifestEntry {
     #[serde(default)]
     pub ended: String,
     pub points: usize,
+    /// Continuation steps refused and retried with half the step (see
+    /// [`crate::sweep::SweepReport::rejected_steps`]); absent in older manifests.
+    #[serde(default)]
+    pub refused_steps: usize,
     pub seconds: f64,
     pub recording: String,
     pub sha256: String,
@@ -339,6 +343,7 @@ fn run_one(
     match result {
         Ok(report) => {
             entry.points = report.points;
+            entry.refused_steps = report.rejected_steps;
             entry.ended = report
                 .finish
                 .as_ref()
