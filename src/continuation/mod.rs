@@ -1078,7 +1078,6 @@ impl<'a> Continuation<'a> {
             });
         }
         let distance = self.corrector_distance(cur, ds, &a, omega);
-
         if distance > self.opts.max_corrector_distance * ds {
             return Err(RejectReason::Distance { ds, distance });
         }

@@ -23,10 +23,10 @@
 //! instead (reference and benchmark).
 
 use faer::Mat;
-use faer::MatMut;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::perm::PermRef;
+use faer::{MatMut, get_global_parallelism};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -599,7 +599,7 @@ struct Lu {
 impl Lu {
     fn new(mut a: Mat<f64>) -> Self {
         let n = a.nrows();
-        let par = faer::get_global_parallelism();
+        let par = get_global_parallelism();
         let mut perm = vec![0usize; n];
         let mut perm_inv = vec![0usize; n];
         let mut mem = MemBuffer::new(lu_factor::lu_in_place_scratch::<usize, f64>(
@@ -632,7 +632,7 @@ impl Lu {
 
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let n = self.lu.nrows();
-        let par = faer::get_global_parallelism();
+        let par = get_global_parallelism();
         let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
         let mut mem = MemBuffer::new(lu_solve::solve_in_place_scratch::<usize, f64>(
             n,

@@ -232,10 +232,10 @@ fn solve(
     let mut omega = omega0;
     let mut r = vec![0.0; nu];
     let mut r_omega = vec![0.0; nu];
+    // the trial's residual; swapped with `r` when the trial is accepted
+    let mut r_trial = vec![0.0; nu];
     let mut refs = reference_norms(hb, omega);
     let test = Test::new(opts);
-    let merit = |m: &Measure| test.merit(m);
-    let converged = |m: &Measure| test.converged(m);
     // Keller's first step: the Jacobian at the iterate is not computed for it
     let keller = first.zip(arc);
     let mut parts = match keller {
@@ -259,7 +259,7 @@ fn solve(
             jacobian: parts.map(|p| (p, r)),
         };
     for it in 0..=opts.max_iterations {
-        if converged(&meas) && arc_ok(&a, omega) {
+        if test.converged(&meas) && arc_ok(&a, omega) {
             return Ok(done(a, omega, it, &meas, parts, r));
         }
         if it == opts.max_iterations {
@@ -288,10 +288,9 @@ fn solve(
                 }
             }
         };
-        let phi0 = merit(&meas);
+        let phi0 = test.merit(&meas);
         let mut lambda = 1.0;
         let mut accepted = None;
-        let mut r_trial = vec![0.0; nu];
         for _ in 0..=opts.max_backtracks {
             let trial: Vec<f64> = a.iter().zip(&delta).map(|(x, d)| x + lambda * d).collect();
             let w_trial = omega + lambda * d_omega;
@@ -309,8 +308,8 @@ fn solve(
             };
             if let Ok(trial_parts) = evaluated {
                 let m = measure(hb, &r_trial, refs_trial);
-                if merit(&m).is_finite()
-                    && (merit(&m) < (1.0 - 1e-4 * lambda) * phi0 || converged(&meas))
+                if test.merit(&m).is_finite()
+                    && (test.merit(&m) < (1.0 - 1e-4 * lambda) * phi0 || test.converged(&meas))
                 {
                     accepted = Some((trial, w_trial, m, refs_trial, trial_parts));
                     break;
@@ -332,7 +331,7 @@ fn solve(
         meas = m;
         std::mem::swap(&mut r, &mut r_trial);
         parts = trial_parts;
-        if converged(&meas) && arc_ok(&a, omega) {
+        if test.converged(&meas) && arc_ok(&a, omega) {
             return Ok(done(a, omega, it + 1, &meas, parts, r));
         }
     }
