@@ -26,7 +26,7 @@ use faer::Mat;
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve};
 use faer::perm::PermRef;
-use faer::{MatMut, get_global_parallelism};
+use faer::{MatMut, Par, get_global_parallelism};
 use rayon::prelude::*;
 use thiserror::Error;
 
@@ -342,19 +342,26 @@ impl Condensed {
         for (k, &g) in globals.iter().enumerate() {
             pos[g] = k;
         }
-        // condensed matrix, starts as J_nl (+ border)
-        let mut a = Mat::<f64>::zeros(m, m);
-        a.as_mut()
+        // The condensed matrix is assembled transposed, `at = Aᵀ`: the row-major `J_nl` is
+        // then a column-major copy (a transposing copy of 3 MB cost a millisecond), and the
+        // Schur complements below are added down columns. `Lu` solves with `A`.
+        // `at` starts as `J_nlᵀ` (+ border).
+        let mut at = Mat::<f64>::zeros(m, m);
+        at.as_mut()
             .submatrix_mut(0, 0, pn, pn)
-            .copy_from(faer::MatRef::from_row_major_slice(&parts.nonlinear, pn, pn));
+            .copy_from(faer::MatRef::from_column_major_slice(
+                &parts.nonlinear,
+                pn,
+                pn,
+            ));
         if let Some(bd) = border {
             for (k, &g) in globals.iter().enumerate() {
                 for c in 0..nc {
-                    a[(k * nc + c, pn)] = bd.column[g * nc + c];
-                    a[(pn, k * nc + c)] = bd.row[g * nc + c];
+                    at[(pn, k * nc + c)] = bd.column[g * nc + c];
+                    at[(k * nc + c, pn)] = bd.row[g * nc + c];
                 }
             }
-            a[(pn, pn)] = bd.corner;
+            at[(pn, pn)] = bd.corner;
         }
         let coeff = |hs: usize, part: usize| coeff_index(nh, hs, part);
         let flds = fields(&parts.linear, hb.n_mech(), hb.n_therm());
@@ -413,7 +420,8 @@ impl Condensed {
                             }
                         }
                     }
-                    let lu = Lu::new(z_block(&lin, &lin, np, z));
+                    // small (≤ 2·72 rows) and already one of many parallel jobs
+                    let lu = Lu::factor(z_block(&lin, &lin, np, z), false, Par::Seq);
                     let x = lu.solve(&rhs);
                     check_finite(&x, "linear-DoF block", sl, omega)?;
                     let prod = &block.znl * &x; // sn × ncol
@@ -445,13 +453,14 @@ impl Condensed {
             for pr in 0..np {
                 for ti in 0..nl_len {
                     let (r, ar) = (pr * nl_len + ti, crow(ti, pr));
+                    let mut col = at.col_mut(ar);
                     for pc in 0..np {
                         for tj in 0..nl_len {
-                            a[(ar, crow(tj, pc))] += schur[(r, pc * nl_len + tj)];
+                            col[crow(tj, pc)] += schur[(r, pc * nl_len + tj)];
                         }
                     }
                     if has_border {
-                        a[(ar, pn)] -= corr_c[(r, 0)];
+                        col[pn] -= corr_c[(r, 0)];
                     }
                 }
             }
@@ -464,12 +473,13 @@ impl Condensed {
                             continue;
                         }
                         let li = pr * nn + ti;
+                        let mut col = at.col_mut(pn);
                         for pc in 0..np {
                             for tj in 0..nl_len {
-                                a[(pn, crow(tj, pc))] -= rl * bl.w[(li, pc * nl_len + tj)];
+                                col[crow(tj, pc)] -= rl * bl.w[(li, pc * nl_len + tj)];
                             }
                         }
-                        a[(pn, pn)] -= rl * bl.yc[(li, 0)];
+                        col[pn] -= rl * bl.yc[(li, 0)];
                     }
                 }
             }
@@ -483,7 +493,7 @@ impl Condensed {
             pos,
             blocks,
             border_row: border.map(|bd| bd.row.to_vec()),
-            lu: (m > 0).then(|| Lu::new(a)),
+            lu: (m > 0).then(|| Lu::factor(at, true, get_global_parallelism())),
         })
     }
 
@@ -594,12 +604,21 @@ struct Lu {
     lu: Mat<f64>,
     perm: Vec<usize>,
     perm_inv: Vec<usize>,
+    /// The factors are those of `Aᵀ` (the matrix was handed over transposed), and solves
+    /// are with `A`.
+    transposed: bool,
+    par: Par,
 }
 
 impl Lu {
-    fn new(mut a: Mat<f64>) -> Self {
+    fn new(a: Mat<f64>) -> Self {
+        Self::factor(a, false, get_global_parallelism())
+    }
+
+    /// Factors `a` (or, with `transposed`, keeps the factors of `a` and solves with `aᵀ`)
+    /// with parallelism `par`.
+    fn factor(mut a: Mat<f64>, transposed: bool, par: Par) -> Self {
         let n = a.nrows();
-        let par = get_global_parallelism();
         let mut perm = vec![0usize; n];
         let mut perm_inv = vec![0usize; n];
         let mut mem = MemBuffer::new(lu_factor::lu_in_place_scratch::<usize, f64>(
@@ -620,6 +639,8 @@ impl Lu {
             lu: a,
             perm,
             perm_inv,
+            transposed,
+            par,
         }
     }
 
@@ -632,21 +653,20 @@ impl Lu {
 
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let n = self.lu.nrows();
-        let par = get_global_parallelism();
+        let par = self.par;
         let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
+        // the two scratch sizes are the same (one row permutation of the right-hand sides)
         let mut mem = MemBuffer::new(lu_solve::solve_in_place_scratch::<usize, f64>(
             n,
             rhs.ncols(),
             par,
         ));
-        lu_solve::solve_in_place(
-            self.lu.as_ref(),
-            self.lu.as_ref(),
-            perm,
-            rhs,
-            par,
-            MemStack::new(&mut mem),
-        );
+        let (l, u, stack) = (self.lu.as_ref(), self.lu.as_ref(), MemStack::new(&mut mem));
+        if self.transposed {
+            lu_solve::solve_transpose_in_place(l, u, perm, rhs, par, stack);
+        } else {
+            lu_solve::solve_in_place(l, u, perm, rhs, par, stack);
+        }
     }
 }
 
