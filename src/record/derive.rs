@@ -76,20 +76,48 @@ pub fn dof_history(
     omega_rad_s: f64,
     samples: usize,
 ) -> Result<Vec<f64>, DeriveError> {
-    if samples == 0 {
-        return Err(DeriveError::Samples(samples));
+    Sampled::new(basis, omega_rad_s, samples)?.history(coeffs)
+}
+
+/// A basis sampled at `samples` equally spaced times over one period: the harmonics'
+/// sines and cosines are computed once and serve every DoF's history (a point's record
+/// takes the histories of all nodes and thermal DoFs at the same times).
+struct Sampled<'b> {
+    basis: &'b Basis,
+    trig: Vec<Vec<(f64, f64, f64)>>,
+}
+
+impl<'b> Sampled<'b> {
+    fn new(basis: &'b Basis, omega_rad_s: f64, samples: usize) -> Result<Self, DeriveError> {
+        if samples == 0 {
+            return Err(DeriveError::Samples(samples));
+        }
+        let trig = sample_times(basis.period(omega_rad_s), samples)
+            .into_iter()
+            .map(|t| {
+                let mut row = Vec::with_capacity(basis.n_harmonics());
+                basis.trig_table(omega_rad_s, t, &mut row);
+                row
+            })
+            .collect();
+        Ok(Self { basis, trig })
     }
-    if coeffs.len() != basis.n_coeffs() {
-        return Err(DeriveError::Size {
-            what: "one DoF",
-            got: coeffs.len(),
-            want: basis.n_coeffs(),
-        });
+
+    /// The history of the DoF with coefficients `coeffs`.
+    fn history(&self, coeffs: &[f64]) -> Result<Vec<f64>, DeriveError> {
+        if coeffs.len() != self.basis.n_coeffs() {
+            return Err(DeriveError::Size {
+                what: "one DoF",
+                got: coeffs.len(),
+                want: self.basis.n_coeffs(),
+            });
+        }
+        Ok(self
+            .trig
+            .iter()
+            .map(|row| self.basis.eval_with(coeffs, row).0)
+            .collect())
     }
-    Ok(sample_times(basis.period(omega_rad_s), samples)
-        .into_iter()
-        .map(|t| basis.eval(coeffs, omega_rad_s, t).0)
-        .collect())
 }
 
 /// Orbits of every dynamic node of the run from the mechanical coefficients.
@@ -101,22 +129,13 @@ pub fn orbits(
 ) -> Result<Vec<NodeOrbit>, DeriveError> {
     let basis = run.basis()?;
     let nc = basis.n_coeffs();
+    let sampled = Sampled::new(&basis, omega_rad_s, samples)?;
     run.nodes
         .iter()
         .map(|n| {
             Ok(NodeOrbit {
-                x_m: dof_history(
-                    &basis,
-                    block(coeffs_mech, n.dof_x, nc, "coeffs_mech")?,
-                    omega_rad_s,
-                    samples,
-                )?,
-                y_m: dof_history(
-                    &basis,
-                    block(coeffs_mech, n.dof_y, nc, "coeffs_mech")?,
-                    omega_rad_s,
-                    samples,
-                )?,
+                x_m: sampled.history(block(coeffs_mech, n.dof_x, nc, "coeffs_mech")?)?,
+                y_m: sampled.history(block(coeffs_mech, n.dof_y, nc, "coeffs_mech")?)?,
             })
         })
         .collect()
@@ -155,16 +174,10 @@ pub fn temperature_histories(
 ) -> Result<Vec<Vec<f64>>, DeriveError> {
     let basis = run.basis()?;
     let nc = basis.n_coeffs();
+    let sampled = Sampled::new(&basis, omega_rad_s, samples)?;
     run.thermal_nodes
         .iter()
-        .map(|n| {
-            dof_history(
-                &basis,
-                block(coeffs_therm, n.dof, nc, "coeffs_therm")?,
-                omega_rad_s,
-                samples,
-            )
-        })
+        .map(|n| sampled.history(block(coeffs_therm, n.dof, nc, "coeffs_therm")?))
         .collect()
 }
 
