@@ -331,3 +331,74 @@ fn keller_corrector_lands_where_newton_does() {
     assert_eq!(jr, r_check);
     assert_eq!(jp.nonlinear, fresh.nonlinear);
 }
+
+/// Chord iterations (solves with the last Newton iteration's matrix while each cuts the
+/// residual by the set factor) converge to the point Newton finds, with fewer
+/// factorizations; a factor no iteration reaches leaves plain Newton.
+#[test]
+fn chord_iterations_land_where_newton_does_with_fewer_factorizations() {
+    use tmrotor::hb::newton::{ArcConstraint, solve_arclength};
+    let sys = Chain::with_contacts(7, 5, 3, 2);
+    let basis = Basis::paper(1, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let nu = hb.n_unknowns();
+    let newton = NewtonOptions::default();
+    let chord = NewtonOptions {
+        chord_contraction: 0.5,
+        ..NewtonOptions::default()
+    };
+    let never = NewtonOptions {
+        chord_contraction: 1e-300,
+        ..NewtonOptions::default()
+    };
+    let w0 = 0.9;
+    let zero = vec![0.0; nu];
+    let (a0, s0) = solve_fixed(&hb, w0, &zero, &newton).expect("newton");
+    let (a1, s1) = solve_fixed(&hb, w0, &zero, &chord).expect("chord");
+    let (_, s2) = solve_fixed(&hb, w0, &zero, &never).expect("never");
+    // each part within its tolerance's reach: mechanical 1e-8 on the residual, thermal
+    // 1e-3 (the paper's), so the two solves' temperatures may differ far more
+    let nm = hb.n_mech_unknowns();
+    let maxabs = |a: &[f64]| a.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let dev = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    };
+    let close = |a: &[f64], b: &[f64]| {
+        let (dm, dt) = (dev(&a[..nm], &b[..nm]), dev(&a[nm..], &b[nm..]));
+        assert!(dm < 1e-6 * maxabs(&a0[..nm]), "mechanical {dm:e}");
+        assert!(dt < 1e-3 * maxabs(&a0[nm..]), "thermal {dt:e}");
+    };
+    close(&a0, &a1);
+    assert!(s1.relative.mech <= chord.tol_mech && s1.relative.therm <= chord.tol_therm);
+    // Newton factors at every iteration, the chord solve less often
+    assert_eq!(s0.factorizations, s0.iterations);
+    assert_eq!(s0.chord_iterations, 0);
+    assert!(s1.chord_iterations > 0, "{s1:?}");
+    assert_eq!(s1.factorizations + s1.chord_iterations, s1.iterations);
+    assert!(
+        s1.factorizations < s0.factorizations,
+        "{s1:?} against {s0:?}"
+    );
+    assert_eq!(
+        s1.newton_equivalent(),
+        s1.iterations - s1.chord_iterations + s1.chord_iterations.div_ceil(2)
+    );
+    assert_eq!((s2.chord_iterations, s2.factorizations), (0, s2.iterations));
+    // the same with the arclength constraint (natural parameter, ω − ω0 = ds)
+    let row = vec![0.0; nu];
+    let ds = 0.03;
+    let arc = ArcConstraint {
+        anchor: &a0,
+        anchor_omega: w0,
+        row: &row,
+        corner: 1.0,
+        ds,
+    };
+    let (an, wn, _) = solve_arclength(&hb, &a0, w0 + ds, &arc, &newton).expect("newton");
+    let (ac, wc, sc) = solve_arclength(&hb, &a0, w0 + ds, &arc, &chord).expect("chord");
+    assert!((wn - wc).abs() < 1e-12, "{wn} {wc}");
+    close(&an, &ac);
+    assert!(sc.relative.mech <= chord.tol_mech);
+}

@@ -149,12 +149,15 @@ fn bad_command_line_input_names_the_option() {
 
 /// At exactly ω = 484 rad/s the order-1 Newton stalls just above its tolerance (a bearing
 /// contact event on an AFT sample, see the module docs); the study then reports the
-/// nearest nudged speed that converges, and says so, instead of a missing row.
+/// nearest nudged speed that converges, and says so, instead of a missing row. Whether it
+/// stalls depends on the start guess, interpolated from the branch points around the
+/// target: traced over 482–486 rad/s the chord iterations converge there, over 470–500
+/// rad/s they stall.
 #[test]
 fn a_stalled_target_is_reported_at_the_nearest_converged_speed() {
     let settings = StudySettings {
-        omega_start: 482.0,
-        omega_end: 486.0,
+        omega_start: 470.0,
+        omega_end: 500.0,
         ..Default::default()
     };
     let opts = TruncationOptions {

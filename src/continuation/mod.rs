@@ -88,6 +88,15 @@ const FOLD_SLOPE_TOL: f64 = 1e-2;
 /// rounding on a branch that runs at constant ω cannot halve the step away.
 const FOLD_PAIR_MIN_CHANGE: f64 = 1e-6;
 
+/// The corrector's chord iterations ([`NewtonOptions::chord_contraction`]): after its
+/// Newton iteration, a step keeps solving with that matrix while each iteration cuts the
+/// residual tenfold or more. On the dual rotor a corrector then takes Keller's
+/// iteration, one Newton iteration and one or two chord iterations, and the tangent
+/// factors the matrix at the new point: two factorizations per step instead of three.
+/// The chord iterations count half in the step control and in
+/// [`ContinuationOptions::max_step_iterations`] ([`newton::NewtonStats::newton_equivalent`]).
+pub const CHORD_CONTRACTION: f64 = 0.1;
+
 /// Continuation settings. Every default is given in the field's doc.
 #[derive(Clone, Debug)]
 pub struct ContinuationOptions {
@@ -114,7 +123,8 @@ pub struct ContinuationOptions {
     pub max_step_iterations: usize,
     /// Maximum number of accepted points (default 2000).
     pub max_points: usize,
-    /// Newton settings of the corrector (defaults of [`NewtonOptions`]).
+    /// Newton settings of the corrector (defaults of [`NewtonOptions`], except chord
+    /// iterations: `chord_contraction` [`CHORD_CONTRACTION`]).
     pub newton: NewtonOptions,
     /// Scale of mechanical coefficients; default (`None`): the largest mechanical
     /// coefficient magnitude of the start solution (1 if that is zero).
@@ -166,7 +176,10 @@ impl ContinuationOptions {
             target_iterations: 4,
             max_step_iterations: 4,
             max_points: 2000,
-            newton: NewtonOptions::default(),
+            newton: NewtonOptions {
+                chord_contraction: CHORD_CONTRACTION,
+                ..NewtonOptions::default()
+            },
             scale_mech: None,
             scale_therm: None,
             scale_omega: None,
@@ -1007,10 +1020,11 @@ impl<'a> Continuation<'a> {
         }
         let mut point = self.bare_point(&c.a, c.omega, &c.stats, c.arclength);
         // step control
-        let factor = if c.stats.iterations == 0 {
+        let effort = c.stats.newton_equivalent();
+        let factor = if effort == 0 {
             2.0
         } else {
-            (self.opts.target_iterations as f64 / c.stats.iterations as f64)
+            (self.opts.target_iterations as f64 / effort as f64)
                 .sqrt()
                 .clamp(0.5, 2.0)
         };
@@ -1071,10 +1085,10 @@ impl<'a> Continuation<'a> {
             stats,
             jacobian,
         } = self.correct(cur, ds).map_err(|e| corrector(&e))?;
-        if stats.iterations > self.opts.max_step_iterations {
+        if stats.newton_equivalent() > self.opts.max_step_iterations {
             return Err(RejectReason::Iterations {
                 ds,
-                iterations: stats.iterations,
+                iterations: stats.newton_equivalent(),
             });
         }
         let distance = self.corrector_distance(cur, ds, &a, omega);

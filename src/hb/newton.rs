@@ -6,6 +6,18 @@
 //! `λ` starts at 1 and is halved (at most [`NewtonOptions::max_backtracks`] times) until the
 //! merit `φ = (ε_mech / tol_mech)² + (ε_therm / tol_therm)²` decreases.
 //!
+//! ## Chord iterations
+//! With [`NewtonOptions::chord_contraction`] set, the matrix factored for a Newton
+//! iteration is kept, and the following iterations solve with it (chord, or modified
+//! Newton, iterations: a residual and a solve each, about 2.5 ms on the dual rotor against
+//! 16 ms for a Jacobian and a factorization) as long as each cuts the residual by that
+//! factor. One that does not is followed by a new Jacobian and factorization. The bearing
+//! model is not smooth everywhere (see [`crate::truncation`]): Newton's convergence there
+//! is far from quadratic, and where a contact event falls on an AFT sample at the
+//! solution the exact Jacobian may give no descent at all. A chord step, with the
+//! Jacobian of a nearby iterate, can pass such a point (order 1 at 484 rad/s, traced over
+//! 482–486 rad/s: Newton stalled there, the chord iterations converge).
+//!
 //! ## Convergence test (paper: separate dynamic and thermal tolerances)
 //!
 //! `ε_mech = ‖R_mech‖₂ / ‖P[F]‖₂` and `ε_therm = ‖R_therm‖₂ / ‖F_T‖₂`: the 2-norm of the
@@ -39,6 +51,12 @@ pub struct NewtonOptions {
     pub max_backtracks: usize,
     /// Condense the linear DoFs (default true).
     pub condense: bool,
+    /// Chord iterations: after a Newton iteration, later ones solve with its factored
+    /// matrix (a residual and a solve each, no Jacobian or factorization) while each cuts
+    /// the residual (the square root of the merit) by at least this factor; a slower one
+    /// is followed by a new Jacobian and factorization. 0 (the default) factors at every
+    /// iteration.
+    pub chord_contraction: f64,
 }
 
 impl Default for NewtonOptions {
@@ -49,6 +67,7 @@ impl Default for NewtonOptions {
             tol_therm: 1e-3,
             max_backtracks: 10,
             condense: true,
+            chord_contraction: 0.0,
         }
     }
 }
@@ -84,10 +103,27 @@ pub enum NewtonError {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct NewtonStats {
     pub iterations: usize,
+    /// Iterations that factored a new matrix (the others are Keller's first one and chord
+    /// iterations, see [`NewtonOptions::chord_contraction`]).
+    pub factorizations: usize,
+    /// Chord iterations among `iterations`.
+    pub chord_iterations: usize,
     /// Absolute 2-norms of the final residual (paper Eq. 36 in coefficient form).
     pub residual: ResidualNorms,
     /// Normalised residuals `ε_mech`, `ε_therm`.
     pub relative: ResidualNorms,
+}
+
+impl NewtonStats {
+    /// The effort as Newton iterations: every iteration counts one, except chord
+    /// iterations, which count half (rounded up). A chord iteration costs a residual and
+    /// a solve, and while it is taken it cuts the residual by
+    /// [`NewtonOptions::chord_contraction`] or more, so that two stand for about one
+    /// Newton iteration near the solution. The continuation's step control and its limit
+    /// on corrector iterations use this count.
+    pub fn newton_equivalent(&self) -> usize {
+        self.iterations - self.chord_iterations + self.chord_iterations.div_ceil(2)
+    }
 }
 
 /// Pseudo-arclength constraint `g = row·(A − anchor) + corner·(ω − anchor_omega) − ds = 0`.
@@ -247,47 +283,73 @@ fn solve(
     };
     let mut meas = measure(hb, &r, refs);
     let arc_ok = |a: &[f64], w: f64| arc.is_none_or(|c| test.arc_ok(c, c.value(a, w)));
-    let done =
-        |a: Vec<f64>, omega, it, meas: &Measure, parts: Option<JacobianParts>, r| Converged {
-            a,
-            omega,
-            stats: NewtonStats {
-                iterations: it,
-                residual: meas.abs,
-                relative: meas.rel,
-            },
-            jacobian: parts.map(|p| (p, r)),
-        };
+    // the matrix of the last Newton iteration, while chord iterations use it
+    let mut held: Option<Factorization> = None;
+    let mut factorizations = 0;
+    let mut chords = 0;
+    let done = |a: Vec<f64>,
+                omega,
+                it,
+                factorizations,
+                chords,
+                meas: &Measure,
+                parts: Option<JacobianParts>,
+                r| Converged {
+        a,
+        omega,
+        stats: NewtonStats {
+            iterations: it,
+            factorizations,
+            chord_iterations: chords,
+            residual: meas.abs,
+            relative: meas.rel,
+        },
+        jacobian: parts.map(|p| (p, r)),
+    };
     for it in 0..=opts.max_iterations {
         if test.converged(&meas) && arc_ok(&a, omega) {
-            return Ok(done(a, omega, it, &meas, parts, r));
+            return Ok(done(a, omega, it, factorizations, chords, &meas, parts, r));
         }
         if it == opts.max_iterations {
             break;
         }
         let neg_r: Vec<f64> = r.iter().map(|v| -v).collect();
-        let (delta, d_omega) = match keller.filter(|_| it == 0) {
-            Some((f, c)) => f.solve(&neg_r, -c.value(&a, omega))?,
-            None => {
-                // due after a damped step, whose trial had no Jacobian
+        let g = arc.map_or(0.0, |c| -c.value(&a, omega));
+        let (delta, d_omega) = match (keller.filter(|_| it == 0), &held) {
+            (Some((f, _)), _) => f.solve(&neg_r, g)?,
+            (None, Some(f)) => {
+                chords += 1;
+                f.solve(&neg_r, g)?
+            }
+            (None, None) => {
+                // due after a damped or a chord step, whose trial had no Jacobian
                 let p = match parts.take() {
                     Some(p) => p,
                     None => hb.residual_jacobian(&a, omega, &mut r)?,
                 };
-                match arc {
+                let border = match arc {
                     Some(c) => {
                         hb.d_residual_d_omega_from(&a, omega, &r, &mut r_omega)?;
-                        let border = Border {
+                        Some(Border {
                             column: &r_omega,
                             row: c.row,
                             corner: c.corner,
-                        };
-                        solver.solve(hb, &p, Some(border), &neg_r, -c.value(&a, omega))?
+                        })
                     }
-                    None => solver.solve(hb, &p, None, &neg_r, 0.0)?,
+                    None => None,
+                };
+                let f = solver.factor(hb, &p, border)?;
+                factorizations += 1;
+                let x = f.solve(&neg_r, g)?;
+                if opts.chord_contraction > 0.0 {
+                    held = Some(f);
                 }
+                x
             }
         };
+        // the next iteration is a chord one (its trial needs no Jacobian) unless this
+        // one's contraction says otherwise
+        let chord_next = held.is_some();
         let phi0 = test.merit(&meas);
         let mut lambda = 1.0;
         let mut accepted = None;
@@ -300,7 +362,7 @@ fn solve(
                 refs
             };
             // the full step is usually taken: its Jacobian is computed with its residual
-            let evaluated = if lambda == 1.0 {
+            let evaluated = if lambda == 1.0 && !chord_next {
                 hb.residual_jacobian(&trial, w_trial, &mut r_trial)
                     .map(Some)
             } else {
@@ -325,6 +387,12 @@ fn solve(
                 residual_therm: meas.rel.therm,
             });
         };
+        // a damped step, or a chord step that contracted too little: refactor next
+        let contraction = (test.merit(&m) / phi0).sqrt();
+        let contracted = contraction <= opts.chord_contraction;
+        if lambda < 1.0 || !contracted {
+            held = None;
+        }
         a = trial;
         omega = w_trial;
         refs = refs_trial;
@@ -332,7 +400,16 @@ fn solve(
         std::mem::swap(&mut r, &mut r_trial);
         parts = trial_parts;
         if test.converged(&meas) && arc_ok(&a, omega) {
-            return Ok(done(a, omega, it + 1, &meas, parts, r));
+            return Ok(done(
+                a,
+                omega,
+                it + 1,
+                factorizations,
+                chords,
+                &meas,
+                parts,
+                r,
+            ));
         }
     }
     Err(NewtonError::Diverged {
