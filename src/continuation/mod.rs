@@ -111,11 +111,14 @@ pub struct ContinuationOptions {
     pub ds_min: f64,
     /// Largest step (default 0.1).
     pub ds_max: f64,
-    /// Newton iterations the step control aims at (default 4).
+    /// Newton iterations the step control aims at (default 4; counted as
+    /// [`newton::NewtonStats::newton_equivalent`]).
     pub target_iterations: usize,
-    /// Most corrector iterations of an accepted step (default 4); a step that needs more
-    /// is rejected and halved. The corrector takes Keller's step and then Newton steps,
-    /// three iterations on a smooth branch at the default step cap. A corrector that
+    /// Most corrector iterations of an accepted step (default 4, counted by
+    /// [`newton::NewtonStats::newton_equivalent`]: chord iterations count half); a step
+    /// that needs more is rejected and halved. The corrector takes Keller's step, then a
+    /// Newton step and chord steps, three counted iterations on a smooth branch at the
+    /// default step cap. A corrector that
     /// labours has usually started across a turn of the branch: on the 5 L/min branch
     /// the step over the fold pair at 658–661 rad/s needs five (test
     /// `a_step_over_a_fold_pair_is_refused_and_both_folds_are_located`). It does not catch
