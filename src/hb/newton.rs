@@ -287,28 +287,21 @@ fn solve(
     let mut held: Option<Factorization> = None;
     let mut factorizations = 0;
     let mut chords = 0;
-    let done = |a: Vec<f64>,
-                omega,
-                it,
-                factorizations,
-                chords,
-                meas: &Measure,
-                parts: Option<JacobianParts>,
-                r| Converged {
-        a,
-        omega,
-        stats: NewtonStats {
-            iterations: it,
-            factorizations,
-            chord_iterations: chords,
-            residual: meas.abs,
-            relative: meas.rel,
-        },
-        jacobian: parts.map(|p| (p, r)),
-    };
     for it in 0..=opts.max_iterations {
+        // (after the last iteration too: the loop runs once more for this test)
         if test.converged(&meas) && arc_ok(&a, omega) {
-            return Ok(done(a, omega, it, factorizations, chords, &meas, parts, r));
+            return Ok(Converged {
+                a,
+                omega,
+                stats: NewtonStats {
+                    iterations: it,
+                    factorizations,
+                    chord_iterations: chords,
+                    residual: meas.abs,
+                    relative: meas.rel,
+                },
+                jacobian: parts.map(|p| (p, r)),
+            });
         }
         if it == opts.max_iterations {
             break;
@@ -399,18 +392,6 @@ fn solve(
         meas = m;
         std::mem::swap(&mut r, &mut r_trial);
         parts = trial_parts;
-        if test.converged(&meas) && arc_ok(&a, omega) {
-            return Ok(done(
-                a,
-                omega,
-                it + 1,
-                factorizations,
-                chords,
-                &meas,
-                parts,
-                r,
-            ));
-        }
     }
     Err(NewtonError::Diverged {
         iterations: opts.max_iterations,
