@@ -591,9 +591,19 @@ fn z_block(
     z: impl Fn(usize, usize, usize, usize) -> f64,
 ) -> Mat<f64> {
     let (nr, nc) = (rows.len(), cols.len());
-    Mat::from_fn(np * nr, np * nc, |r, c| {
-        z(rows[r % nr], cols[c % nc], r / nr, c / nc)
-    })
+    let mut out = Mat::<f64>::zeros(np * nr, np * nc);
+    // column by column, without dividing the flat indices into part and DoF
+    for pc in 0..np {
+        for (b, &cj) in cols.iter().enumerate() {
+            let col = out.col_as_slice_mut(pc * nc + b);
+            for pr in 0..np {
+                for (a, &ri) in rows.iter().enumerate() {
+                    col[pr * nr + a] = z(ri, cj, pr, pc);
+                }
+            }
+        }
+    }
+    out
 }
 
 /// A partial-pivoting LU factorization kept in one matrix (unit lower part below the

@@ -59,8 +59,30 @@ pub enum HbError {
     NonFinite { what: &'static str, omega: f64 },
 }
 
-/// Reads one derivative entry of a pointwise evaluation.
-type Getter = fn(&NonlinearEval, usize) -> f64;
+/// Which derivative array of a pointwise evaluation a Jacobian block is built from.
+#[derive(Clone, Copy)]
+enum Derivative {
+    FX,
+    FV,
+    FT,
+    GX,
+    GV,
+    GT,
+}
+
+impl Derivative {
+    #[inline(always)]
+    fn of(self, e: &NonlinearEval) -> &[f64] {
+        match self {
+            Derivative::FX => &e.df_dx,
+            Derivative::FV => &e.df_dv,
+            Derivative::FT => &e.df_dt,
+            Derivative::GX => &e.dg_dx,
+            Derivative::GV => &e.dg_dv,
+            Derivative::GT => &e.dg_dt,
+        }
+    }
+}
 
 /// The Jacobian `∂R/∂A` in structured form: the linear matrices (the harmonic blocks are
 /// formed from them on the fly) and the dense nonlinear part on the nonlinear DoFs.
@@ -87,6 +109,9 @@ pub struct HarmonicBalance<'a> {
     nl: NonlinearDofs,
     n_mech: usize,
     n_therm: usize,
+    /// Per-sample evaluation buffers of earlier residuals, reused: allocating and zeroing
+    /// them (128 × 13 kB on the dual rotor) was about a tenth of a residual.
+    eval_pool: std::sync::Mutex<Vec<Vec<NonlinearEval>>>,
 }
 
 impl std::fmt::Debug for HarmonicBalance<'_> {
@@ -163,6 +188,7 @@ impl<'a> HarmonicBalance<'a> {
             nl,
             n_mech,
             n_therm,
+            eval_pool: std::sync::Mutex::new(Vec::new()),
         })
     }
 
@@ -344,28 +370,55 @@ impl<'a> HarmonicBalance<'a> {
         (xs, vs, ts)
     }
 
-    /// Pointwise evaluations of the nonlinear terms at every sample.
+    /// Pointwise evaluations of the nonlinear terms at every sample (in buffers from the
+    /// pool; hand them back with [`Self::recycle`]).
     fn evaluate(&self, coeffs: &[f64], omega: f64) -> Vec<NonlinearEval> {
         let n = self.aft.n_samples();
         let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
         let (xs, vs, ts) = self.nonlinear_samples(coeffs, omega);
-        let eval_one = |j: usize| {
-            let x: Vec<f64> = (0..p).map(|k| xs[k * n + j]).collect();
-            let v: Vec<f64> = (0..p).map(|k| vs[k * n + j]).collect();
-            let t: Vec<f64> = (0..q).map(|k| ts[k * n + j]).collect();
-            let mut e = NonlinearEval::new(p, q);
+        let mut evals = self
+            .eval_pool
+            .lock()
+            .ok()
+            .and_then(|mut pool| pool.pop())
+            .unwrap_or_default();
+        evals.resize_with(n, || NonlinearEval::new(p, q));
+        let eval_one = |(x, v, t): &mut (Vec<f64>, Vec<f64>, Vec<f64>),
+                        (j, e): (usize, &mut NonlinearEval)| {
+            for k in 0..p {
+                x[k] = xs[k * n + j];
+                v[k] = vs[k * n + j];
+            }
+            for (k, tk) in t.iter_mut().enumerate() {
+                *tk = ts[k * n + j];
+            }
             self.system
-                .eval_nonlinear(omega, self.aft.time(omega, j), &x, &v, &t, &mut e);
-            e
+                .eval_nonlinear(omega, self.aft.time(omega, j), x, v, t, e);
         };
+        let buffers = || (vec![0.0; p], vec![0.0; p], vec![0.0; q]);
         if (p + q) * n >= 512 {
-            (0..n)
-                .into_par_iter()
+            evals
+                .par_iter_mut()
+                .enumerate()
                 .with_min_len(8)
-                .map(eval_one)
-                .collect()
+                .for_each_init(buffers, eval_one);
         } else {
-            (0..n).map(eval_one).collect()
+            let mut b = buffers();
+            evals
+                .iter_mut()
+                .enumerate()
+                .for_each(|je| eval_one(&mut b, je));
+        }
+        evals
+    }
+
+    /// Returns the buffers of [`Self::evaluate`] to the pool.
+    fn recycle(&self, evals: Vec<NonlinearEval>) {
+        if let Ok(mut pool) = self.eval_pool.lock() {
+            // one per thread that may evaluate at once is plenty
+            if pool.len() < 4 {
+                pool.push(evals);
+            }
         }
     }
 
@@ -428,6 +481,7 @@ impl<'a> HarmonicBalance<'a> {
             if let Some(jac) = jac {
                 self.nonlinear_jacobian(&evals, omega, jac);
             }
+            self.recycle(evals);
         }
         if out.iter().any(|v| !v.is_finite()) {
             return Err(HbError::NonFinite {
@@ -452,33 +506,29 @@ impl<'a> HarmonicBalance<'a> {
                 let mut series = vec![0.0; n];
                 let mut buf: Vec<Complex64> = Vec::new();
                 for l in 0..pt {
-                    let mut terms: [(Option<Getter>, Signal, usize); 2] =
+                    let mut terms: [(Option<Derivative>, Signal, usize); 2] =
                         [(None, Signal::Value, 0), (None, Signal::Rate, 0)];
                     match (k < p, l < p) {
                         (true, true) => {
-                            terms[0] = (Some(|e, i| e.df_dx[i]), Signal::Value, k * p + l);
-                            terms[1] = (Some(|e, i| e.df_dv[i]), Signal::Rate, k * p + l);
+                            terms[0] = (Some(Derivative::FX), Signal::Value, k * p + l);
+                            terms[1] = (Some(Derivative::FV), Signal::Rate, k * p + l);
                         }
                         (true, false) => {
-                            terms[0] = (Some(|e, i| e.df_dt[i]), Signal::Value, k * q + (l - p));
+                            terms[0] = (Some(Derivative::FT), Signal::Value, k * q + (l - p));
                         }
                         (false, true) => {
-                            terms[0] = (Some(|e, i| e.dg_dx[i]), Signal::Value, (k - p) * p + l);
-                            terms[1] = (Some(|e, i| e.dg_dv[i]), Signal::Rate, (k - p) * p + l);
+                            terms[0] = (Some(Derivative::GX), Signal::Value, (k - p) * p + l);
+                            terms[1] = (Some(Derivative::GV), Signal::Rate, (k - p) * p + l);
                         }
                         (false, false) => {
-                            terms[0] = (
-                                Some(|e, i| e.dg_dt[i]),
-                                Signal::Value,
-                                (k - p) * q + (l - p),
-                            );
+                            terms[0] = (Some(Derivative::GT), Signal::Value, (k - p) * q + (l - p));
                         }
                     }
-                    for (getter, signal, idx) in terms {
-                        let Some(getter) = getter else { continue };
+                    for (which, signal, idx) in terms {
+                        let Some(which) = which else { continue };
                         let mut any = false;
                         for (s, e) in series.iter_mut().zip(evals) {
-                            *s = getter(e, idx);
+                            *s = which.of(e)[idx];
                             any |= *s != 0.0;
                         }
                         if !any {
