@@ -494,3 +494,54 @@ impl<'a> StateSpace<'a> {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::systems::chain::Chain;
+
+    #[test]
+    fn derivative_matrix_places_every_block() {
+        let sys = Chain::new(5, 3);
+        let space = StateSpace::new(&sys, 0.9).expect("state space");
+        let (p, q) = (space.dofs().mech.len(), space.dofs().therm.len());
+        assert!(p > 0 && q > 0, "both fields nonlinear");
+        // distinct entries, so that a misplaced one shows
+        let mut d = NonlinearEval::new(p, q);
+        for (k, buf) in [
+            &mut d.df_dx,
+            &mut d.df_dv,
+            &mut d.df_dt,
+            &mut d.dg_dx,
+            &mut d.dg_dv,
+            &mut d.dg_dt,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            for (i, v) in buf.iter_mut().enumerate() {
+                *v = (1000 * (k + 1) + i) as f64;
+            }
+        }
+        let (g, r) = space.low_rank_dims();
+        let mut m = Mat::<f64>::zeros(r, g);
+        space.derivative_matrix(&d, m.as_mut());
+        // the same through a row-major (strided) view
+        let mut t = Mat::<f64>::zeros(g, r);
+        space.derivative_matrix(&d, t.as_mut().transpose_mut());
+        for i in 0..r {
+            for j in 0..g {
+                let want = match (i < p, j) {
+                    (true, j) if j < p => d.df_dx[i * p + j],
+                    (true, j) if j < 2 * p => d.df_dv[i * p + j - p],
+                    (true, j) => d.df_dt[i * q + j - 2 * p],
+                    (false, j) if j < p => d.dg_dx[(i - p) * p + j],
+                    (false, j) if j < 2 * p => d.dg_dv[(i - p) * p + j - p],
+                    (false, j) => d.dg_dt[(i - p) * q + j - 2 * p],
+                };
+                assert_eq!(m[(i, j)], want, "({i}, {j})");
+                assert_eq!(t[(j, i)], want, "strided ({i}, {j})");
+            }
+        }
+    }
+}
