@@ -680,8 +680,10 @@ impl ModalField {
         let (g, r) = space.low_rank_dims();
         let s = space.gather_matrix();
         let l = space.spread_matrix();
+        use rayon::prelude::*;
+        // the blocks' eigenvalue problems are independent: side by side
         blocks
-            .iter()
+            .par_iter()
             .map(|&(r0, r1)| {
                 let (gather, spread) = if (r0, r1) == (0, d) {
                     ((0, g), (0, r))
