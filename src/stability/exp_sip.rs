@@ -674,13 +674,13 @@ impl ModalField {
         b_bar: &Mat<f64>,
         blocks: &[(usize, usize)],
     ) -> Option<Vec<Self>> {
+        use rayon::prelude::*;
         let d = space.dim();
         let dm = 2 * space.n_mech();
         let (p, q) = (space.dofs().mech.len(), space.dofs().therm.len());
         let (g, r) = space.low_rank_dims();
         let s = space.gather_matrix();
         let l = space.spread_matrix();
-        use rayon::prelude::*;
         // the blocks' eigenvalue problems are independent: side by side
         blocks
             .par_iter()

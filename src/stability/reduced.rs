@@ -68,8 +68,9 @@ pub struct CraigBampton {
     boundary: Vec<usize>,
     /// `T` (n × r), `r = n_b + n_modes`, columns `[boundary unit/constraint; modes]`.
     basis: Mat<f64>,
-    /// Maps a full displacement to reduced coordinates, `q = R x` (r × n).
-    project: Mat<f64>,
+    /// Maps a full displacement to reduced coordinates, `q = R x` (r × n), row-major so
+    /// that each reduced coordinate is one contiguous dot product.
+    project: Vec<f64>,
     /// Natural frequencies of the kept interior modes (rad/s), ascending.
     frequencies: Vec<f64>,
     /// Lowest dropped interior frequency (rad/s), if any mode was dropped.
@@ -236,7 +237,10 @@ impl CraigBampton {
             n,
             boundary,
             basis,
-            project,
+            project: (0..r)
+                .flat_map(|k| (0..n).map(move |j| (k, j)))
+                .map(|(k, j)| project[(k, j)])
+                .collect(),
             frequencies,
             first_dropped,
             dofs: reduced_dofs,
@@ -358,23 +362,16 @@ pub struct ReducedOrbit<'a> {
     /// Full displacement and velocity at the last evaluation (reused: `state_at` runs
     /// once per quadrature node or integrator stage).
     full: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
-    /// The projection's rows, row-major (contiguous dot products).
-    rows: Vec<f64>,
 }
 
 impl<'a> ReducedOrbit<'a> {
     /// Views `orbit` (of the full system) through `cb`.
     pub fn new(orbit: &'a dyn PeriodicOrbit, cb: &'a CraigBampton) -> Self {
         let n = cb.n;
-        let r = cb.project.as_ref();
-        let rows = (0..r.nrows())
-            .flat_map(|k| (0..r.ncols()).map(move |j| r[(k, j)]))
-            .collect();
         Self {
             inner: orbit,
             cb,
             full: std::cell::RefCell::new((vec![0.0; n], vec![0.0; n])),
-            rows,
         }
     }
 }
@@ -394,7 +391,8 @@ impl PeriodicOrbit for ReducedOrbit<'_> {
         let (fx, fv) = &mut *full;
         self.inner.state_at(t, fx, fv, temp);
         for ((row, xo), vo) in self
-            .rows
+            .cb
+            .project
             .chunks_exact(n)
             .zip(x.iter_mut())
             .zip(v.iter_mut())
