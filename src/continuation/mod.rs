@@ -18,8 +18,12 @@
 //! * new tangent from `[[∂R/∂A, ∂R/∂ω], [τ_prevᵀ]] t = [0; 1]`, normalised: this keeps the
 //!   orientation (`τ_prev·t > 0`), i.e. direction control. The Jacobian at the point is
 //!   the one the corrector's last trial computed with its residual, and `∂R/∂ω` a forward
-//!   difference from that residual. Its factorization is kept for the next step's
-//!   Keller iteration;
+//!   difference from that residual. When the corrector ended with chord iterations, the
+//!   tangent system is solved by iterative refinement with their matrix (the Jacobian of
+//!   an earlier iterate, bordered with `τ_prev`'s row): a product with the unassembled
+//!   Jacobian and a solve per refinement step, no factorization; only when the
+//!   refinement does not contract is the Jacobian at the point factored. The matrix the
+//!   tangent was solved with is kept for the next step's Keller iteration;
 //! * step control: `ds ← ds·clamp(sqrt(n_target / n_iter), 0.5, 2)` after success, halving
 //!   after a failed corrector, a corrector that needed more than `max_step_iterations`
 //!   iterations, a turn of the tangent by more than 60°, a corrected point
@@ -88,11 +92,38 @@ const FOLD_SLOPE_TOL: f64 = 1e-2;
 /// rounding on a branch that runs at constant ω cannot halve the step away.
 const FOLD_PAIR_MIN_CHANGE: f64 = 1e-6;
 
+/// A tangent refined with a nearby iterate's matrix ([`Continuation::refine_tangent`]) is
+/// taken when a correction falls below this fraction of it (scaled units). The tangent's
+/// uses are a predictor, an arclength row and the sign of its ω-component at folds, where
+/// it is compared with [`FOLD_SLOPE_TOL`] of its size: 1e-9 leaves a wide margin.
+const TANGENT_TOL: f64 = 1e-9;
+
+/// Most refinement steps of a tangent before the Jacobian at the point is factored
+/// instead (each step at least halves the system's residual, or the refinement stops at
+/// once). Twenty solves and products cost about as much as one factorization.
+const TANGENT_REFINEMENTS: usize = 20;
+
+/// A solution `(x, μ)` of a bordered system.
+type BorderedSolve = (Vec<f64>, f64);
+
+/// The tangent system at a point: `[[∂R/∂A, ∂R/∂ω], [rᵀ, d]]`.
+struct TangentSystem<'s> {
+    parts: &'s JacobianParts,
+    r_omega: &'s [f64],
+    row: &'s [f64],
+    corner: f64,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
 /// The corrector's chord iterations ([`NewtonOptions::chord_contraction`]): after its
 /// Newton iteration, a step keeps solving with that matrix while each iteration cuts the
 /// residual tenfold or more. On the dual rotor a corrector then takes Keller's
-/// iteration, one Newton iteration and one or two chord iterations, and the tangent
-/// factors the matrix at the new point: two factorizations per step instead of three.
+/// iteration, one Newton iteration and one or two chord iterations, and the tangent at
+/// the new point is refined with the Newton iteration's matrix: one factorization per
+/// step where the tangent needs no factorization of its own.
 /// The chord iterations count half in the step control and in
 /// [`ContinuationOptions::max_step_iterations`] ([`newton::NewtonStats::newton_equivalent`]).
 pub const CHORD_CONTRACTION: f64 = 0.1;
@@ -632,28 +663,36 @@ impl<'a> Continuation<'a> {
     }
 
     /// Tangent (scaled, unit) at `(a, omega)`. With `prev`, oriented along it; without,
-    /// oriented towards `omega_end`.
+    /// oriented towards `omega_end`. `jacobian` and `matrix` as [`Self::tangent_factored`].
     fn tangent(
         &self,
         a: &[f64],
         omega: f64,
         prev: Option<&[f64]>,
         jacobian: Option<(JacobianParts, Vec<f64>)>,
+        matrix: Option<Factorization>,
     ) -> Result<Vec<f64>, ContinuationError> {
-        self.tangent_factored(a, omega, prev, jacobian, false)
+        self.tangent_factored(a, omega, prev, jacobian, matrix, false)
             .map(|(t, _)| t)
     }
 
     /// [`Self::tangent`] (from `jacobian`, `∂R/∂A` and `R` at the point, when the
-    /// corrector left them) and, with `prev` and `keep`, the Jacobian's factorization
-    /// bordered with the new tangent's arclength row: the corrector's first matrix for a
-    /// step from this point (`None` when that row makes it singular).
+    /// corrector left them) and, with `prev` and `keep`, a factorization bordered with the
+    /// new tangent's arclength row: the corrector's first matrix for a step from this
+    /// point (`None` when that row makes it singular).
+    ///
+    /// With `matrix` (the corrector's last matrix, bordered with `prev`'s arclength row:
+    /// the Jacobian at an earlier iterate) the tangent system at the point is solved by
+    /// iterative refinement with that matrix ([`Self::refine_tangent`]), and that matrix
+    /// is the one kept; only when the refinement does not converge is the Jacobian at the
+    /// point factored.
     fn tangent_factored(
         &self,
         a: &[f64],
         omega: f64,
         prev: Option<&[f64]>,
         jacobian: Option<(JacobianParts, Vec<f64>)>,
+        matrix: Option<Factorization>,
         keep: bool,
     ) -> Result<(Vec<f64>, Option<Factorization>), ContinuationError> {
         let nu = self.hb.n_unknowns();
@@ -671,38 +710,88 @@ impl<'a> Continuation<'a> {
             condense: self.opts.newton.condense,
         };
         let s = &self.scales;
-        let (z, zeta, fact) = match prev {
-            Some(t) => {
-                let row = self.arc_row(t);
-                let border = Border {
-                    column: &r_omega,
-                    row: &row,
-                    corner: t[nu] / s[nu],
-                };
-                let fact = solver.factor(&self.hb, &parts, Some(border))?;
-                let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
-                (z, zeta, keep.then_some(fact))
-            }
-            None => {
-                let neg: Vec<f64> = r_omega.iter().map(|v| -v).collect();
-                let (z, _) = solver.solve(&self.hb, &parts, None, &neg, 0.0)?;
-                (z, 1.0, None)
-            }
+        let Some(t) = prev else {
+            let neg: Vec<f64> = r_omega.iter().map(|v| -v).collect();
+            let (z, _) = solver.solve(&self.hb, &parts, None, &neg, 0.0)?;
+            return Ok((self.oriented(&z, 1.0, None), None));
         };
-        Ok(self.oriented(&z, zeta, prev, fact))
+        let row = self.arc_row(t);
+        let corner = t[nu] / s[nu];
+        let system = TangentSystem {
+            parts: &parts,
+            r_omega: &r_omega,
+            row: &row,
+            corner,
+        };
+        if let Some(m) = matrix.filter(Factorization::bordered)
+            && let Some((z, zeta, own)) = self.refine_tangent(&m, &system)
+        {
+            let tangent = self.oriented(&z, zeta, prev);
+            return Ok(self.with_row(tangent, keep.then_some(m), Some(&own)));
+        }
+        let border = Border {
+            column: &r_omega,
+            row: &row,
+            corner,
+        };
+        let fact = solver.factor(&self.hb, &parts, Some(border))?;
+        let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
+        let tangent = self.oriented(&z, zeta, prev);
+        // the tangent's own solve is `A⁻¹ e` of the row replacement
+        Ok(self.with_row(tangent, keep.then_some(fact), Some(&(z, zeta))))
+    }
+
+    /// The solution `(z, ζ)` of the tangent system `[[∂R/∂A, ∂R/∂ω], [rᵀ, d]] (z, ζ) =
+    /// (0, 1)` at the point, by iterative refinement with `m`, a factorization of the same
+    /// system at a nearby iterate: `x ← x + m⁻¹ (e − A x)`, each step a product with the
+    /// unassembled Jacobian and a solve (about 0.6 ms on the dual rotor, against 11 ms
+    /// for a factorization). Converged when a correction is below [`TANGENT_TOL`] of the
+    /// solution in scaled units; `None` when a step does not at least halve the residual
+    /// of the system (the corrections themselves need not fall monotonically in scaled
+    /// units) or [`TANGENT_REFINEMENTS`] steps do not suffice. Also returns
+    /// `m`'s own solve of `(0, 1)` (for [`Factorization::replace_border_row`]).
+    fn refine_tangent(
+        &self,
+        m: &Factorization,
+        sys: &TangentSystem<'_>,
+    ) -> Option<(Vec<f64>, f64, BorderedSolve)> {
+        let nu = self.hb.n_unknowns();
+        let s = &self.scales;
+        let norm = |x: &[f64], mu: f64| {
+            (x.iter().zip(s).map(|(v, si)| (v / si).powi(2)).sum::<f64>() + (mu / s[nu]).powi(2))
+                .sqrt()
+        };
+        let first = m.solve(&vec![0.0; nu], 1.0).ok()?;
+        let (mut z, mut zeta) = first.clone();
+        let mut jz = vec![0.0; nu];
+        let mut last = f64::INFINITY;
+        for _ in 0..TANGENT_REFINEMENTS {
+            self.hb.apply_jacobian(sys.parts, &z, &mut jz);
+            let res: Vec<f64> = jz
+                .iter()
+                .zip(sys.r_omega)
+                .map(|(j, c)| -(j + c * zeta))
+                .collect();
+            let e = 1.0 - (dot(sys.row, &z) + sys.corner * zeta);
+            // the residual is what a good matrix contracts at every step
+            let size = (dot(&res, &res) + e * e).sqrt();
+            if !size.is_finite() || size > 0.5 * last {
+                return None;
+            }
+            last = size;
+            let (dz, dzeta) = m.solve(&res, e).ok()?;
+            z.iter_mut().zip(&dz).for_each(|(x, d)| *x += d);
+            zeta += dzeta;
+            if norm(&dz, dzeta) <= TANGENT_TOL * norm(&z, zeta) {
+                return Some((z, zeta, first));
+            }
+        }
+        None
     }
 
     /// The unit tangent from the solution `(z, ζ)` of the tangent system, oriented along
-    /// `prev` (or towards `omega_end`), and `fact` (the tangent's matrix, factored with
-    /// the arclength row of `prev`, whose solve `(z, ζ)` is) with its row replaced by the
-    /// new tangent's.
-    fn oriented(
-        &self,
-        z: &[f64],
-        zeta: f64,
-        prev: Option<&[f64]>,
-        fact: Option<Factorization>,
-    ) -> (Vec<f64>, Option<Factorization>) {
+    /// `prev` (or towards `omega_end`).
+    fn oriented(&self, z: &[f64], zeta: f64, prev: Option<&[f64]>) -> Vec<f64> {
         let nu = self.hb.n_unknowns();
         let s = &self.scales;
         let mut t: Vec<f64> = z.iter().zip(s).map(|(v, si)| v / si).collect();
@@ -714,14 +803,30 @@ impl<'a> Continuation<'a> {
         } else {
             1.0
         };
-        let t: Vec<f64> = t.into_iter().map(|v| sign * v / norm).collect();
-        // the tangent's own solve is `A⁻¹ e` of the row replacement
+        t.into_iter().map(|v| sign * v / norm).collect()
+    }
+
+    /// `tangent` and `fact` (a matrix bordered with the previous tangent's arclength row)
+    /// with its row replaced by the tangent's; `own` is `fact`'s solve of `(0, 1)` with
+    /// its current row, when known.
+    fn with_row(
+        &self,
+        tangent: Vec<f64>,
+        fact: Option<Factorization>,
+        own: Option<&BorderedSolve>,
+    ) -> (Vec<f64>, Option<Factorization>) {
+        let nu = self.hb.n_unknowns();
+        let corner = tangent[nu] / self.scales[nu];
         let fact = fact.and_then(|mut f| {
-            f.replace_border_row(&self.arc_row(&t), t[nu] / s[nu], Some((z, zeta)))
-                .ok()
-                .map(|()| f)
+            f.replace_border_row(
+                &self.arc_row(&tangent),
+                corner,
+                own.map(|(x, mu)| (x.as_slice(), *mu)),
+            )
+            .ok()
+            .map(|()| f)
         });
-        (t, fact)
+        (tangent, fact)
     }
 
     /// The start point and the state to continue from (sets the scales and the history).
@@ -767,7 +872,7 @@ impl<'a> Continuation<'a> {
             }
         }
         self.scales.push(sw);
-        let tangent = self.tangent(&a, omega, None, None)?;
+        let tangent = self.tangent(&a, omega, None, None, None)?;
         let point = self.bare_point(&a, omega, &stats, 0.0);
         self.history = vec![(self.scaled(&a, omega), 0.0)];
         self.n_points = 1;
@@ -960,7 +1065,7 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
-            let Ok(t) = self.tangent(&a, w, Some(&from.tangent), c.jacobian) else {
+            let Ok(t) = self.tangent(&a, w, Some(&from.tangent), c.jacobian, c.matrix) else {
                 break;
             };
             let g_mid = t[nu];
@@ -979,18 +1084,30 @@ impl<'a> Continuation<'a> {
 
     /// The next trial of a bracket search from `from` (guard as [`Bracket::trial`]): its
     /// arclength offset and corrected point, or `None` when the bracket is already narrower
-    /// than `bifurcation_tol_arclength` or the corrector fails there.
+    /// than `bifurcation_tol_arclength` or the corrector fails there. A corrector that
+    /// fails at the secant's trial is tried again at the bracket's midpoint and quarter
+    /// points: on the dual rotor's non-smooth bearing model Newton can stall at a single
+    /// arclength (a contact event on an AFT sample, see [`crate::hb::newton`]), and a fold
+    /// whose first trial fell there was otherwise dropped.
     fn bracket_trial(
         &self,
         from: &Current,
         bracket: &Bracket,
         guard: f64,
     ) -> Option<(f64, newton::Converged)> {
-        if bracket.width() <= self.opts.bifurcation_tol_arclength {
+        let width = bracket.width();
+        if width <= self.opts.bifurcation_tol_arclength {
             return None;
         }
-        let mid = bracket.trial(guard);
-        Some((mid, self.correct(from, mid).ok()?))
+        let first = bracket.trial(guard);
+        let retries = [0.5, 0.25, 0.75].map(|f| bracket.lo + f * width);
+        std::iter::once(first)
+            .chain(
+                retries
+                    .into_iter()
+                    .filter(|m| (m - first).abs() > 0.05 * width),
+            )
+            .find_map(|mid| self.correct(from, mid).ok().map(|c| (mid, c)))
     }
 
     /// Hands out the held point with its bifurcations.
@@ -1087,6 +1204,7 @@ impl<'a> Continuation<'a> {
             omega,
             stats,
             jacobian,
+            matrix,
         } = self.correct(cur, ds).map_err(|e| corrector(&e))?;
         if stats.newton_equivalent() > self.opts.max_step_iterations {
             return Err(RejectReason::Iterations {
@@ -1099,7 +1217,7 @@ impl<'a> Continuation<'a> {
             return Err(RejectReason::Distance { ds, distance });
         }
         let (tangent, chord) = self
-            .tangent_factored(&a, omega, Some(&cur.tangent), jacobian, true)
+            .tangent_factored(&a, omega, Some(&cur.tangent), jacobian, matrix, true)
             .map_err(|e| corrector(&e))?;
         let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
         if cos_angle < 0.5 {
@@ -1384,5 +1502,104 @@ mod tests {
             .map(|k| (vec![k as f64 * 0.1, 0.0], vec![1.0, 0.0]))
             .collect();
         assert_eq!(first_closure(&line), None);
+    }
+
+    /// The tangent refined with the matrix of a neighbouring point equals the one from a
+    /// factorization at the point itself, and a matrix from far away is refused rather
+    /// than trusted.
+    #[test]
+    fn refined_tangent_equals_the_freshly_factored_one() {
+        use crate::hb::Basis;
+        use crate::systems::duffing::Duffing;
+        let sys = Duffing::default();
+        let basis = Basis::integer(3).expect("basis");
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let opts = ContinuationOptions::new(0.5, 1.6);
+        let mut cont = Continuation::new(hb, opts, None).expect("continuation");
+        let (start, _) = cont.start().expect("start");
+        let nu = cont.hb.n_unknowns();
+        // the start's Jacobian bordered with its tangent's row: a nearby point's matrix
+        let near = |ds: f64| {
+            let c = cont.correct(&start, ds).expect("corrects");
+            let (_, m) = cont
+                .tangent_factored(
+                    &start.a,
+                    start.omega,
+                    Some(&start.tangent),
+                    None,
+                    None,
+                    true,
+                )
+                .expect("tangent at the start");
+            (c, m.expect("bordered matrix"))
+        };
+        let (c, m) = near(0.005);
+        let fresh = cont
+            .tangent(&c.a, c.omega, Some(&start.tangent), None, None)
+            .expect("fresh tangent");
+        let refined = cont
+            .tangent(&c.a, c.omega, Some(&start.tangent), None, Some(m.clone()))
+            .expect("refined tangent");
+        let diff = fresh
+            .iter()
+            .zip(&refined)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        assert!(diff < 1e-8, "refined and fresh tangents differ by {diff:e}");
+        // the refinement itself converged (no fallback to a factorization)
+        let mut r = vec![0.0; nu];
+        let parts = cont.hb.residual_jacobian(&c.a, c.omega, &mut r).expect("J");
+        let mut r_omega = vec![0.0; nu];
+        cont.hb
+            .d_residual_d_omega_from(&c.a, c.omega, &r, &mut r_omega)
+            .expect("dR/dω");
+        let row = cont.arc_row(&start.tangent);
+        let sys_at = TangentSystem {
+            parts: &parts,
+            r_omega: &r_omega,
+            row: &row,
+            corner: start.tangent[nu] / cont.scales[nu],
+        };
+        assert!(cont.refine_tangent(&m, &sys_at).is_some());
+        // a point far along the branch (past the resonance): the start's matrix is no
+        // contraction there, and the refinement must say so instead of answering
+        let mut far = start;
+        for _ in 0..400 {
+            match cont.step().expect("step") {
+                StepOutcome::Accepted { point, .. } if point.solution.omega > 1.3 => {
+                    let a = point.solution.unknowns();
+                    let w = point.solution.omega;
+                    let mut r = vec![0.0; nu];
+                    let parts = cont.hb.residual_jacobian(&a, w, &mut r).expect("J");
+                    let mut r_omega_far = vec![0.0; nu];
+                    cont.hb
+                        .d_residual_d_omega_from(&a, w, &r, &mut r_omega_far)
+                        .expect("dR/dω");
+                    let sys_far = TangentSystem {
+                        parts: &parts,
+                        r_omega: &r_omega_far,
+                        row: &row,
+                        corner: sys_at.corner,
+                    };
+                    if let Some((z, zeta, _)) = cont.refine_tangent(&m, &sys_far) {
+                        // if it converged it solved the far system: check its residual
+                        let mut jz = vec![0.0; nu];
+                        cont.hb.apply_jacobian(&parts, &z, &mut jz);
+                        let res = jz
+                            .iter()
+                            .zip(&r_omega_far)
+                            .map(|(j, c)| (j + c * zeta).abs())
+                            .fold(0.0, f64::max);
+                        let size = jz.iter().map(|v| v.abs()).fold(0.0, f64::max);
+                        assert!(res <= 1e-6 * size.max(1e-300), "residual {res:e}");
+                    }
+                    far.omega = w;
+                    break;
+                }
+                StepOutcome::Accepted { .. } | StepOutcome::Rejected(_) => {}
+                StepOutcome::Finished(_) => break,
+            }
+        }
+        assert!(far.omega > 1.3, "the branch reaches past the resonance");
     }
 }

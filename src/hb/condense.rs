@@ -28,6 +28,7 @@ use faer::linalg::lu::partial_pivoting::{factor as lu_factor, solve as lu_solve}
 use faer::perm::PermRef;
 use faer::{MatMut, Par, get_global_parallelism};
 use rayon::prelude::*;
+use std::sync::Arc;
 use thiserror::Error;
 
 use super::residual::{HarmonicBalance, JacobianParts, fields};
@@ -123,11 +124,11 @@ impl LinearSolver {
         parts: &JacobianParts,
         border: Option<Border<'_>>,
     ) -> Result<Factorization, SolveError> {
-        let inner = if self.condense {
+        let inner = Arc::new(if self.condense {
             Factored::Condensed(Box::new(Condensed::new(hb, parts, border)?))
         } else {
             Factored::Full(full_lu(hb, parts, border))
-        };
+        });
         Ok(Factorization {
             inner,
             omega: parts.omega,
@@ -138,9 +139,12 @@ impl LinearSolver {
     }
 }
 
-/// A factored (bordered) Newton matrix (see [`LinearSolver::factor`]).
+/// A factored (bordered) Newton matrix (see [`LinearSolver::factor`]). Cloning shares
+/// the factors (they are never changed after the factorization) and copies only the
+/// border row and its replacement.
+#[derive(Clone)]
 pub struct Factorization {
-    inner: Factored,
+    inner: Arc<Factored>,
     omega: f64,
     n_unknowns: usize,
     /// The border row and corner the matrix was factored with.
@@ -152,6 +156,7 @@ pub struct Factorization {
 /// A replaced border row `(r', d')`, applied by Sherman–Morrison: the new matrix is
 /// `A' = A + e vᵀ` with `e` the border's unit vector and `v = (r' − r, d' − d)`, so
 /// `A'⁻¹ b = y − u (vᵀ y) / (1 + vᵀ u)` with `y = A⁻¹ b` and `u = A⁻¹ e`.
+#[derive(Clone)]
 struct RowUpdate {
     /// `u = A⁻¹ e`: unknowns, then the border component.
     u: Vec<f64>,
@@ -241,7 +246,7 @@ impl Factorization {
     fn solve_factored(&self, b: &[f64], e: f64) -> Result<(Vec<f64>, f64), SolveError> {
         let nu = self.n_unknowns;
         let bordered = self.bordered();
-        match &self.inner {
+        match self.inner.as_ref() {
             Factored::Full(lu) => {
                 let m = nu + usize::from(bordered);
                 let mut rhs = Mat::<f64>::zeros(m, 1);

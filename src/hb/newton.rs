@@ -233,6 +233,11 @@ pub struct Converged {
     pub stats: NewtonStats,
     /// `∂R/∂A` and `R` at `(a, omega)`.
     pub jacobian: Option<(JacobianParts, Vec<f64>)>,
+    /// The matrix the last chord iterations solved with (bordered with the arclength
+    /// row, when there is one), when they led to the solution: the Jacobian of an earlier
+    /// iterate. A tangent at the solution can be refined with it instead of factoring
+    /// the Jacobian there (see [`crate::continuation`]).
+    pub matrix: Option<Factorization>,
 }
 
 /// [`solve_arclength`] whose first iteration, when `first` is given, solves with that
@@ -301,6 +306,7 @@ fn solve(
                     relative: meas.rel,
                 },
                 jacobian: parts.map(|p| (p, r)),
+                matrix: held,
             });
         }
         if it == opts.max_iterations {
