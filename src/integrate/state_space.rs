@@ -296,23 +296,39 @@ impl<'a> StateSpace<'a> {
     /// The pointwise derivative matrix
     /// `D = [[∂f/∂x, ∂f/∂v, ∂f/∂T], [∂g/∂x, ∂g/∂v, ∂g/∂T]]`, `(p+q) × (2p+q)`, into `out`.
     pub fn derivative_matrix(&self, derivs: &NonlinearEval, mut out: MatMut<'_, f64>) {
+        self.for_each_derivative(derivs, |i, j, v| out[(i, j)] = v);
+    }
+
+    /// The nonzero entries `(row, column, value)` of [`Self::derivative_matrix`], into
+    /// `out` (cleared first), ordered by row within each derivative block.
+    pub fn derivative_nonzeros(&self, derivs: &NonlinearEval, out: &mut Vec<(usize, usize, f64)>) {
+        out.clear();
+        self.for_each_derivative(derivs, |i, j, v| {
+            if v != 0.0 {
+                out.push((i, j, v));
+            }
+        });
+    }
+
+    /// Calls `put(row, column, value)` for every entry of [`Self::derivative_matrix`].
+    fn for_each_derivative(&self, derivs: &NonlinearEval, mut put: impl FnMut(usize, usize, f64)) {
         let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
         for i in 0..p {
             for j in 0..p {
-                out[(i, j)] = derivs.df_dx[i * p + j];
-                out[(i, p + j)] = derivs.df_dv[i * p + j];
+                put(i, j, derivs.df_dx[i * p + j]);
+                put(i, p + j, derivs.df_dv[i * p + j]);
             }
             for j in 0..q {
-                out[(i, 2 * p + j)] = derivs.df_dt[i * q + j];
+                put(i, 2 * p + j, derivs.df_dt[i * q + j]);
             }
         }
         for i in 0..q {
             for j in 0..p {
-                out[(p + i, j)] = derivs.dg_dx[i * p + j];
-                out[(p + i, p + j)] = derivs.dg_dv[i * p + j];
+                put(p + i, j, derivs.dg_dx[i * p + j]);
+                put(p + i, p + j, derivs.dg_dv[i * p + j]);
             }
             for j in 0..q {
-                out[(p + i, 2 * p + j)] = derivs.dg_dt[i * q + j];
+                put(p + i, 2 * p + j, derivs.dg_dt[i * q + j]);
             }
         }
     }
@@ -543,5 +559,24 @@ mod tests {
                 assert_eq!(t[(j, i)], want, "strided ({i}, {j})");
             }
         }
+        // the nonzero list: every nonzero entry once, in its place; zeros left out
+        d.df_dv.iter_mut().for_each(|v| *v = 0.0);
+        d.dg_dx[0] = 0.0;
+        space.derivative_matrix(&d, m.as_mut());
+        let mut nonzeros = Vec::new();
+        space.derivative_nonzeros(&d, &mut nonzeros);
+        let mut rebuilt = Mat::<f64>::zeros(r, g);
+        for &(i, j, v) in &nonzeros {
+            assert_ne!(v, 0.0, "({i}, {j}) listed with a zero");
+            assert_eq!(rebuilt[(i, j)], 0.0, "({i}, {j}) listed twice");
+            rebuilt[(i, j)] = v;
+        }
+        assert_eq!(rebuilt, m);
+        let zeros = (0..r)
+            .flat_map(|i| (0..g).map(move |j| (i, j)))
+            .filter(|&(i, j)| m[(i, j)] == 0.0)
+            .count();
+        assert_eq!(nonzeros.len() + zeros, r * g);
+        assert!(zeros >= p * p + 1, "the zeroed entries are left out");
     }
 }

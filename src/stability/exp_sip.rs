@@ -419,6 +419,11 @@ impl ExpSip {
     /// `G_k = [Σ_{i=1}^{N} Δⁱ/i! (D_k K)^{i−1}] D_k`, evaluated by Horner's scheme on
     /// `(p+q) × (p+q)` matrices. `k_mat` is `K` (Strang) or its weighted form
     /// ([`IntervalMap::Exponential`]).
+    ///
+    /// `D_k` is sparse (each bearing's force depends on its own rings' displacements and a
+    /// few temperatures, each heat source on its bearing's load: about 200 of the dual
+    /// rotor's 36 × 46 entries), so the two products with it, `D_k K` and `H D_k`, run over
+    /// its nonzeros; only the Horner products are dense.
     fn fluctuation_factors(
         &self,
         space: &StateSpace<'_>,
@@ -428,17 +433,20 @@ impl ExpSip {
     ) -> Vec<Mat<f64>> {
         use rayon::prelude::*;
         let (g, r) = space.low_rank_dims();
-        let factor = |bufs: &mut [Mat<f64>; 4], fl: &NonlinearEval| {
-            let [d_mat, y, h, tmp] = bufs;
-            space.derivative_matrix(fl, d_mat.as_mut());
-            matmul(
-                y.as_mut(),
-                Accum::Replace,
-                d_mat.as_ref(),
-                k_mat.as_ref(),
-                1.0,
-                Par::Seq,
-            );
+        let k_t = k_mat.transpose().to_owned();
+        let factor = |(bufs, nonzeros): &mut ([Mat<f64>; 4], Vec<(usize, usize, f64)>),
+                      fl: &NonlinearEval| {
+            let [y, y_t, h, tmp] = bufs;
+            space.derivative_nonzeros(fl, nonzeros);
+            // Y = D K over D's nonzeros, as Yᵀ = Kᵀ Dᵀ (contiguous columns of Kᵀ)
+            y_t.fill(0.0);
+            for &(i, j, v) in nonzeros.iter() {
+                let kj = column(&k_t, j);
+                for (yv, kv) in column_mut(y_t, i).iter_mut().zip(kj) {
+                    *yv += v * kv;
+                }
+            }
+            y.copy_from(y_t.transpose());
             // innermost Horner factor I + (Δ/N)·Y without a product by the identity
             let order = self.series_order;
             for j in 0..r {
@@ -465,24 +473,27 @@ impl ExpSip {
                 }
                 std::mem::swap(h, tmp);
             }
+            // G = Δ H D over D's nonzeros: column j of G gathers H's columns i
             let mut gk = Mat::<f64>::zeros(r, g);
-            matmul(
-                gk.as_mut(),
-                Accum::Replace,
-                h.as_ref(),
-                d_mat.as_ref(),
-                delta,
-                Par::Seq,
-            );
+            for &(i, j, v) in nonzeros.iter() {
+                let w = delta * v;
+                let hi = column(h, i);
+                for (gv, hv) in column_mut(&mut gk, j).iter_mut().zip(hi) {
+                    *gv += w * hv;
+                }
+            }
             gk
         };
         let buffers = || {
-            [
-                Mat::<f64>::zeros(r, g),
-                Mat::<f64>::zeros(r, r),
-                Mat::<f64>::zeros(r, r),
-                Mat::<f64>::zeros(r, r),
-            ]
+            (
+                [
+                    Mat::<f64>::zeros(r, r),
+                    Mat::<f64>::zeros(r, r),
+                    Mat::<f64>::zeros(r, r),
+                    Mat::<f64>::zeros(r, r),
+                ],
+                Vec::new(),
+            )
         };
         fluctuations
             .par_iter()
@@ -631,6 +642,18 @@ impl ExpSip {
         }
         prod
     }
+}
+
+/// Column `j` of an owned (column-major, contiguous) matrix as a slice.
+fn column(m: &Mat<f64>, j: usize) -> &[f64] {
+    let n = m.nrows();
+    &m.col_as_slice(j)[..n]
+}
+
+/// Column `j` of an owned matrix as a mutable slice.
+fn column_mut(m: &mut Mat<f64>, j: usize) -> &mut [f64] {
+    let n = m.nrows();
+    &mut m.col_as_slice_mut(j)[..n]
 }
 
 /// The columns `lo..hi` of `c0..c1` that fall in the diagonal block on rows (and
@@ -893,5 +916,48 @@ mod tests {
         assert!(clear_of_the_circle(&ext, &fine));
         // small multipliers never ask for refinement
         assert!(clear_of_the_circle(&[c(0.3, 0.0)], &[c(0.1, 0.0)]));
+    }
+
+    #[test]
+    fn sparse_fluctuation_factors_equal_the_dense_series() {
+        use crate::systems::chain::Chain;
+        let sys = Chain::new(5, 3);
+        let space = StateSpace::new(&sys, 0.9).expect("state space");
+        let (p, q) = (space.dofs().mech.len(), space.dofs().therm.len());
+        let (g, r) = space.low_rank_dims();
+        // a sparse fluctuation: a few entries of every block, one block left empty
+        let mut fl = NonlinearEval::new(p, q);
+        for (k, buf) in [&mut fl.df_dx, &mut fl.df_dt, &mut fl.dg_dx, &mut fl.dg_dt]
+            .into_iter()
+            .enumerate()
+        {
+            for (i, v) in buf.iter_mut().enumerate().filter(|(i, _)| i % 3 == k % 2) {
+                *v = 0.5 - 0.1 * k as f64 + 0.03 * i as f64;
+            }
+        }
+        let k_mat = Mat::from_fn(g, r, |i, j| ((i * r + j) as f64 * 0.37).sin());
+        let delta = 0.2;
+        for order in 1..=5 {
+            let sip = ExpSip {
+                series_order: order,
+                ..ExpSip::default()
+            };
+            let factors =
+                sip.fluctuation_factors(&space, std::slice::from_ref(&fl), delta, &k_mat);
+            // reference: Σ_{i=1}^{N} Δⁱ/i! (D K)^{i−1} D term by term, dense
+            let mut d = Mat::<f64>::zeros(r, g);
+            space.derivative_matrix(&fl, d.as_mut());
+            let dk = &d * &k_mat;
+            let mut power = Mat::<f64>::identity(r, r);
+            let mut want = Mat::<f64>::zeros(r, g);
+            let mut coeff = 1.0;
+            for i in 1..=order {
+                coeff *= delta / i as f64;
+                want += coeff * &power * &d;
+                power = &power * &dk;
+            }
+            let err = (&factors[0] - &want).norm_max();
+            assert!(err < 1e-13 * want.norm_max(), "order {order}: {err:e}");
+        }
     }
 }
