@@ -241,8 +241,9 @@ impl ExpSip {
             Some(rough) => rough,
             None => {
                 // Coarse means: each the average of two fine ones (a composite Gauss rule).
+                use rayon::prelude::*;
                 let coarse: Vec<NonlinearEval> = means
-                    .chunks_exact(2)
+                    .par_chunks_exact(2)
                     .map(|pair| {
                         let mut m = pair[0].clone();
                         m.clear();
@@ -337,8 +338,12 @@ impl ExpSip {
         delta: f64,
         omega: f64,
     ) -> Result<Mat<f64>, StabilityError> {
-        for m in &mut means {
-            axpy_derivs(m, -1.0, split.mean);
+        {
+            use rayon::prelude::*;
+            means
+                .par_iter_mut()
+                .with_min_len(64)
+                .for_each(|m| axpy_derivs(m, -1.0, split.mean));
         }
         let prod = match split.modal {
             Some(fields) => {
@@ -942,8 +947,7 @@ mod tests {
                 series_order: order,
                 ..ExpSip::default()
             };
-            let factors =
-                sip.fluctuation_factors(&space, std::slice::from_ref(&fl), delta, &k_mat);
+            let factors = sip.fluctuation_factors(&space, std::slice::from_ref(&fl), delta, &k_mat);
             // reference: Σ_{i=1}^{N} Δⁱ/i! (D K)^{i−1} D term by term, dense
             let mut d = Mat::<f64>::zeros(r, g);
             space.derivative_matrix(&fl, d.as_mut());
