@@ -439,8 +439,7 @@ impl ExpSip {
         use rayon::prelude::*;
         let (g, r) = space.low_rank_dims();
         let k_t = k_mat.transpose().to_owned();
-        let factor = |(bufs, nonzeros): &mut ([Mat<f64>; 4], Vec<(usize, usize, f64)>),
-                      fl: &NonlinearEval| {
+        let factor = |(bufs, nonzeros): &mut FactorBuffers, fl: &NonlinearEval| {
             let [y, y_t, h, tmp] = bufs;
             space.derivative_nonzeros(fl, nonzeros);
             // Y = D K over D's nonzeros, as Yᵀ = Kᵀ Dᵀ (contiguous columns of Kᵀ)
@@ -648,6 +647,10 @@ impl ExpSip {
         prod
     }
 }
+
+/// Per-thread scratch of [`ExpSip::fluctuation_factors`]: `Y`, `Yᵀ`, the Horner factor and
+/// its product, and the interval's derivative nonzeros `(row, column, value)`.
+type FactorBuffers = ([Mat<f64>; 4], Vec<(usize, usize, f64)>);
 
 /// Column `j` of an owned (column-major, contiguous) matrix as a slice.
 fn column(m: &Mat<f64>, j: usize) -> &[f64] {
