@@ -93,6 +93,41 @@ fn campaign_runs_resumes_shards_and_merges() {
 }
 
 #[test]
+fn an_interrupt_starts_no_further_run_and_keeps_earlier_recordings() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_campaign(dir.path());
+    let out = dir.path().join("out");
+    // Ctrl-C during run "a" (one run at a time): "a" stops where it is, "b" and "c" are
+    // never started.
+    let flag = Arc::new(AtomicBool::new(false));
+    let during_a = |name: &str, _: &tmrotor::sweep::Progress| {
+        if name == "a" {
+            flag.store(true, Ordering::Relaxed);
+        }
+    };
+    let m = campaign::run(&file, Some(1), None, Some(flag.clone()), &during_a).expect("run");
+    let status =
+        |m: &campaign::Manifest| m.runs.iter().map(|r| r.status.clone()).collect::<Vec<_>>();
+    assert_eq!(status(&m), ["interrupted", "pending", "pending"]);
+    assert!(out.join("a.mcap").exists());
+    assert!(!out.join("b.mcap").exists(), "b was started");
+    assert!(!out.join("c.mcap").exists(), "c was started");
+    let a_hash = sha256_file(&out.join("a.mcap")).expect("a recording");
+    // Interrupted again before anything starts: the manifest still describes a's
+    // recording, which is left as it was.
+    let m = campaign::run(&file, Some(1), None, Some(flag.clone()), &during_a).expect("rerun");
+    assert_eq!(status(&m), ["interrupted", "pending", "pending"]);
+    assert_eq!(m.runs[0].sha256, a_hash);
+    assert_eq!(sha256_file(&out.join("a.mcap")).expect("a"), a_hash);
+    // Without an interrupt everything completes.
+    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let m = campaign::run(&file, Some(1), None, None, &quiet).expect("resume");
+    assert_eq!(status(&m), ["completed", "completed", "completed"]);
+}
+
+#[test]
 fn campaign_file_errors_name_the_run() {
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("bad.toml");

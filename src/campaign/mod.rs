@@ -21,6 +21,9 @@
 //! * resumable: a run whose recording exists with the checksum the manifest recorded and a
 //!   `completed` status is skipped; anything else (missing, interrupted, failed, changed)
 //!   is run again;
+//! * interrupt (`interrupt` set, Ctrl-C on the command line): the runs under way stop and
+//!   record what they computed (`interrupted`), no further run starts; a run not started
+//!   keeps its earlier manifest entry (and recording), or is listed `pending`;
 //! * `shard = (i, n)` runs only the runs whose position `p` satisfies `p mod n = i`
 //!   (deterministic, so a cluster scheduler can split a campaign into `n` jobs), writing
 //!   `manifest-shard-i-of-n.toml`; [`merge_manifests`] joins the shard manifests;
@@ -298,10 +301,17 @@ pub fn run(
             let _ = write_manifest(&manifest_path, &m);
         }
     };
+    // After an interrupt no further run is started (it would only write an empty recording
+    // over whatever an earlier attempt left).
+    let interrupted = || {
+        interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+    };
     std::thread::scope(|scope| {
         for _ in 0..slots {
             scope.spawn(|| {
-                loop {
+                while !interrupted() {
                     let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                     let Some(r) = selected.get(k) else { break };
                     work(k, r);
@@ -309,7 +319,13 @@ pub fn run(
             });
         }
     });
-    let m = manifest.into_inner().unwrap_or_default();
+    let mut m = manifest.into_inner().unwrap_or_default();
+    // A run not started this time keeps what the manifest said of its recording before.
+    for entry in m.runs.iter_mut().filter(|e| e.status == "pending") {
+        if let Some(prev) = previous.runs.iter().find(|p| p.name == entry.name) {
+            *entry = prev.clone();
+        }
+    }
     write_manifest(&manifest_path, &m)?;
     Ok(m)
 }
