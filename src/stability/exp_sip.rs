@@ -934,30 +934,14 @@ impl SlowState {
 
     /// Starts a block from the field's rows `t`.
     fn restart(&mut self, slow: &SlowField, gather: &Mat<f64>, t: MatRef<'_, f64>) {
-        matmul(
-            self.y.as_mut(),
-            Accum::Replace,
-            gather.as_ref(),
-            t,
-            1.0,
-            Par::Seq,
-        );
-        matmul(
-            self.a1.as_mut(),
-            Accum::Replace,
-            slow.sn.as_ref(),
-            t,
-            1.0,
-            Par::Seq,
-        );
-        matmul(
-            self.a2.as_mut(),
-            Accum::Replace,
-            slow.sn2.as_ref(),
-            t,
-            1.0,
-            Par::Seq,
-        );
+        // y = S̃ t, a₁ = S̃N t, a₂ = S̃N² t
+        for (out, by) in [
+            (&mut self.y, gather),
+            (&mut self.a1, &slow.sn),
+            (&mut self.a2, &slow.sn2),
+        ] {
+            matmul(out.as_mut(), Accum::Replace, by.as_ref(), t, 1.0, Par::Seq);
+        }
         self.stack.fill(0.0);
         self.v.fill(0.0);
         self.n = 0;
