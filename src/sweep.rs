@@ -278,11 +278,17 @@ impl GivingUp {
     }
 }
 
-impl StabilityMethod for GivingUp {
-    fn multipliers(
+impl GivingUp {
+    /// Runs `evaluate` with the inner method unless it has given up; a setting error
+    /// makes it give up for the rest of the sweep.
+    fn guarded(
         &self,
-        system: &dyn crate::system::System,
-        orbit: &dyn crate::system::PeriodicOrbit,
+        evaluate: impl FnOnce(
+            &dyn StabilityMethod,
+        ) -> Result<
+            crate::stability::FloquetResult,
+            crate::stability::StabilityError,
+        >,
     ) -> Result<crate::stability::FloquetResult, crate::stability::StabilityError> {
         if let Some(r) = self.reason() {
             return Err(crate::stability::StabilityError::Setting {
@@ -302,13 +308,31 @@ impl StabilityMethod for GivingUp {
                 reason: "the stability method could not be set up",
             });
         };
-        let out = inner.multipliers(system, orbit);
+        let out = evaluate(inner.as_ref());
         if let Err(e @ crate::stability::StabilityError::Setting { .. }) = &out {
             if let Ok(mut g) = self.reason.lock() {
                 *g = Some(e.to_string());
             }
         }
         out
+    }
+}
+
+impl StabilityMethod for GivingUp {
+    fn multipliers(
+        &self,
+        system: &dyn crate::system::System,
+        orbit: &dyn crate::system::PeriodicOrbit,
+    ) -> Result<crate::stability::FloquetResult, crate::stability::StabilityError> {
+        self.guarded(|m| m.multipliers(system, orbit))
+    }
+
+    fn search_multipliers(
+        &self,
+        system: &dyn crate::system::System,
+        orbit: &dyn crate::system::PeriodicOrbit,
+    ) -> Result<crate::stability::FloquetResult, crate::stability::StabilityError> {
+        self.guarded(|m| m.search_multipliers(system, orbit))
     }
 }
 

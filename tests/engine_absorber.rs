@@ -7,10 +7,11 @@
 mod engine_support;
 
 use engine_support::{VariationalFloquet, rk4};
+use num_complex::Complex64;
 use tmrotor::continuation::{Branch, Continuation, ContinuationOptions};
 use tmrotor::hb::{Basis, HarmonicBalance};
-use tmrotor::stability::BifurcationKind;
-use tmrotor::system::PeriodicOrbit;
+use tmrotor::stability::{BifurcationKind, FloquetResult, StabilityError, StabilityMethod};
+use tmrotor::system::{PeriodicOrbit, System};
 use tmrotor::systems::absorber::Absorber;
 
 fn trace() -> Branch {
@@ -150,5 +151,79 @@ fn sip_stability_in_the_continuation_locates_the_same_bifurcations() {
         assert_eq!(a.bifurcation, b.bifurcation);
         let (wa, wb) = (a.solution.omega, b.solution.omega);
         assert!((wa - wb).abs() < 1e-5 * wb, "{wa} vs {wb}");
+    }
+}
+
+/// The absorber's multipliers with one more, just below +1: the multiplier of a slow
+/// thermal mode, `e^{−P/τ}` with a time constant of minutes against a period of
+/// milliseconds, as the coupled rotor has dozens of.
+struct WithSlowMode<M>(M);
+
+impl<M: StabilityMethod> StabilityMethod for WithSlowMode<M> {
+    fn multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError> {
+        let mut f = self.0.multipliers(system, orbit)?;
+        f.multipliers.push(Complex64::new(1.0 - 1e-5, 0.0));
+        Ok(FloquetResult::new(f.multipliers))
+    }
+}
+
+#[test]
+fn a_slow_multiplier_below_one_does_not_stop_the_crossing_search() {
+    // With the modulus tolerance of a sweep, the search for a Neimark–Sacker point must
+    // follow the crossing pair, not the largest multiplier: on the stable side that is
+    // the slow one at 1 − 1e-5, already within the tolerance of the circle, and a search
+    // that ranked all multipliers stopped at its first trial with the pair far inside.
+    let sys = Absorber::default();
+    let basis = Basis::integer(7).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let opts = ContinuationOptions {
+        bifurcation_tol_modulus: 1e-4,
+        ..ContinuationOptions::new(0.8, 1.4)
+    };
+    let floquet = WithSlowMode(VariationalFloquet { steps: 400 });
+    let mut cont = Continuation::new(hb, opts, Some(&floquet)).expect("continuation");
+    let branch = cont.run(|_| {}).expect("run");
+    let ns: Vec<_> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker))
+        .collect();
+    assert_eq!(ns.len(), 2, "Neimark–Sacker points: {}", ns.len());
+    let reference = trace();
+    for b in &ns {
+        let f = b.stability.as_ref().expect("multipliers");
+        let pair = f
+            .multipliers
+            .iter()
+            .filter(|m| m.im.abs() > 0.05 * m.norm())
+            .min_by(|a, c| (a.norm() - 1.0).abs().total_cmp(&(c.norm() - 1.0).abs()))
+            .expect("a complex pair");
+        assert!(
+            (pair.norm() - 1.0).abs() <= 1e-4 + 1e-9,
+            "ω = {}: closest pair |μ| = {}",
+            b.solution.omega,
+            pair.norm()
+        );
+        // and the point is the one found without the slow multiplier
+        let w_ref = reference
+            .bifurcations
+            .iter()
+            .filter(|r| r.bifurcation == Some(BifurcationKind::NeimarkSacker))
+            .map(|r| r.solution.omega)
+            .min_by(|x, y| {
+                (x - b.solution.omega)
+                    .abs()
+                    .total_cmp(&(y - b.solution.omega).abs())
+            })
+            .expect("reference NS");
+        assert!(
+            (b.solution.omega - w_ref).abs() < 1e-4 * w_ref,
+            "ω = {} against {w_ref}",
+            b.solution.omega
+        );
     }
 }

@@ -59,7 +59,13 @@
 //!   pair or a multiplier through −1, the change is located by a safeguarded regula falsi
 //!   on the modulus of the crossing multiplier, until the bracket is shorter than
 //!   `bifurcation_tol_arclength` or that modulus is within `bifurcation_tol_modulus` of
-//!   the circle. One such change per step is located (the first along the step).
+//!   the circle. One such change per step is located (the first along the step). The
+//!   crossing multiplier is ranked among the multipliers of its kind only (complex pairs,
+//!   or negative real ones), so that slow thermal multipliers just below +1 do not stand
+//!   in for it; the trials use the method's search evaluation
+//!   ([`StabilityMethod::search_multipliers`]: for [`crate::stability::ExpSip`] the
+//!   product without its refinement near the circle), and the located point carries
+//!   those multipliers.
 //!
 //! Solutions at given speeds (a truncation study at fixed ω, say): watch consecutive
 //! accepted points with [`crosses`] and re-solve on the speed with
@@ -617,18 +623,6 @@ impl<'a> Continuation<'a> {
         (a.min(b), a.max(b))
     }
 
-    fn make_point(
-        &self,
-        a: &[f64],
-        omega: f64,
-        stats: &newton::NewtonStats,
-        arclength: f64,
-    ) -> BranchPoint {
-        let mut point = self.bare_point(a, omega, stats, arclength);
-        (point.stability, point.stability_error) = self.assess(&point.solution);
-        point
-    }
-
     /// The point without its stability.
     fn bare_point(
         &self,
@@ -649,9 +643,29 @@ impl<'a> Continuation<'a> {
 
     /// The stability of `solution`, or the method's error message.
     fn assess(&self, solution: &HbSolution) -> (Option<FloquetResult>, Option<String>) {
+        self.assess_with(solution, |m, system, orbit| m.multipliers(system, orbit))
+    }
+
+    /// As [`Self::assess`], with the method's evaluation for a bifurcation search
+    /// ([`StabilityMethod::search_multipliers`]).
+    fn assess_for_search(&self, solution: &HbSolution) -> (Option<FloquetResult>, Option<String>) {
+        self.assess_with(solution, |m, system, orbit| {
+            m.search_multipliers(system, orbit)
+        })
+    }
+
+    fn assess_with(
+        &self,
+        solution: &HbSolution,
+        evaluate: impl FnOnce(
+            &dyn StabilityMethod,
+            &dyn crate::system::System,
+            &HbSolution,
+        ) -> Result<FloquetResult, crate::stability::StabilityError>,
+    ) -> (Option<FloquetResult>, Option<String>) {
         match self.stability {
             None => (None, None),
-            Some(m) => match m.multipliers(self.hb.system(), solution) {
+            Some(m) => match evaluate(m, self.hb.system(), solution) {
                 Ok(f) => (Some(f), None),
                 Err(e) => (None, Some(e.to_string())),
             },
@@ -1266,7 +1280,8 @@ impl<'a> Continuation<'a> {
         StepOutcome::Rejected(reason)
     }
 
-    /// Bisection in arclength between `cur` (σ = 0) and the point at σ = `span`.
+    /// Regula falsi in arclength between `cur` (σ = 0) and the point at σ = `span` (see
+    /// the module docs).
     fn locate(
         &self,
         cur: &Current,
@@ -1275,15 +1290,36 @@ impl<'a> Continuation<'a> {
         f_b: &FloquetResult,
         index: usize,
     ) -> Option<BranchPoint> {
-        let n_a = f_a.unstable_count();
-        // The crossing multiplier: the k-th largest modulus, k = min(n_a, n_b) + 1, is
-        // inside the circle at one end and outside at the other; g(s) = |μ_(k)(s)| − (1 +
-        // tol) is continuous in the arclength s and changes sign on the bracket.
-        let k = n_a.min(f_b.unstable_count());
-        let g = |f: &FloquetResult| {
-            let mut m: Vec<f64> = f.multipliers.iter().map(|c| c.norm()).collect();
+        // The crossing multiplier is followed among the multipliers of its kind (complex
+        // pairs for a Neimark–Sacker point, negative real ones for a period doubling): the
+        // k-th largest modulus of that kind, k = min(n_a, n_b) counted in that kind, is
+        // inside the circle at one end and outside at the other, and g(s) = |μ_(k)(s)| −
+        // (1 + tol) is continuous in the arclength s and changes sign on the bracket.
+        // Among all multipliers the k-th largest would be a slow thermal one just below +1
+        // for as long as the crossing multiplier is smaller: g would sit within 1e-5 of
+        // zero on that side, and the modulus tolerance would end the search at its first
+        // trial, wherever that fell. Only when the two ends hold the same number of
+        // outside multipliers of that kind (a pair that turned real as it crossed, say) are
+        // all multipliers ranked.
+        let kind = classify_crossing(f_a, f_b)?;
+        let moduli = |f: &FloquetResult, only: Option<BifurcationKind>| {
+            let mut m: Vec<f64> = f
+                .multipliers
+                .iter()
+                .filter(|c| only.is_none_or(|k| BifurcationKind::of_multiplier(**c) == k))
+                .map(|c| c.norm())
+                .collect();
             m.sort_by(|x, y| y.total_cmp(x));
-            m.get(k).map_or(0.0, |v| v - (1.0 + UNIT_CIRCLE_TOL))
+            m
+        };
+        let outside = |m: &[f64]| m.iter().filter(|v| **v > 1.0 + UNIT_CIRCLE_TOL).count();
+        let only = Some(kind)
+            .filter(|&k| outside(&moduli(f_a, Some(k))) != outside(&moduli(f_b, Some(k))));
+        let n_a = outside(&moduli(f_a, only));
+        let k = n_a.min(outside(&moduli(f_b, only)));
+        // (a side with fewer multipliers of that kind counts the missing ones as 0)
+        let g = |f: &FloquetResult| {
+            moduli(f, only).get(k).copied().unwrap_or(0.0) - (1.0 + UNIT_CIRCLE_TOL)
         };
         let mut bracket = Bracket::new(span, g(f_a), g(f_b));
         let (mut f_lo, mut f_hi) = (f_a.clone(), f_b.clone());
@@ -1294,10 +1330,17 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
-            let p = self.make_point(&a, w, &st, cur.arclength + mid);
+            let mut p = self.bare_point(&a, w, &st, cur.arclength + mid);
+            (p.stability, p.stability_error) = self.assess_for_search(&p.solution);
             let Some(fm) = p.stability.clone() else { break };
             let g_mid = g(&fm);
-            let lo_side = fm.unstable_count() == n_a;
+            let lo_side = outside(&moduli(&fm, only)) == n_a;
+            if std::env::var_os("TMR_DBG").is_some() {
+                eprintln!(
+                    "DBG locate {kind:?} w {w:.4} g {g_mid:.3e} width {:.2e}",
+                    bracket.width()
+                );
+            }
             bracket.narrow(mid, g_mid, lo_side);
             if lo_side {
                 f_lo = fm;

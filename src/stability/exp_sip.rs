@@ -1131,6 +1131,19 @@ impl StabilityMethod for ExpSip {
             n_k *= 2;
         }
     }
+
+    /// The (extrapolated) product on [`ExpSip::intervals`], without refinement.
+    fn search_multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError> {
+        let unrefined = ExpSip {
+            max_intervals: self.intervals,
+            ..*self
+        };
+        unrefined.multipliers(system, orbit)
+    }
 }
 
 /// True when every multiplier of `mu` (extrapolated) whose modulus is above 1/2 lies

@@ -131,6 +131,20 @@ impl BifurcationKind {
             Self::NeimarkSacker => "NS",
         }
     }
+
+    /// The kind of crossing a multiplier `m` makes when it leaves the unit circle where it
+    /// lies: a complex pair (imaginary part above `0.05·|μ|`) makes a Neimark–Sacker
+    /// point, a real multiplier a saddle-node on the positive and a period doubling on the
+    /// negative side (the criterion of [`classify_crossing`]).
+    pub fn of_multiplier(m: Complex64) -> Self {
+        if m.im.abs() > 0.05 * m.norm() {
+            Self::NeimarkSacker
+        } else if m.re > 0.0 {
+            Self::SaddleNode
+        } else {
+            Self::PeriodDoubling
+        }
+    }
 }
 
 /// Errors of the stability layer.
@@ -179,6 +193,20 @@ pub trait StabilityMethod: Sync {
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
     ) -> Result<FloquetResult, StabilityError>;
+
+    /// Multipliers for the trials of a bifurcation search, which by design come ever
+    /// closer to the unit circle. A method that refines its accuracy near the circle
+    /// ([`ExpSip`]) skips the refinement here: the trials then see one smooth function of
+    /// the branch (a refinement level that changes between neighbouring trials makes the
+    /// crossing multiplier jump by the size of its error), and no trial costs the finest
+    /// product. Default: [`Self::multipliers`].
+    fn search_multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError> {
+        self.multipliers(system, orbit)
+    }
 }
 
 /// Classifies the stability change between two neighbouring points of a branch from
@@ -200,13 +228,7 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
         .iter()
         .filter(|m| m.norm() > 1.0 + UNIT_CIRCLE_TOL)
         .min_by(|a, b| a.norm().total_cmp(&b.norm()))?;
-    Some(if crossing.im.abs() > 0.05 * crossing.norm() {
-        BifurcationKind::NeimarkSacker
-    } else if crossing.re > 0.0 {
-        BifurcationKind::SaddleNode
-    } else {
-        BifurcationKind::PeriodDoubling
-    })
+    Some(BifurcationKind::of_multiplier(*crossing))
 }
 
 #[cfg(test)]

@@ -449,4 +449,14 @@ impl<M: StabilityMethod> StabilityMethod for Reduced<M> {
         let view = ReducedOrbit::new(orbit, &self.reduction);
         self.method.multipliers(&reduced, &view)
     }
+
+    fn search_multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError> {
+        let reduced = self.reduction.system(system)?;
+        let view = ReducedOrbit::new(orbit, &self.reduction);
+        self.method.search_multipliers(&reduced, &view)
+    }
 }
