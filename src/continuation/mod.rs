@@ -55,14 +55,17 @@
 //!   fold (a branch point, not generic in one parameter, or that same lag) is left to the
 //!   points' stable flags.
 //! * **Neimark–Sacker and period doubling.** When the number of multipliers outside the
-//!   unit circle differs between neighbours and [`classify_crossing`] calls it a complex
-//!   pair or a multiplier through −1, the change is located by a safeguarded regula falsi
-//!   on the modulus of the crossing multiplier, until the bracket is shorter than
-//!   `bifurcation_tol_arclength` or that modulus is within `bifurcation_tol_modulus` of
-//!   the circle. One such change per step is located (the first along the step). The
-//!   crossing multiplier is ranked among the multipliers of its kind only (complex pairs,
-//!   or negative real ones), so that slow thermal multipliers just below +1 do not stand
-//!   in for it; the trials use the method's search evaluation
+//!   unit circle differs between neighbours, each kind whose own count differs (complex
+//!   pairs, negative real multipliers: [`BifurcationKind::of_multiplier`]) is located by
+//!   a safeguarded regula falsi on the modulus of the crossing multiplier, until the
+//!   bracket is shorter than `bifurcation_tol_arclength` or that modulus is within
+//!   `bifurcation_tol_modulus` of the circle. Counted per kind, a pair crossing in the
+//!   same step as a real multiplier through +1 at a fold is not hidden by it; the crossing
+//!   multiplier is ranked among the multipliers of its kind only, so that slow thermal
+//!   multipliers just below +1 do not stand in for it. A search that does not bring it
+//!   within `CROSSING_MODULUS_TOL` (0.02) of the circle found a jump of the count (a
+//!   collision of two real multipliers into a pair), not a crossing, and reports
+//!   nothing. The trials use the method's search evaluation
 //!   ([`StabilityMethod::search_multipliers`]: for [`crate::stability::ExpSip`] the
 //!   product without its refinement near the circle), and the located point carries
 //!   those multipliers.
@@ -83,9 +86,7 @@ use crate::hb::{
     Factorization, HarmonicBalance, HbError, HbSolution, JacobianParts, LinearSolver, SolveError,
     condense::{Border, dot},
 };
-use crate::stability::{
-    BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL, classify_crossing,
-};
+use crate::stability::{BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL};
 
 /// A fold is located until the ω-component of the unit tangent is this fraction of its
 /// larger value at the two points around it: near a fold `ω(σ) ≈ ω_f − κ(σ − σ_f)²/2`,
@@ -97,6 +98,35 @@ const FOLD_SLOPE_TOL: f64 = 1e-2;
 /// against both tangents by more than this fraction of the step (scaled units), so that
 /// rounding on a branch that runs at constant ω cannot halve the step away.
 const FOLD_PAIR_MIN_CHANGE: f64 = 1e-6;
+
+/// A located Neimark–Sacker or period-doubling point is reported only when the search
+/// brought the crossing multiplier this close to the unit circle. A count of one kind
+/// can also change by a jump: where a real pair collides into a complex one (or the
+/// reverse) next to a fold, the multipliers of that kind appear or vanish with a modulus
+/// far from 1, and the search then closes in on the jump, not on a crossing. On the
+/// default sweep (step caps 0.15 and 0.25) the ten crossings end within 3.3e-4 of the
+/// circle and the one jump (589.5 rad/s, at a fold) no closer than 0.10.
+const CROSSING_MODULUS_TOL: f64 = 0.02;
+
+/// Moduli of the multipliers of `kind` ([`BifurcationKind::of_multiplier`]), largest first.
+fn moduli_of_kind(f: &FloquetResult, kind: BifurcationKind) -> Vec<f64> {
+    let mut m: Vec<f64> = f
+        .multipliers
+        .iter()
+        .filter(|c| BifurcationKind::of_multiplier(**c) == kind)
+        .map(|c| c.norm())
+        .collect();
+    m.sort_by(|x, y| y.total_cmp(x));
+    m
+}
+
+/// How many multipliers of `kind` lie outside the unit circle.
+fn outside_of_kind(f: &FloquetResult, kind: BifurcationKind) -> usize {
+    moduli_of_kind(f, kind)
+        .iter()
+        .filter(|v| **v > 1.0 + UNIT_CIRCLE_TOL)
+        .count()
+}
 
 /// A tangent refined with a nearby iterate's matrix ([`Continuation::refine_tangent`]) is
 /// taken when a correction falls below this fraction of it (scaled units). The tangent's
@@ -1033,16 +1063,18 @@ impl<'a> Continuation<'a> {
         let (Some(fa), Some(fb)) = (&from.stability, &to.stability) else {
             return found;
         };
-        let multiplier_change = fa.unstable_count() != fb.unstable_count()
-            && !matches!(
-                classify_crossing(fa, fb),
-                Some(BifurcationKind::SaddleNode) | None
-            );
-        if multiplier_change {
-            found.extend(
-                self.locate(from, fa, span, fb, index)
-                    .filter(|p| p.bifurcation != Some(BifurcationKind::SaddleNode)),
-            );
+        // each kind whose count outside the circle changed, when the total changed too (a
+        // pair outside that turns into two real multipliers outside changes the kinds'
+        // counts, not the stability); a real multiplier through +1 is the fold's
+        if fa.unstable_count() != fb.unstable_count() {
+            for kind in [
+                BifurcationKind::NeimarkSacker,
+                BifurcationKind::PeriodDoubling,
+            ] {
+                if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
+                    found.extend(self.locate(from, fa, span, fb, index, kind));
+                }
+            }
         }
         found.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
         found
@@ -1280,8 +1312,10 @@ impl<'a> Continuation<'a> {
         StepOutcome::Rejected(reason)
     }
 
-    /// Regula falsi in arclength between `cur` (σ = 0) and the point at σ = `span` (see
-    /// the module docs).
+    /// Regula falsi in arclength between `cur` (σ = 0) and the point at σ = `span` for
+    /// the crossing of a multiplier of `kind` (see the module docs); `None` when the
+    /// count of that kind changes by a jump rather than a crossing (see
+    /// [`CROSSING_MODULUS_TOL`]).
     fn locate(
         &self,
         cur: &Current,
@@ -1289,41 +1323,25 @@ impl<'a> Continuation<'a> {
         span: f64,
         f_b: &FloquetResult,
         index: usize,
+        kind: BifurcationKind,
     ) -> Option<BranchPoint> {
         // The crossing multiplier is followed among the multipliers of its kind (complex
         // pairs for a Neimark–Sacker point, negative real ones for a period doubling): the
         // k-th largest modulus of that kind, k = min(n_a, n_b) counted in that kind, is
         // inside the circle at one end and outside at the other, and g(s) = |μ_(k)(s)| −
-        // (1 + tol) is continuous in the arclength s and changes sign on the bracket.
-        // Among all multipliers the k-th largest would be a slow thermal one just below +1
-        // for as long as the crossing multiplier is smaller: g would sit within 1e-5 of
-        // zero on that side, and the modulus tolerance would end the search at its first
-        // trial, wherever that fell. Only when the two ends hold the same number of
-        // outside multipliers of that kind (a pair that turned real as it crossed, say) are
-        // all multipliers ranked.
-        let kind = classify_crossing(f_a, f_b)?;
-        let moduli = |f: &FloquetResult, only: Option<BifurcationKind>| {
-            let mut m: Vec<f64> = f
-                .multipliers
-                .iter()
-                .filter(|c| only.is_none_or(|k| BifurcationKind::of_multiplier(**c) == k))
-                .map(|c| c.norm())
-                .collect();
-            m.sort_by(|x, y| y.total_cmp(x));
-            m
-        };
-        let outside = |m: &[f64]| m.iter().filter(|v| **v > 1.0 + UNIT_CIRCLE_TOL).count();
-        let only = Some(kind)
-            .filter(|&k| outside(&moduli(f_a, Some(k))) != outside(&moduli(f_b, Some(k))));
-        let n_a = outside(&moduli(f_a, only));
-        let k = n_a.min(outside(&moduli(f_b, only)));
+        // (1 + tol) changes sign on the bracket. Among all multipliers the k-th largest
+        // would be a slow thermal one just below +1 for as long as the crossing multiplier
+        // is smaller: g would sit within 1e-5 of zero on that side, and the modulus
+        // tolerance would end the search at its first trial, wherever that fell.
+        let n_a = outside_of_kind(f_a, kind);
+        let k = n_a.min(outside_of_kind(f_b, kind));
         // (a side with fewer multipliers of that kind counts the missing ones as 0)
         let g = |f: &FloquetResult| {
-            moduli(f, only).get(k).copied().unwrap_or(0.0) - (1.0 + UNIT_CIRCLE_TOL)
+            moduli_of_kind(f, kind).get(k).copied().unwrap_or(0.0) - (1.0 + UNIT_CIRCLE_TOL)
         };
         let mut bracket = Bracket::new(span, g(f_a), g(f_b));
-        let (mut f_lo, mut f_hi) = (f_a.clone(), f_b.clone());
-        let mut best: Option<BranchPoint> = None;
+        // the trial closest to the circle
+        let mut best: Option<(f64, BranchPoint)> = None;
         for _ in 0..self.opts.max_bisections {
             // kept at least a tenth of the bracket from either end
             let Some((mid, c)) = self.bracket_trial(cur, &bracket, 0.1) else {
@@ -1332,29 +1350,26 @@ impl<'a> Continuation<'a> {
             let (a, w, st) = (c.a, c.omega, c.stats);
             let mut p = self.bare_point(&a, w, &st, cur.arclength + mid);
             (p.stability, p.stability_error) = self.assess_for_search(&p.solution);
-            let Some(fm) = p.stability.clone() else { break };
-            let g_mid = g(&fm);
-            let lo_side = outside(&moduli(&fm, only)) == n_a;
-            if std::env::var_os("TMR_DBG").is_some() {
-                eprintln!(
-                    "DBG locate {kind:?} w {w:.4} g {g_mid:.3e} width {:.2e}",
-                    bracket.width()
-                );
+            let Some(fm) = p.stability.as_ref() else {
+                break;
+            };
+            let g_mid = g(fm);
+            bracket.narrow(mid, g_mid, outside_of_kind(fm, kind) == n_a);
+            if best
+                .as_ref()
+                .is_none_or(|(g_best, _)| g_mid.abs() < g_best.abs())
+            {
+                best = Some((g_mid, p));
             }
-            bracket.narrow(mid, g_mid, lo_side);
-            if lo_side {
-                f_lo = fm;
-            } else {
-                f_hi = fm;
-            }
-            best = Some(p);
             // the crossing is found to the accuracy the multipliers themselves have
             if g_mid.abs() <= self.opts.bifurcation_tol_modulus {
                 break;
             }
         }
-        let kind = classify_crossing(&f_lo, &f_hi)?;
-        let mut p = best?;
+        let (g_best, mut p) = best?;
+        if g_best.abs() > CROSSING_MODULUS_TOL {
+            return None;
+        }
         p.bifurcation = Some(kind);
         p.index = index;
         Some(p)
@@ -1453,6 +1468,43 @@ impl<'a> Continuation<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use num_complex::Complex64;
+
+    #[test]
+    fn a_pair_crossing_beside_a_fold_is_seen_in_its_own_kind() {
+        // From the default sweep next to the fold at 592.16 rad/s: a complex pair outside
+        // at one point; at the next it is back inside while three real multipliers have
+        // left through +1 (the fold's and two slow ones). Ranked together, the smallest
+        // outside multiplier is real and positive, and the step reads as a fold only.
+        let c = |re: f64, im: f64| Complex64::new(re, im);
+        let pair = FloquetResult::new(vec![
+            c(0.85, 0.62),
+            c(0.85, -0.62),
+            c(0.9958, 0.0),
+            c(-0.3, 0.0),
+        ]);
+        let reals = FloquetResult::new(vec![
+            c(0.5, 0.4),
+            c(0.5, -0.4),
+            c(1.058, 0.0),
+            c(1.0115, 0.0),
+            c(1.0013, 0.0),
+            c(-0.3, 0.0),
+        ]);
+        assert_eq!(
+            crate::stability::classify_crossing(&pair, &reals),
+            Some(BifurcationKind::SaddleNode)
+        );
+        let ns = BifurcationKind::NeimarkSacker;
+        assert_eq!(outside_of_kind(&pair, ns), 2);
+        assert_eq!(outside_of_kind(&reals, ns), 0);
+        let pd = BifurcationKind::PeriodDoubling;
+        assert_eq!(outside_of_kind(&pair, pd), outside_of_kind(&reals, pd));
+        // the pair's moduli, largest first, without the real multiplier near +1
+        let m = moduli_of_kind(&pair, ns);
+        assert_eq!(m.len(), 2);
+        assert!((m[0] - c(0.85, 0.62).norm()).abs() < 1e-15);
+    }
 
     /// Points on a circle of radius 1 in the (x₀, x₁) plane, `n` per turn, for `turns`
     /// turns (the radius shrinking by `shrink` per turn).
