@@ -331,8 +331,9 @@ impl StabilityMethod for GivingUp {
         &self,
         system: &dyn crate::system::System,
         orbit: &dyn crate::system::PeriodicOrbit,
+        ends: [&crate::stability::FloquetResult; 2],
     ) -> Result<crate::stability::FloquetResult, crate::stability::StabilityError> {
-        self.guarded(|m| m.search_multipliers(system, orbit))
+        self.guarded(|m| m.search_multipliers(system, orbit, ends))
     }
 }
 

@@ -67,8 +67,8 @@
 //!   collision of two real multipliers into a pair), not a crossing, and reports
 //!   nothing. The trials use the method's search evaluation
 //!   ([`StabilityMethod::search_multipliers`]: for [`crate::stability::ExpSip`] the
-//!   product without its refinement near the circle), and the located point carries
-//!   those multipliers.
+//!   product on the intervals of the finer end, without further refinement), and the
+//!   located point carries those multipliers.
 //!
 //! Solutions at given speeds (a truncation study at fixed ω, say): watch consecutive
 //! accepted points with [`crosses`] and re-solve on the speed with
@@ -677,10 +677,14 @@ impl<'a> Continuation<'a> {
     }
 
     /// As [`Self::assess`], with the method's evaluation for a bifurcation search
-    /// ([`StabilityMethod::search_multipliers`]).
-    fn assess_for_search(&self, solution: &HbSolution) -> (Option<FloquetResult>, Option<String>) {
+    /// between two points with results `ends` ([`StabilityMethod::search_multipliers`]).
+    fn assess_for_search(
+        &self,
+        solution: &HbSolution,
+        ends: [&FloquetResult; 2],
+    ) -> (Option<FloquetResult>, Option<String>) {
         self.assess_with(solution, |m, system, orbit| {
-            m.search_multipliers(system, orbit)
+            m.search_multipliers(system, orbit, ends)
         })
     }
 
@@ -1349,7 +1353,7 @@ impl<'a> Continuation<'a> {
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
             let mut p = self.bare_point(&a, w, &st, cur.arclength + mid);
-            (p.stability, p.stability_error) = self.assess_for_search(&p.solution);
+            (p.stability, p.stability_error) = self.assess_for_search(&p.solution, [f_a, f_b]);
             let Some(fm) = p.stability.as_ref() else {
                 break;
             };

@@ -1124,7 +1124,7 @@ impl StabilityMethod for ExpSip {
             let (mu, mu_fine) = (mu?, mu_fine?);
             let refine = mu_fine.is_some_and(|mu_fine| !clear_of_the_circle(&mu, &mu_fine));
             if !refine {
-                return Ok(FloquetResult::new(mu));
+                return Ok(FloquetResult::new(mu).with_intervals(n_k));
             }
             // this level's plain product is the next level's coarse one
             coarse = fine;
@@ -1132,17 +1132,24 @@ impl StabilityMethod for ExpSip {
         }
     }
 
-    /// The (extrapolated) product on [`ExpSip::intervals`], without refinement.
+    /// The (extrapolated) product on the intervals of the finer end (at least
+    /// [`ExpSip::intervals`]), without refinement.
     fn search_multipliers(
         &self,
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
+        ends: [&FloquetResult; 2],
     ) -> Result<FloquetResult, StabilityError> {
-        let unrefined = ExpSip {
-            max_intervals: self.intervals,
+        let n = ends
+            .iter()
+            .filter_map(|f| f.intervals)
+            .fold(self.intervals, usize::max);
+        let fixed = ExpSip {
+            intervals: n,
+            max_intervals: n,
             ..*self
         };
-        unrefined.multipliers(system, orbit)
+        fixed.multipliers(system, orbit)
     }
 }
 

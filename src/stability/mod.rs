@@ -60,6 +60,9 @@ pub struct FloquetResult {
     /// True when every multiplier lies inside the unit circle (within the method's
     /// tolerance, see [`FloquetResult::unstable_count`]).
     pub stable: bool,
+    /// Intervals per period of the product the multipliers came from, for a method that
+    /// chooses them per orbit ([`ExpSip`]'s refinement); `None` otherwise.
+    pub intervals: Option<usize>,
 }
 
 impl FloquetResult {
@@ -69,6 +72,15 @@ impl FloquetResult {
         Self {
             multipliers,
             stable,
+            intervals: None,
+        }
+    }
+
+    /// The same result, noting the intervals of the product.
+    pub fn with_intervals(self, intervals: usize) -> Self {
+        Self {
+            intervals: Some(intervals),
+            ..self
         }
     }
 
@@ -194,17 +206,20 @@ pub trait StabilityMethod: Sync {
         orbit: &dyn PeriodicOrbit,
     ) -> Result<FloquetResult, StabilityError>;
 
-    /// Multipliers for the trials of a bifurcation search, which by design come ever
-    /// closer to the unit circle. A method that refines its accuracy near the circle
-    /// ([`ExpSip`]) skips the refinement here: the trials then see one smooth function of
+    /// Multipliers for the trials of a bifurcation search between two points whose
+    /// results are `ends`; the trials by design come ever closer to the unit circle. A
+    /// method that refines its accuracy near the circle ([`ExpSip`]) uses one fixed
+    /// accuracy here, that of the finer end: the trials then see one smooth function of
     /// the branch (a refinement level that changes between neighbouring trials makes the
-    /// crossing multiplier jump by the size of its error), and no trial costs the finest
-    /// product. Default: [`Self::multipliers`].
+    /// crossing multiplier jump by the size of its error), as accurate as the ends that
+    /// bracket the crossing. Default: [`Self::multipliers`].
     fn search_multipliers(
         &self,
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
+        ends: [&FloquetResult; 2],
     ) -> Result<FloquetResult, StabilityError> {
+        let _ = ends;
         self.multipliers(system, orbit)
     }
 }

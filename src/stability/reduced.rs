@@ -454,9 +454,10 @@ impl<M: StabilityMethod> StabilityMethod for Reduced<M> {
         &self,
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
+        ends: [&FloquetResult; 2],
     ) -> Result<FloquetResult, StabilityError> {
         let reduced = self.reduction.system(system)?;
         let view = ReducedOrbit::new(orbit, &self.reduction);
-        self.method.search_multipliers(&reduced, &view)
+        self.method.search_multipliers(&reduced, &view, ends)
     }
 }
