@@ -198,6 +198,22 @@ pub trait System: Sync {
         out: &mut NonlinearEval,
     );
 
+    /// `f` and `g` alone: [`System::eval_nonlinear`] without the partial derivatives,
+    /// whose buffers in `out` it may leave as they were. The harmonic-balance residual
+    /// needs only these (three of its four evaluations on a sweep). Default: the full
+    /// evaluation.
+    fn eval_nonlinear_values(
+        &self,
+        omega: f64,
+        t: f64,
+        x: &[f64],
+        v: &[f64],
+        temp: &[f64],
+        out: &mut NonlinearEval,
+    ) {
+        self.eval_nonlinear(omega, t, x, v, temp, out);
+    }
+
     /// Mechanical load `F(t; ω)` (length `n_mech`), written into `out`.
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]);
 

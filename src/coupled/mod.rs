@@ -501,11 +501,55 @@ impl System for CoupledRotor {
         temp: &[f64],
         out: &mut NonlinearEval,
     ) {
-        out.clear();
+        self.eval_terms(omega, t, x, temp, out, true);
+    }
+
+    fn eval_nonlinear_values(
+        &self,
+        omega: f64,
+        t: f64,
+        x: &[f64],
+        _v: &[f64],
+        temp: &[f64],
+        out: &mut NonlinearEval,
+    ) {
+        self.eval_terms(omega, t, x, temp, out, false);
+    }
+
+    fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
+        self.assembly.forcing(omega, t, out);
+    }
+
+    fn thermal_load(&self, omega: f64, out: &mut [f64]) {
+        match &self.network {
+            Some(net) => out.copy_from_slice(&net.load(omega)),
+            None => out.iter_mut().for_each(|v| *v = 0.0),
+        }
+    }
+}
+
+impl CoupledRotor {
+    /// `f`, `g` and, when `derivatives`, their partial derivatives (see
+    /// [`System::eval_nonlinear`]).
+    fn eval_terms(
+        &self,
+        omega: f64,
+        t: f64,
+        x: &[f64],
+        temp: &[f64],
+        out: &mut NonlinearEval,
+        derivatives: bool,
+    ) {
         let p = self.nl.mech.len();
         let q = self.nl.therm.len();
         // Per-bearing ∂F_b/∂(local mech DoF) and ∂F_b/∂(local thermal DoF), for the chain.
         let m_net = self.network.as_ref().map_or(0, |n| n.n_bearings());
+        if derivatives {
+            out.clear();
+        } else {
+            out.f.iter_mut().for_each(|v| *v = 0.0);
+            out.g.iter_mut().for_each(|v| *v = 0.0);
+        }
         let mut scratch = self
             .scratch
             .lock()
@@ -532,6 +576,9 @@ impl System for CoupledRotor {
                 }
                 out.f[row_node] += rs * force.fx;
                 out.f[row_node + 1] += rs * force.fy;
+                if !derivatives {
+                    continue;
+                }
                 for &(col_node, cs) in &sides {
                     if col_node == usize::MAX {
                         continue;
@@ -545,7 +592,9 @@ impl System for CoupledRotor {
             }
             // Thermal clearance: ∂F/∂T = ∂F/∂δv · ∂δv/∂T.
             let ddv = match cv {
-                Some((loc, c)) if !self.frozen_clearance => Some((loc, c.d_delta_v_d_temp)),
+                Some((loc, c)) if derivatives && !self.frozen_clearance => {
+                    Some((loc, c.d_delta_v_d_temp))
+                }
                 _ => None,
             };
             if let Some((loc, d)) = ddv {
@@ -565,6 +614,9 @@ impl System for CoupledRotor {
                     fb_n: force.fb,
                     n_loaded: force.n_loaded as f64,
                 };
+                if !derivatives {
+                    continue;
+                }
                 let row = &mut dfb[tb * (p + q)..(tb + 1) * (p + q)];
                 for &(col_node, cs) in &sides {
                     if col_node == usize::MAX {
@@ -582,7 +634,13 @@ impl System for CoupledRotor {
         }
 
         if let Some(net) = &self.network {
-            if net.eval_nonlinear(omega, temp, loads, teval).is_ok() {
+            if !derivatives {
+                if net.eval_values(omega, temp, loads, teval).is_ok() {
+                    out.g.copy_from_slice(&teval.g);
+                } else {
+                    out.g.iter_mut().for_each(|v| *v = f64::NAN);
+                }
+            } else if net.eval_nonlinear(omega, temp, loads, teval).is_ok() {
                 out.g.copy_from_slice(&teval.g);
                 out.dg_dt.copy_from_slice(&teval.dg_dt);
                 // Chain through F_b: ∂g/∂x = Σ_k ∂g/∂F_bk ∂F_bk/∂x, same for T.
@@ -610,19 +668,6 @@ impl System for CoupledRotor {
         }
     }
 
-    fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
-        self.assembly.forcing(omega, t, out);
-    }
-
-    fn thermal_load(&self, omega: f64, out: &mut [f64]) {
-        match &self.network {
-            Some(net) => out.copy_from_slice(&net.load(omega)),
-            None => out.iter_mut().for_each(|v| *v = 0.0),
-        }
-    }
-}
-
-impl CoupledRotor {
     /// Start guess for Newton at the first ω of a sweep, in the engine's unknown layout
     /// (mechanical DoF blocks of `1 + 2H` coefficients, then thermal blocks): mechanical
     /// constant terms from the static gravity equilibrium of the rotor on its nonlinear

@@ -372,7 +372,9 @@ impl<'a> HarmonicBalance<'a> {
 
     /// Pointwise evaluations of the nonlinear terms at every sample (in buffers from the
     /// pool; hand them back with [`Self::recycle`]).
-    fn evaluate(&self, coeffs: &[f64], omega: f64) -> Vec<NonlinearEval> {
+    /// The nonlinear terms at every AFT sample; their derivatives too when
+    /// `derivatives`.
+    fn evaluate(&self, coeffs: &[f64], omega: f64, derivatives: bool) -> Vec<NonlinearEval> {
         let n = self.aft.n_samples();
         let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
         let (xs, vs, ts) = self.nonlinear_samples(coeffs, omega);
@@ -392,8 +394,12 @@ impl<'a> HarmonicBalance<'a> {
             for (k, tk) in t.iter_mut().enumerate() {
                 *tk = ts[k * n + j];
             }
-            self.system
-                .eval_nonlinear(omega, self.aft.time(omega, j), x, v, t, e);
+            let time = self.aft.time(omega, j);
+            if derivatives {
+                self.system.eval_nonlinear(omega, time, x, v, t, e);
+            } else {
+                self.system.eval_nonlinear_values(omega, time, x, v, t, e);
+            }
         };
         let buffers = || (vec![0.0; p], vec![0.0; p], vec![0.0; q]);
         if (p + q) * n >= 512 {
@@ -464,7 +470,7 @@ impl<'a> HarmonicBalance<'a> {
         self.check_linear(&lin)?;
         self.add_linear(&lin, omega, coeffs, out);
         if p + q > 0 {
-            let evals = self.evaluate(coeffs, omega);
+            let evals = self.evaluate(coeffs, omega, jac.is_some());
             let mut buf = Vec::new();
             let mut series = vec![0.0; n];
             let mut proj = vec![0.0; nc];

@@ -671,6 +671,41 @@ impl ThermalNetwork {
         loads: &[BearingLoad],
         out: &mut ThermalEval,
     ) -> Result<(), ThermalError> {
+        self.check_lengths(temps_nl, loads)?;
+        let (q, m) = (self.nl_nodes.len(), self.bearings.len());
+        if out.g.len() != q || out.dg_dfb.len() != q * m {
+            *out = ThermalEval::new(q, m);
+        }
+        out.clear();
+        for (k, (b, load)) in self.bearings.iter().zip(loads).enumerate() {
+            self.eval_bearing(k, b, omega, temps_nl, *load, out, true);
+        }
+        Ok(())
+    }
+
+    /// `g` alone: [`Self::eval_nonlinear`] without the derivatives, whose buffers in
+    /// `out` are left as they were (the harmonic-balance residual needs only `g`).
+    pub fn eval_values(
+        &self,
+        omega: f64,
+        temps_nl: &[f64],
+        loads: &[BearingLoad],
+        out: &mut ThermalEval,
+    ) -> Result<(), ThermalError> {
+        self.check_lengths(temps_nl, loads)?;
+        let (q, m) = (self.nl_nodes.len(), self.bearings.len());
+        if out.g.len() != q || out.dg_dfb.len() != q * m {
+            *out = ThermalEval::new(q, m);
+        }
+        out.g.iter_mut().for_each(|v| *v = 0.0);
+        for (k, (b, load)) in self.bearings.iter().zip(loads).enumerate() {
+            self.eval_bearing(k, b, omega, temps_nl, *load, out, false);
+        }
+        Ok(())
+    }
+
+    /// The lengths of the nonlinear-node temperatures and of the bearing loads.
+    fn check_lengths(&self, temps_nl: &[f64], loads: &[BearingLoad]) -> Result<(), ThermalError> {
         let q = self.nl_nodes.len();
         let m = self.bearings.len();
         if temps_nl.len() != q {
@@ -687,16 +722,10 @@ impl ThermalNetwork {
                 got: loads.len(),
             });
         }
-        if out.g.len() != q || out.dg_dfb.len() != q * m {
-            *out = ThermalEval::new(q, m);
-        }
-        out.clear();
-        for (k, (b, load)) in self.bearings.iter().zip(loads).enumerate() {
-            self.eval_bearing(k, b, omega, temps_nl, *load, out);
-        }
         Ok(())
     }
 
+    /// One bearing's terms of `g` and, when `derivatives`, their derivatives.
     #[allow(clippy::too_many_arguments)]
     fn eval_bearing(
         &self,
@@ -706,6 +735,7 @@ impl ThermalNetwork {
         t: &[f64],
         load: BearingLoad,
         out: &mut ThermalEval,
+        derivatives: bool,
     ) {
         let q = self.nl_nodes.len();
         let m = self.bearings.len();
@@ -722,6 +752,9 @@ impl ThermalNetwork {
             let dt = t[x] - t[y];
             out.g[x] += g * dt;
             out.g[y] -= g * dt;
+            if !derivatives {
+                return;
+            }
             out.dg_dt[x * q + x] += g;
             out.dg_dt[x * q + y] -= g;
             out.dg_dt[y * q + x] -= g;
@@ -733,6 +766,9 @@ impl ThermalNetwork {
             let (g, dg_df, dg_dn) =
                 parallel_conductance(geom, b.ball, load.fb_n, load.n_loaded, self.min_load_n);
             link(out, b.lb, ring, g);
+            if !derivatives {
+                continue;
+            }
             let dt = t[b.lb] - t[ring];
             out.dg_dfb[b.lb * m + k] += dg_df * dt;
             out.dg_dfb[ring * m + k] -= dg_df * dt;
@@ -754,6 +790,9 @@ impl ThermalNetwork {
         let lub_link = |out: &mut ThermalEval, x: usize, c: Coefficient, area: f64| {
             let g = c.h * area;
             link(out, x, b.ll, g);
+            if !derivatives {
+                return;
+            }
             let dg_dtl = c.dh_dnu * dnu_dt * area;
             let dt = t[x] - tl;
             out.dg_dt[x * q + b.ll] += dg_dtl * dt;
@@ -769,6 +808,9 @@ impl ThermalNetwork {
         // Friction heat at the rolling elements (Eqs. 9–13), −Q_g on the left-hand side.
         let heat = b.palmgren.heat(load.fb_n.max(0.0), nu_mm, rel);
         out.g[b.lb] -= heat.total_w();
+        if !derivatives {
+            return;
+        }
         if load.fb_n > 0.0 {
             out.dg_dfb[b.lb * m + k] -= heat.dq_load_d_fb;
         }
