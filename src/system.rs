@@ -236,4 +236,13 @@ pub trait PeriodicOrbit {
     /// Full state at physical time `t`: `x` and `v` (length `n_mech`) and `temp`
     /// (length `n_therm`).
     fn state_at(&self, t: f64, x: &mut [f64], v: &mut [f64], temp: &mut [f64]);
+
+    /// The same orbit in the mechanical coordinates `q = P x`, with `P` the row-major
+    /// `r × n_mech` matrix `rows` (the thermal part unchanged), when the orbit can form
+    /// it once instead of per sample (a harmonic solution maps its coefficients); `None`
+    /// otherwise.
+    fn mapped(&self, rows: &[f64], r: usize) -> Option<Box<dyn PeriodicOrbit + '_>> {
+        let _ = (rows, r);
+        None
+    }
 }

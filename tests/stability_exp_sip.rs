@@ -492,3 +492,45 @@ fn thermal_field_in_blocks_equals_the_per_interval_product_on_the_dual_rotor() {
         );
     }
 }
+
+#[test]
+fn the_orbit_mapped_once_equals_the_projection_per_sample() {
+    // The harmonic solution maps its coefficients into the reduced coordinates once; the
+    // view projects the full state at every sample. The same linear map, so the states
+    // agree to rounding at any time, and so do the multipliers of the reduced product.
+    let p = dual_rotor_point(450.0, true);
+    let (sys, orbit) = (&p.sys, &p.orbit);
+    let cb = CraigBampton::new(sys, 450.0, ReductionSettings::default()).expect("reduction");
+    let rs = cb.system(sys).expect("reduced system");
+    let view = ReducedOrbit::new(orbit, &cb);
+    let mapped = cb
+        .mapped_orbit(orbit)
+        .expect("a harmonic solution maps itself");
+    let (r, m) = (rs.n_mech(), rs.n_therm());
+    let (mut x1, mut v1, mut t1) = (vec![0.0; r], vec![0.0; r], vec![0.0; m]);
+    let (mut x2, mut v2, mut t2) = (vec![0.0; r], vec![0.0; r], vec![0.0; m]);
+    let scale = |a: &[f64]| a.iter().fold(0.0_f64, |s, v| s.max(v.abs()));
+    for k in 0..37 {
+        let t = orbit.period() * k as f64 / 37.0;
+        view.state_at(t, &mut x1, &mut v1, &mut t1);
+        mapped.state_at(t, &mut x2, &mut v2, &mut t2);
+        for (a, b, what) in [(&x1, &x2, "x"), (&v1, &v2, "v"), (&t1, &t2, "T")] {
+            let s = scale(a);
+            assert!(s > 0.0);
+            for (ai, bi) in a.iter().zip(b.iter()) {
+                assert!(
+                    (ai - bi).abs() <= 1e-12 * s,
+                    "{what} at t = {t}: {ai} vs {bi}"
+                );
+            }
+        }
+    }
+    let sip = ExpSip::default();
+    let mu_view = sip.multipliers(&rs, &view).expect("view").multipliers;
+    let mu_mapped = sip
+        .multipliers(&rs, mapped.as_ref())
+        .expect("mapped")
+        .multipliers;
+    let d = matched_distance(&mu_view, &mu_mapped, mu_view.len());
+    assert!(d < 1e-9, "multipliers differ by {d}");
+}

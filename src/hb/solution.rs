@@ -144,4 +144,25 @@ impl PeriodicOrbit for HbSolution {
                 .0;
         }
     }
+
+    /// The coefficients of `q = P x`, formed once: `r × n_mech × (1 + 2H)` products
+    /// instead of `r × n_mech` per sample.
+    fn mapped(&self, rows: &[f64], r: usize) -> Option<Box<dyn PeriodicOrbit + '_>> {
+        let (n, nc) = (self.n_mech(), self.basis.n_coeffs());
+        if rows.len() != r * n {
+            return None;
+        }
+        let mut mech = vec![0.0; r * nc];
+        for (row, out) in rows.chunks_exact(n).zip(mech.chunks_exact_mut(nc)) {
+            for (w, c) in row.iter().zip(self.mech.chunks_exact(nc)) {
+                if *w != 0.0 {
+                    out.iter_mut().zip(c).for_each(|(o, ci)| *o += w * ci);
+                }
+            }
+        }
+        Some(Box::new(HbSolution {
+            mech,
+            ..self.clone()
+        }))
+    }
 }

@@ -364,6 +364,18 @@ pub struct ReducedOrbit<'a> {
     full: std::cell::RefCell<(Vec<f64>, Vec<f64>)>,
 }
 
+impl CraigBampton {
+    /// `orbit` in reduced coordinates, mapped once by the orbit itself
+    /// ([`PeriodicOrbit::mapped`]: a harmonic solution projects its coefficients); `None`
+    /// when it cannot, and [`ReducedOrbit`] projects sample by sample instead.
+    pub fn mapped_orbit<'o>(
+        &self,
+        orbit: &'o dyn PeriodicOrbit,
+    ) -> Option<Box<dyn PeriodicOrbit + 'o>> {
+        orbit.mapped(&self.project, self.project.len() / self.n.max(1))
+    }
+}
+
 impl<'a> ReducedOrbit<'a> {
     /// Views `orbit` (of the full system) through `cb`.
     pub fn new(orbit: &'a dyn PeriodicOrbit, cb: &'a CraigBampton) -> Self {
@@ -446,8 +458,12 @@ impl<M: StabilityMethod> StabilityMethod for Reduced<M> {
         orbit: &dyn PeriodicOrbit,
     ) -> Result<FloquetResult, StabilityError> {
         let reduced = self.reduction.system(system)?;
-        let view = ReducedOrbit::new(orbit, &self.reduction);
-        self.method.multipliers(&reduced, &view)
+        match self.reduction.mapped_orbit(orbit) {
+            Some(mapped) => self.method.multipliers(&reduced, mapped.as_ref()),
+            None => self
+                .method
+                .multipliers(&reduced, &ReducedOrbit::new(orbit, &self.reduction)),
+        }
     }
 
     fn search_multipliers(
@@ -457,7 +473,15 @@ impl<M: StabilityMethod> StabilityMethod for Reduced<M> {
         ends: [&FloquetResult; 2],
     ) -> Result<FloquetResult, StabilityError> {
         let reduced = self.reduction.system(system)?;
-        let view = ReducedOrbit::new(orbit, &self.reduction);
-        self.method.search_multipliers(&reduced, &view, ends)
+        match self.reduction.mapped_orbit(orbit) {
+            Some(mapped) => self
+                .method
+                .search_multipliers(&reduced, mapped.as_ref(), ends),
+            None => self.method.search_multipliers(
+                &reduced,
+                &ReducedOrbit::new(orbit, &self.reduction),
+                ends,
+            ),
+        }
     }
 }
