@@ -122,9 +122,9 @@ fn moduli_of_kind(f: &FloquetResult, kind: BifurcationKind) -> Vec<f64> {
 
 /// How many multipliers of `kind` lie outside the unit circle.
 fn outside_of_kind(f: &FloquetResult, kind: BifurcationKind) -> usize {
-    moduli_of_kind(f, kind)
+    f.multipliers
         .iter()
-        .filter(|v| **v > 1.0 + UNIT_CIRCLE_TOL)
+        .filter(|c| c.norm() > 1.0 + UNIT_CIRCLE_TOL && BifurcationKind::of_multiplier(**c) == kind)
         .count()
 }
 

@@ -161,8 +161,13 @@ impl PeriodicOrbit for HbSolution {
             }
         }
         Some(Box::new(HbSolution {
+            omega: self.omega,
+            basis: self.basis.clone(),
             mech,
-            ..self.clone()
+            therm: self.therm.clone(),
+            residual: self.residual,
+            relative_residual: self.relative_residual,
+            iterations: self.iterations,
         }))
     }
 }

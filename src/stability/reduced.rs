@@ -457,13 +457,7 @@ impl<M: StabilityMethod> StabilityMethod for Reduced<M> {
         system: &dyn System,
         orbit: &dyn PeriodicOrbit,
     ) -> Result<FloquetResult, StabilityError> {
-        let reduced = self.reduction.system(system)?;
-        match self.reduction.mapped_orbit(orbit) {
-            Some(mapped) => self.method.multipliers(&reduced, mapped.as_ref()),
-            None => self
-                .method
-                .multipliers(&reduced, &ReducedOrbit::new(orbit, &self.reduction)),
-        }
+        self.on_reduced(system, orbit, |m, rs, ro| m.multipliers(rs, ro))
     }
 
     fn search_multipliers(
@@ -472,15 +466,32 @@ impl<M: StabilityMethod> StabilityMethod for Reduced<M> {
         orbit: &dyn PeriodicOrbit,
         ends: [&FloquetResult; 2],
     ) -> Result<FloquetResult, StabilityError> {
+        self.on_reduced(system, orbit, |m, rs, ro| {
+            m.search_multipliers(rs, ro, ends)
+        })
+    }
+}
+
+impl<M: StabilityMethod> Reduced<M> {
+    /// Runs `evaluate` with the method on the reduced system and `orbit` in reduced
+    /// coordinates (mapped once when the orbit can, else viewed sample by sample).
+    fn on_reduced(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+        evaluate: impl FnOnce(
+            &M,
+            &dyn System,
+            &dyn PeriodicOrbit,
+        ) -> Result<FloquetResult, StabilityError>,
+    ) -> Result<FloquetResult, StabilityError> {
         let reduced = self.reduction.system(system)?;
         match self.reduction.mapped_orbit(orbit) {
-            Some(mapped) => self
-                .method
-                .search_multipliers(&reduced, mapped.as_ref(), ends),
-            None => self.method.search_multipliers(
+            Some(mapped) => evaluate(&self.method, &reduced, mapped.as_ref()),
+            None => evaluate(
+                &self.method,
                 &reduced,
                 &ReducedOrbit::new(orbit, &self.reduction),
-                ends,
             ),
         }
     }

@@ -671,16 +671,7 @@ impl ThermalNetwork {
         loads: &[BearingLoad],
         out: &mut ThermalEval,
     ) -> Result<(), ThermalError> {
-        self.check_lengths(temps_nl, loads)?;
-        let (q, m) = (self.nl_nodes.len(), self.bearings.len());
-        if out.g.len() != q || out.dg_dfb.len() != q * m {
-            *out = ThermalEval::new(q, m);
-        }
-        out.clear();
-        for (k, (b, load)) in self.bearings.iter().zip(loads).enumerate() {
-            self.eval_bearing(k, b, omega, temps_nl, *load, out, true);
-        }
-        Ok(())
+        self.eval(omega, temps_nl, loads, out, true)
     }
 
     /// `g` alone: [`Self::eval_nonlinear`] without the derivatives, whose buffers in
@@ -692,14 +683,30 @@ impl ThermalNetwork {
         loads: &[BearingLoad],
         out: &mut ThermalEval,
     ) -> Result<(), ThermalError> {
+        self.eval(omega, temps_nl, loads, out, false)
+    }
+
+    /// `g` and, when `derivatives`, its derivatives (zeroed first; otherwise left alone).
+    fn eval(
+        &self,
+        omega: f64,
+        temps_nl: &[f64],
+        loads: &[BearingLoad],
+        out: &mut ThermalEval,
+        derivatives: bool,
+    ) -> Result<(), ThermalError> {
         self.check_lengths(temps_nl, loads)?;
         let (q, m) = (self.nl_nodes.len(), self.bearings.len());
         if out.g.len() != q || out.dg_dfb.len() != q * m {
             *out = ThermalEval::new(q, m);
         }
-        out.g.iter_mut().for_each(|v| *v = 0.0);
+        if derivatives {
+            out.clear();
+        } else {
+            out.g.iter_mut().for_each(|v| *v = 0.0);
+        }
         for (k, (b, load)) in self.bearings.iter().zip(loads).enumerate() {
-            self.eval_bearing(k, b, omega, temps_nl, *load, out, false);
+            self.eval_bearing(k, b, omega, temps_nl, *load, out, derivatives);
         }
         Ok(())
     }
