@@ -17,7 +17,9 @@ pub struct CampaignArgs {
     pub command: Option<CampaignCommand>,
     /// Campaign file (TOML; see `examples/paper_campaign.toml`).
     pub file: Option<PathBuf>,
-    /// Runs computed at the same time (default: one per core).
+    /// Runs computed at the same time (default: one per core). Each run's parallel parts
+    /// get `threads / runs at a time` threads of their own (at least one); with one run
+    /// at a time, it uses every core.
     #[arg(long)]
     pub threads: Option<usize>,
     /// Run only shard I of N (runs whose position p has p mod N = I), e.g. `--shard 0/4`.
