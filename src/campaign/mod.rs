@@ -274,8 +274,9 @@ pub fn run(
     // leave the first one stalled behind it (measured: 119 % CPU on 2 cores). Sharing the
     // global pool between the concurrent runs kept both cores busy, but their fine-grained
     // parallel sections spent the CPU on splitting, spinning and waking each other: on the
-    // paper campaign (2 cores, two runs at a time, back to back) 206 s wall and 380 s CPU
-    // against 175 s and 317 s with one single-thread pool per run, the same results.
+    // paper campaign (2 cores, two runs at a time, three pairs back to back) 206–215 s
+    // wall and 380–398 s CPU against 175–209 s and 317–380 s with one single-thread pool
+    // per run, the same results.
     let workers = threads.filter(|&t| t > 0).unwrap_or_else(|| {
         std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
     });
