@@ -634,14 +634,16 @@ impl CoupledRotor {
         }
 
         if let Some(net) = &self.network {
-            if !derivatives {
-                if net.eval_values(omega, temp, loads, teval).is_ok() {
-                    out.g.copy_from_slice(&teval.g);
-                } else {
-                    out.g.iter_mut().for_each(|v| *v = f64::NAN);
-                }
-            } else if net.eval_nonlinear(omega, temp, loads, teval).is_ok() {
-                out.g.copy_from_slice(&teval.g);
+            let evaluated = if derivatives {
+                net.eval_nonlinear(omega, temp, loads, teval)
+            } else {
+                net.eval_values(omega, temp, loads, teval)
+            };
+            match evaluated {
+                Ok(()) => out.g.copy_from_slice(&teval.g),
+                Err(_) => out.g.iter_mut().for_each(|v| *v = f64::NAN),
+            }
+            if derivatives && evaluated.is_ok() {
                 out.dg_dt.copy_from_slice(&teval.dg_dt);
                 // Chain through F_b: ∂g/∂x = Σ_k ∂g/∂F_bk ∂F_bk/∂x, same for T.
                 for r in 0..q {
@@ -659,8 +661,6 @@ impl CoupledRotor {
                         }
                     }
                 }
-            } else {
-                out.g.iter_mut().for_each(|v| *v = f64::NAN);
             }
         }
         if let Ok(mut s) = self.scratch.lock() {

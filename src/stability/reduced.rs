@@ -372,7 +372,7 @@ impl CraigBampton {
         &self,
         orbit: &'o dyn PeriodicOrbit,
     ) -> Option<Box<dyn PeriodicOrbit + 'o>> {
-        orbit.mapped(&self.project, self.project.len() / self.n.max(1))
+        orbit.mapped(&self.project, self.basis.ncols())
     }
 }
 
