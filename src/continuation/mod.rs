@@ -34,8 +34,10 @@
 //!   linear response) or from [`ContinuationOptions::initial_guess`]; its tangent is oriented towards `ω_end`;
 //! * stops when ω leaves `[min(ω_start, ω_end), max(…)]` (the last point is re-solved on the
 //!   bound), after `max_points`, when the step falls below `ds_min`, or when the branch
-//!   comes back onto its own path ([`closing_point`]: a closed curve would otherwise be
-//!   traced round and round until `max_points`).
+//!   comes back onto its own path: going the same way ([`closing_point`]: a closed curve
+//!   would otherwise be traced round and round until `max_points`) or the other way
+//!   ([`reversing_point`]: after switching curves at a branch point, the path would
+//!   otherwise retrace itself backwards).
 //!
 //! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
 //! [`HbSolution`]. The bifurcations between neighbouring points are located in arclength
@@ -349,6 +351,11 @@ pub enum FinishReason {
     /// the earlier point `earlier` (running number), going the same way, so from here on
     /// the continuation would retrace a closed curve (see [`closing_point`]).
     Closed { omega: f64, earlier: usize },
+    /// The branch came back onto itself reversed: the point at `omega` and the one before
+    /// it lie on the segments after the earlier point `earlier` (running number), going
+    /// the other way; the continuation switched curves at a branch point earlier and would
+    /// now retrace its own path backwards (see [`reversing_point`]).
+    Reversed { omega: f64, earlier: usize },
 }
 
 impl std::fmt::Display for FinishReason {
@@ -364,6 +371,13 @@ impl std::fmt::Display for FinishReason {
                 f,
                 "stopped at ω = {omega:.3} rad/s: it closed on itself (it retraces the \
                  segment after point {earlier})"
+            ),
+            Self::Reversed { omega, earlier } => write!(
+                f,
+                "stopped at ω = {omega:.3} rad/s: it came back onto its own path going the \
+                 other way (along the segment after point {earlier}), after switching \
+                 branches at a branch point; a different step cap (ds_max) may keep it on \
+                 the branch"
             ),
         }
     }
@@ -387,9 +401,80 @@ pub fn closing_point(
     tangent: &[f64],
 ) -> Option<usize> {
     let n = history.len();
-    if n < 3 {
-        return None;
+    (0..n.saturating_sub(2)).find(|&j| {
+        segment_fit(history, j, x, s_x, 0.25).is_some_and(|fit| fit.cos_with(tangent) > 0.8)
+    })
+}
+
+/// Radius of the tube round an earlier segment, as a fraction of its length, inside which
+/// [`reversing_point`] takes a point to be on that segment. A point on the same curve lies
+/// within the chord's sagitta, `len·θ/8` for a turn `θ` over the segment (0.01·len at 5°,
+/// 0.065·len at 30°); a second sheet of a fold or of a Z running back beside the first is
+/// farther than this from it except within a few steps of the tip, where the path-length
+/// condition leaves it out.
+const RETRACE_TUBE: f64 = 0.05;
+
+/// Whether the point `x` (as in [`closing_point`]) runs back along the earlier path: it
+/// lies within [`RETRACE_TUBE`] of an earlier segment `history[j] → history[j+1]`, with the
+/// projection and path-length conditions of [`closing_point`], but goes the other way (the
+/// segment's direction within about 37° of `−tangent`), and the point before it lies as
+/// close to that segment or one of the two after it. Returns `j`.
+///
+/// A branch is a curve: it does not come back onto itself reversed. When the path does,
+/// the continuation has switched curves at a (near) branch point and come back onto its
+/// own earlier part, which it would now retrace backwards point by point, re-finding every
+/// bifurcation on it. On the 1 L/min dual rotor with a step cap of 0.1 the path left the
+/// primary response for the period-doubled (ω/2) branch where the two cross near
+/// 618.4 rad/s, came back onto the primary near 591.7 rad/s, and retraced it down to
+/// 300 rad/s (600 points). Two consecutive points on the reversed path are required so
+/// that the second sheet of a fold, which runs back close to the first near the tip, does
+/// not count.
+pub fn reversing_point(
+    history: &[(Vec<f64>, f64)],
+    x: &[f64],
+    s_x: f64,
+    tangent: &[f64],
+) -> Option<usize> {
+    let n = history.len();
+    let (prev, s_prev) = history.last()?;
+    (0..n.saturating_sub(2)).find(|&j| {
+        segment_fit(history, j, x, s_x, RETRACE_TUBE)
+            .is_some_and(|fit| fit.cos_with(tangent) < -0.8)
+            && (j..(j + 3).min(n - 2))
+                .any(|i| segment_fit(history, i, prev, *s_prev, RETRACE_TUBE).is_some())
+    })
+}
+
+/// How a point lies against one earlier segment of the path.
+struct SegmentFit<'a> {
+    from: &'a [f64],
+    to: &'a [f64],
+    len: f64,
+}
+
+impl SegmentFit<'_> {
+    /// Cosine between the segment's direction and `tangent` (a unit vector).
+    fn cos_with(&self, tangent: &[f64]) -> f64 {
+        self.to
+            .iter()
+            .zip(self.from)
+            .zip(tangent)
+            .map(|((c, b), t)| (c - b) * t)
+            .sum::<f64>()
+            / self.len
     }
+}
+
+/// The segment `history[j] → history[j+1]` when `x` (at arclength `s_x`) projects into it,
+/// lies within `tube` of its length from it, and has at least eight of its lengths of
+/// path between them.
+fn segment_fit<'a>(
+    history: &'a [(Vec<f64>, f64)],
+    j: usize,
+    x: &[f64],
+    s_x: f64,
+    tube: f64,
+) -> Option<SegmentFit<'a>> {
     let dot = |u: &[f64], v: &[f64], w: &[f64], z: &[f64]| -> f64 {
         // (u − v)·(w − z)
         u.iter()
@@ -398,31 +483,26 @@ pub fn closing_point(
             .map(|((a, b), (c, e))| (a - b) * (c - e))
             .sum()
     };
-    (0..n - 2).find(|&j| {
-        let ((p, _), (q, s_q)) = (&history[j], &history[j + 1]);
-        let len2 = dot(q, p, q, p);
-        let len = len2.sqrt();
-        if len.is_nan() || len <= 0.0 || s_x - s_q < 8.0 * len {
-            return false;
-        }
-        // within a quarter length of the segment, x is at most 1.03·len from its start
-        let dist2 = dot(x, p, x, p);
-        if dist2 > 1.07 * len2 {
-            return false;
-        }
-        let along = dot(x, p, q, p) / len;
-        if !(-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) {
-            return false;
-        }
-        let perp = (dist2 - along * along).max(0.0).sqrt();
-        let cos: f64 = q
-            .iter()
-            .zip(p)
-            .zip(tangent)
-            .map(|((c, b), t)| (c - b) * t)
-            .sum::<f64>()
-            / len;
-        perp <= 0.25 * len && cos > 0.8
+    let ((p, _), (q, s_q)) = (history.get(j)?, history.get(j + 1)?);
+    let len2 = dot(q, p, q, p);
+    let len = len2.sqrt();
+    if len.is_nan() || len <= 0.0 || s_x - s_q < 8.0 * len {
+        return None;
+    }
+    // within a quarter length of the segment, x is at most 1.03·len from its start
+    let dist2 = dot(x, p, x, p);
+    if dist2 > 1.07 * len2 {
+        return None;
+    }
+    let along = dot(x, p, q, p) / len;
+    if !(-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) {
+        return None;
+    }
+    let perp = (dist2 - along * along).max(0.0).sqrt();
+    (perp <= tube * len).then_some(SegmentFit {
+        from: p,
+        to: q,
+        len,
     })
 }
 
@@ -1204,6 +1284,14 @@ impl<'a> Continuation<'a> {
                 earlier,
             });
         }
+        if self.finish_after.is_none()
+            && let Some(earlier) = reversing_point(&self.history, &x, c.arclength, &c.tangent)
+        {
+            self.finish_after = Some(FinishReason::Reversed {
+                omega: c.omega,
+                earlier,
+            });
+        }
         self.history.push((x, c.arclength));
         if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
             self.finish_after = Some(FinishReason::MaxPoints);
@@ -1529,6 +1617,18 @@ mod tests {
     /// The first index at which [`closing_point`] fires along `path`, and the earlier
     /// point it names.
     fn first_closure(path: &[(Vec<f64>, Vec<f64>)]) -> Option<(usize, usize)> {
+        first_hit(path, closing_point)
+    }
+
+    /// The first index at which [`reversing_point`] fires along `path`, and the earlier
+    /// point it names.
+    fn first_reversal(path: &[(Vec<f64>, Vec<f64>)]) -> Option<(usize, usize)> {
+        first_hit(path, reversing_point)
+    }
+
+    type PathCheck = fn(&[(Vec<f64>, f64)], &[f64], f64, &[f64]) -> Option<usize>;
+
+    fn first_hit(path: &[(Vec<f64>, Vec<f64>)], check: PathCheck) -> Option<(usize, usize)> {
         let mut history: Vec<(Vec<f64>, f64)> = Vec::new();
         let mut s = 0.0;
         for (k, (x, t)) in path.iter().enumerate() {
@@ -1540,7 +1640,7 @@ mod tests {
                     .sum::<f64>()
                     .sqrt();
             }
-            if let Some(j) = closing_point(&history, x, s, t) {
+            if let Some(j) = check(&history, x, s, t) {
                 return Some((k, j));
             }
             history.push((x.clone(), s));
@@ -1581,6 +1681,9 @@ mod tests {
                 .map(|(x, t)| (x, t.iter().map(|v| -v).collect::<Vec<_>>())),
         );
         assert_eq!(first_closure(&back), None);
+        // ... which is what the reversal check is for: found once a point and the one
+        // before it lie on earlier segments with eight segments' length of path between
+        assert_eq!(first_reversal(&back), Some((46, 32)));
         // a Z of two folds within three steps, its third sheet right on its first
         let z = [
             (vec![0.0, 0.0], vec![1.0, 0.0]),
@@ -1596,6 +1699,35 @@ mod tests {
             .map(|k| (vec![k as f64 * 0.1, 0.0], vec![1.0, 0.0]))
             .collect();
         assert_eq!(first_closure(&line), None);
+    }
+
+    #[test]
+    fn forward_paths_and_folds_are_not_taken_for_reversals() {
+        // a closed curve run round twice the same way, a spiral, a line: no reversal
+        assert_eq!(first_reversal(&circle(40, 2.0, 0.0)), None);
+        assert_eq!(first_reversal(&circle(40, 2.0, 0.1)), None);
+        let line: Vec<_> = (0..50)
+            .map(|k| (vec![k as f64 * 0.1, 0.0], vec![1.0, 0.0]))
+            .collect();
+        assert_eq!(first_reversal(&line), None);
+        // a hairpin fold: out along y = 0 and back along y = 0.02·|x − 3| (steps 0.1), so
+        // the second sheet runs back close to the first and meets it at the tip
+        let mut hairpin: Vec<_> = (0..=30)
+            .map(|k| (vec![k as f64 * 0.1, 0.0], vec![1.0, 0.0]))
+            .collect();
+        let back = (1.0f64 + 0.02 * 0.02).sqrt();
+        hairpin.extend((1..=30).map(|k| {
+            let x = 3.0 - k as f64 * 0.1;
+            (vec![x, 0.02 * (3.0 - x)], vec![-1.0 / back, 0.02 / back])
+        }));
+        assert_eq!(first_reversal(&hairpin), None);
+        // the same with the second sheet on the first (a retrace): found two points in
+        // beyond the eight segments' length of path the checks require
+        let mut retrace: Vec<_> = (0..=30)
+            .map(|k| (vec![k as f64 * 0.1, 0.0], vec![1.0, 0.0]))
+            .collect();
+        retrace.extend((1..=30).map(|k| (vec![3.0 - k as f64 * 0.1, 0.0], vec![-1.0, 0.0])));
+        assert!(first_reversal(&retrace).is_some());
     }
 
     /// The tangent refined with the matrix of a neighbouring point equals the one from a
