@@ -43,7 +43,7 @@ fn branch_csv_has_one_row_per_point_with_recorded_values() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(
         lines[0],
-        "index,omega,arc_length,amp_1_m,stable,bifurcation,residual_mech,residual_therm,newton_iterations"
+        "index,omega,arc_length,amp_1_m,stable,bifurcation,residual_mech,residual_therm,newton_iterations,half_order_share"
     );
     assert_eq!(lines.len(), rec.points.len() + 1);
     for (line, p) in lines[1..].iter().zip(&rec.points) {

@@ -36,7 +36,7 @@
 //!   bound), after `max_points`, when the step falls below `ds_min`, or when the branch
 //!   comes back onto its own path: going the same way ([`closing_point`]: a closed curve
 //!   would otherwise be traced round and round until `max_points`) or the other way
-//!   ([`reversing_point`]: after switching curves at a branch point, the path would
+//!   ([`reversing_point`]: after a jump between sheets where they meet, the path would
 //!   otherwise retrace itself backwards).
 //!
 //! With a [`StabilityMethod`], each point's Floquet multipliers are computed on its
@@ -353,8 +353,8 @@ pub enum FinishReason {
     Closed { omega: f64, earlier: usize },
     /// The branch came back onto itself reversed: the point at `omega` and the one before
     /// it lie on the segments after the earlier point `earlier` (running number), going
-    /// the other way; the continuation switched curves at a branch point earlier and would
-    /// now retrace its own path backwards (see [`reversing_point`]).
+    /// the other way; the path jumped between sheets of the branch where they meet and
+    /// would now retrace itself backwards (see [`reversing_point`]).
     Reversed { omega: f64, earlier: usize },
 }
 
@@ -375,9 +375,9 @@ impl std::fmt::Display for FinishReason {
             Self::Reversed { omega, earlier } => write!(
                 f,
                 "stopped at ω = {omega:.3} rad/s: it came back onto its own path going the \
-                 other way (along the segment after point {earlier}), after switching \
-                 branches at a branch point; a different step cap (ds_max) may keep it on \
-                 the branch"
+                 other way (along the segment after point {earlier}); it jumped between \
+                 sheets of the branch where they meet, and would now retrace itself. A \
+                 different step cap (ds_max) may keep it on one sheet"
             ),
         }
     }
@@ -421,12 +421,12 @@ const RETRACE_TUBE: f64 = 0.05;
 /// close to that segment or one of the two after it. Returns `j`.
 ///
 /// A branch is a curve: it does not come back onto itself reversed. When the path does,
-/// the continuation has switched curves at a (near) branch point and come back onto its
-/// own earlier part, which it would now retrace backwards point by point, re-finding every
-/// bifurcation on it. On the 1 L/min dual rotor with a step cap of 0.1 the path left the
-/// primary response for the period-doubled (ω/2) branch where the two cross near
-/// 618.4 rad/s, came back onto the primary near 591.7 rad/s, and retraced it down to
-/// 300 rad/s (600 points). Two consecutive points on the reversed path are required so
+/// it has jumped between sheets where they meet (a branch point, or the sharp bend of an
+/// imperfect one) and come back onto its own earlier part, which it would now retrace
+/// backwards point by point, re-finding every bifurcation on it. On the 1 L/min dual rotor
+/// with a step cap of 0.1 the path bent into the period-doubled (ω/2) response near
+/// 618.4 rad/s, came back onto the primary one near 591.7 rad/s, went up it onto the
+/// stretch it had come down, and retraced that down to 300 rad/s (425 points more). Two consecutive points on the reversed path are required so
 /// that the second sheet of a fold, which runs back close to the first near the tip, does
 /// not count.
 pub fn reversing_point(
