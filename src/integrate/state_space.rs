@@ -37,6 +37,7 @@ use super::IntegrateError;
 use crate::system::{DenseMatrix, NonlinearDofs, NonlinearEval, System};
 
 /// The first-order form of a [`System`] at one `ω` (see the module docs).
+#[derive(Clone)]
 pub struct StateSpace<'a> {
     system: &'a dyn System,
     omega: f64,
@@ -59,6 +60,9 @@ pub struct StateSpace<'a> {
     ctinv_q: Mat<f64>,
     /// `C_T⁻¹F_T` (m).
     ctinv_ft: Vec<f64>,
+    /// Whether `S` gathers the velocity rows `v_P` (default); see
+    /// [`StateSpace::with_velocity_gather`].
+    velocity: bool,
 }
 
 /// Scratch buffers for [`StateSpace`] evaluations; one per thread.
@@ -163,7 +167,26 @@ impl<'a> StateSpace<'a> {
             ctinv_kt,
             ctinv_q,
             ctinv_ft,
+            velocity: true,
         })
+    }
+
+    /// The same state space with (`on`) or without the velocity rows `v_P` in the gather
+    /// `S`, and the columns `∂f/∂v`, `∂g/∂v` in the derivative matrix `D`. Without them
+    /// `S` reads `[x_P, T_Q]` (`p + q` rows instead of `2p + q`): exact for derivatives
+    /// whose `∂f/∂v` and `∂g/∂v` vanish, which are then not read. The dual rotor's forces
+    /// (Hertz contacts, heat sources) do not depend on velocities, so its Floquet products
+    /// gather 36 rows instead of 46 (see [`crate::stability::ExpSip`]).
+    pub fn with_velocity_gather(&self, on: bool) -> Self {
+        Self {
+            velocity: on,
+            ..self.clone()
+        }
+    }
+
+    /// Whether the gather reads the velocity rows (see [`Self::with_velocity_gather`]).
+    pub fn gathers_velocity(&self) -> bool {
+        self.velocity
     }
 
     /// The system this state space was built from.
@@ -214,15 +237,16 @@ impl<'a> StateSpace<'a> {
     pub fn workspace(&self) -> Workspace {
         let p = self.dofs.mech.len();
         let q = self.dofs.therm.len();
+        let (g, r) = self.low_rank_dims();
         Workspace {
             force: vec![0.0; self.n],
             xp: vec![0.0; p],
             vp: vec![0.0; p],
             tq: vec![0.0; q],
             eval: NonlinearEval::new(p, q),
-            gathered: Mat::zeros(2 * p + q, 0),
-            mixed: Mat::zeros(p + q, 0),
-            d_mat: Mat::zeros(p + q, 2 * p + q),
+            gathered: Mat::zeros(g, 0),
+            mixed: Mat::zeros(r, 0),
+            d_mat: Mat::zeros(r, g),
         }
     }
 
@@ -286,15 +310,22 @@ impl<'a> StateSpace<'a> {
         }
     }
 
-    /// Number of rows `S` gathers (`2p + q`: `x_P`, `v_P`, `T_Q`) and of columns `L` spreads
-    /// (`p + q`).
+    /// Number of rows `S` gathers (`2p + q`: `x_P`, `v_P`, `T_Q`; `p + q` without the
+    /// velocity rows) and of columns `L` spreads (`p + q`).
     pub fn low_rank_dims(&self) -> (usize, usize) {
         let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
-        (2 * p + q, p + q)
+        (self.mech_gathered() + q, p + q)
+    }
+
+    /// Number of mechanical rows `S` gathers: `2p`, or `p` without the velocity rows.
+    fn mech_gathered(&self) -> usize {
+        let p = self.dofs.mech.len();
+        if self.velocity { 2 * p } else { p }
     }
 
     /// The pointwise derivative matrix
-    /// `D = [[∂f/∂x, ∂f/∂v, ∂f/∂T], [∂g/∂x, ∂g/∂v, ∂g/∂T]]`, `(p+q) × (2p+q)`, into `out`.
+    /// `D = [[∂f/∂x, ∂f/∂v, ∂f/∂T], [∂g/∂x, ∂g/∂v, ∂g/∂T]]`, `(p+q) × (2p+q)`, into `out`
+    /// (without the `∂/∂v` columns when the gather has no velocity rows).
     pub fn derivative_matrix(&self, derivs: &NonlinearEval, mut out: MatMut<'_, f64>) {
         self.for_each_derivative(derivs, |i, j, v| out[(i, j)] = v);
     }
@@ -313,38 +344,47 @@ impl<'a> StateSpace<'a> {
     /// Calls `put(row, column, value)` for every entry of [`Self::derivative_matrix`].
     fn for_each_derivative(&self, derivs: &NonlinearEval, mut put: impl FnMut(usize, usize, f64)) {
         let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
+        let t0 = self.mech_gathered();
         for i in 0..p {
             for j in 0..p {
                 put(i, j, derivs.df_dx[i * p + j]);
-                put(i, p + j, derivs.df_dv[i * p + j]);
+                if self.velocity {
+                    put(i, p + j, derivs.df_dv[i * p + j]);
+                }
             }
             for j in 0..q {
-                put(i, 2 * p + j, derivs.df_dt[i * q + j]);
+                put(i, t0 + j, derivs.df_dt[i * q + j]);
             }
         }
         for i in 0..q {
             for j in 0..p {
                 put(p + i, j, derivs.dg_dx[i * p + j]);
-                put(p + i, p + j, derivs.dg_dv[i * p + j]);
+                if self.velocity {
+                    put(p + i, p + j, derivs.dg_dv[i * p + j]);
+                }
             }
             for j in 0..q {
-                put(p + i, 2 * p + j, derivs.dg_dt[i * q + j]);
+                put(p + i, t0 + j, derivs.dg_dt[i * q + j]);
             }
         }
     }
 
-    /// `out = S W`: the rows `x_P`, `v_P`, `T_Q` of `w` (`d × c` → `(2p+q) × c`).
+    /// `out = S W`: the rows `x_P`, `v_P` (unless left out), `T_Q` of `w` (`d × c` →
+    /// `(2p+q) × c`, or `(p+q) × c`).
     pub fn gather(&self, w: MatRef<'_, f64>, mut out: MatMut<'_, f64>) {
         let n = self.n;
         let p = self.dofs.mech.len();
+        let t0 = self.mech_gathered();
         for col in 0..w.ncols() {
             let wc = w.col(col);
             for (k, &i) in self.dofs.mech.iter().enumerate() {
                 out[(k, col)] = wc[i];
-                out[(p + k, col)] = wc[n + i];
+                if self.velocity {
+                    out[(p + k, col)] = wc[n + i];
+                }
             }
             for (k, &i) in self.dofs.therm.iter().enumerate() {
-                out[(2 * p + k, col)] = wc[2 * n + i];
+                out[(t0 + k, col)] = wc[2 * n + i];
             }
         }
     }
@@ -378,7 +418,7 @@ impl<'a> StateSpace<'a> {
         }
     }
 
-    /// `K = S L` (`(2p+q) × (p+q)`): the gathered rows of the spreading columns, so that
+    /// `K = S L` (`g × (p+q)`, `g` the gathered rows): the gathered rows of the spreading columns, so that
     /// `(L D S)ⁱ = L (D K)^{i−1} D S`.
     pub fn gather_of_spread(&self) -> Mat<f64> {
         let (g, r) = self.low_rank_dims();
@@ -387,7 +427,7 @@ impl<'a> StateSpace<'a> {
         k
     }
 
-    /// `S` as a dense `(2p+q) × d` selection matrix (see [`Self::gather`]).
+    /// `S` as a dense `g × d` selection matrix (see [`Self::gather`]).
     pub fn gather_matrix(&self) -> Mat<f64> {
         let (g, _) = self.low_rank_dims();
         let d = self.dim();
@@ -578,5 +618,54 @@ mod tests {
             .count();
         assert_eq!(nonzeros.len() + zeros, r * g);
         assert!(zeros > p * p, "the zeroed entries are left out");
+    }
+
+    /// Without velocity derivatives, the state matrix applied through the gather without
+    /// the velocity rows equals the one through the full gather, and equals the dense
+    /// product `B_lin W + L D S W` assembled from the blocks.
+    #[test]
+    fn the_gather_without_velocity_rows_gives_the_same_linearization() {
+        let sys = Chain::new(5, 3);
+        let full = StateSpace::new(&sys, 0.9).expect("state space");
+        let lean = full.with_velocity_gather(false);
+        assert!(full.gathers_velocity() && !lean.gathers_velocity());
+        let (p, q) = (full.dofs().mech.len(), full.dofs().therm.len());
+        assert_eq!(full.low_rank_dims(), (2 * p + q, p + q));
+        assert_eq!(lean.low_rank_dims(), (p + q, p + q));
+        let mut d = NonlinearEval::new(p, q);
+        for (k, buf) in [&mut d.df_dx, &mut d.df_dt, &mut d.dg_dx, &mut d.dg_dt]
+            .into_iter()
+            .enumerate()
+        {
+            for (i, v) in buf.iter_mut().enumerate() {
+                *v = ((3 * k + 7 * i) % 11) as f64 - 5.0;
+            }
+        }
+        let dim = full.dim();
+        let w = Mat::from_fn(dim, 4, |i, j| ((i * 5 + j * 3) % 7) as f64 - 3.0);
+        let (mut a, mut b) = (Mat::<f64>::zeros(dim, 4), Mat::<f64>::zeros(dim, 4));
+        let mut ws = full.workspace();
+        full.apply_linearization(&d, w.as_ref(), a.as_mut(), &mut ws);
+        let mut ws = lean.workspace();
+        lean.apply_linearization(&d, w.as_ref(), b.as_mut(), &mut ws);
+        assert_eq!(a, b);
+        // S, D and L of the lean form rebuild the low-rank part
+        let (g, r) = lean.low_rank_dims();
+        let mut dm = Mat::<f64>::zeros(r, g);
+        lean.derivative_matrix(&d, dm.as_mut());
+        let low_rank = lean.spread_matrix() * &dm * lean.gather_matrix() * &w;
+        let mut nl = Mat::<f64>::zeros(dim, 4);
+        lean.apply_nonlinear_part(&d, w.as_ref(), nl.as_mut(), &mut ws);
+        for i in 0..dim {
+            for j in 0..4 {
+                assert!((low_rank[(i, j)] - nl[(i, j)]).abs() <= 1e-12 * (1.0 + nl[(i, j)].abs()));
+            }
+        }
+        // T_Q sits right after x_P
+        let s = lean.gather_matrix();
+        let n = sys.n_mech();
+        for (k, &i) in lean.dofs().therm.iter().enumerate() {
+            assert_eq!(s[(p + k, 2 * n + i)], 1.0);
+        }
     }
 }

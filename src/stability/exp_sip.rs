@@ -261,6 +261,16 @@ impl ExpSip {
         let omega = orbit.omega();
         let d = space.dim();
         let (means, mean, b_bar, delta) = self.split_mean(space, orbit, period, n_k)?;
+        // Without velocity derivatives along the orbit (the dual rotor's forces depend on
+        // displacements and temperatures only) the velocity rows are not gathered: the
+        // same products with 36 instead of 46 gathered rows there.
+        let without_velocity;
+        let space = if space.gathers_velocity() && !reads_velocity(&means) {
+            without_velocity = space.with_velocity_gather(false);
+            &without_velocity
+        } else {
+            space
+        };
         let modal = if self.modal {
             ModalField::all(space, &b_bar, &self.exact_blocks(space))
         } else {
@@ -732,6 +742,13 @@ impl ExpSip {
 /// its product, and the interval's derivative nonzeros `(row, column, value)`.
 type FactorBuffers = ([Mat<f64>; 4], Vec<(usize, usize, f64)>);
 
+/// Whether any interval mean has a velocity derivative `∂f/∂v` or `∂g/∂v` other than zero.
+fn reads_velocity(means: &[NonlinearEval]) -> bool {
+    means
+        .iter()
+        .any(|m| m.df_dv.iter().chain(&m.dg_dv).any(|&v| v != 0.0))
+}
+
 /// Column `j` of an owned (column-major, contiguous) matrix as a slice.
 fn column(m: &Mat<f64>, j: usize) -> &[f64] {
     let n = m.nrows();
@@ -790,6 +807,8 @@ impl ModalField {
         let dm = 2 * space.n_mech();
         let (p, q) = (space.dofs().mech.len(), space.dofs().therm.len());
         let (g, r) = space.low_rank_dims();
+        // the mechanical gathered rows, x_P and (when gathered) v_P, come first
+        let gm = g - q;
         let s = space.gather_matrix();
         let l = space.spread_matrix();
         // the blocks' eigenvalue problems are independent: side by side
@@ -799,9 +818,9 @@ impl ModalField {
                 let (gather, spread) = if (r0, r1) == (0, d) {
                     ((0, g), (0, r))
                 } else if (r0, r1) == (0, dm) {
-                    ((0, 2 * p), (0, p))
+                    ((0, gm), (0, p))
                 } else {
-                    ((2 * p, 2 * p + q), (p, p + q))
+                    ((gm, g), (p, p + q))
                 };
                 let len = r1 - r0;
                 let modal =
@@ -836,7 +855,7 @@ struct Kicks {
     gather: Vec<Mat<f64>>,
     /// `L̂` or `L̃ = φ₁(ΔΛ) L̂` per field.
     spread: Vec<Mat<f64>>,
-    /// `K = Σ_f Ŝ_f L̂_f` or `Σ_f Ŝ_f 2φ₂(ΔΛ_f) L̂_f` (`(2p+q) × (p+q)`).
+    /// `K = Σ_f Ŝ_f L̂_f` or `Σ_f Ŝ_f 2φ₂(ΔΛ_f) L̂_f` (gathered rows × `p+q`).
     k: Mat<f64>,
     /// The thermal field brought forward in blocks of intervals, when it is.
     slow: Option<SlowField>,
