@@ -5,7 +5,7 @@
 //!
 //! | file | what | paper |
 //! |---|---|---|
-//! | `amplitude_node8.png` | RMS amplitude (Eq. 35) of dynamic node 8 against ω, one colour per run | Figs. 8a, 9a, 10a, 21a |
+//! | `amplitude_node8.png` | RMS amplitude (Eq. 35) of dynamic node 8 against ω, one colour per run; period-doubled points (`ω/2` share ≥ 5 %) dotted | Figs. 8a, 9a, 10a, 21a |
 //! | `clearance_variation.png` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
 //! | `effective_clearance.png` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
 //! | `rolling_element_temperatures.png` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
@@ -38,6 +38,7 @@ use crate::figure::{
     self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
     draw_chart, draw_legend, legend_height, lighter, render_png, tick,
 };
+use crate::record::derive::{PERIOD_DOUBLED_SHARE, half_order_share};
 use crate::record::{ReadError, read_recording};
 use crate::stability::BifurcationKind;
 
@@ -84,6 +85,8 @@ pub struct CampaignFigures {
 struct PointData {
     omega_rad_s: f64,
     stable: Option<bool>,
+    /// The response is period-doubled: its `ω/2` share reaches [`PERIOD_DOUBLED_SHARE`].
+    period_doubled: bool,
     amplitude_m: Vec<f64>,
     delta_v_m: Vec<f64>,
     effective_m: Vec<f64>,
@@ -279,6 +282,12 @@ fn load_run(
             .map(|p| PointData {
                 omega_rad_s: p.omega_rad_s,
                 stable: p.stable,
+                period_doubled: half_order_share(
+                    &rec.run.harmonics,
+                    rec.run.n_mech,
+                    &p.coeffs_mech,
+                )
+                .is_some_and(|s| s >= PERIOD_DOUBLED_SHARE),
                 amplitude_m: p.amplitude_rms_m.clone(),
                 delta_v_m: p.clearances.iter().map(|c| c.delta_v_m).collect(),
                 effective_m: p.clearances.iter().map(|c| c.effective_m).collect(),
@@ -373,6 +382,15 @@ fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
         entries.push(LegendEntry {
             sample: LegendSample::None,
             text: "stability not assessed".into(),
+        });
+    }
+    if with_markers && points().any(|p| p.period_doubled) {
+        entries.push(LegendEntry {
+            sample: LegendSample::Line(grey, LineStyle::Points),
+            text: format!(
+                "period-doubled response (ω/2 share ≥ {:.0} %)",
+                100.0 * PERIOD_DOUBLED_SHARE
+            ),
         });
     }
     if with_markers && runs.iter().any(|r| !r.bifurcations.is_empty()) {
@@ -523,9 +541,21 @@ pub fn plot_campaign(
         let mut chart = panel(String::new(), OMEGA, "RMS amplitude (µm)", false);
         for r in &runs {
             let Some(k) = r.node(id) else { continue };
-            chart
-                .series
-                .extend(branch_series(r, |p| p.amplitude_m.get(k).map(|a| a * 1e6)));
+            let amplitude = |p: &PointData| p.amplitude_m.get(k).map(|a| a * 1e6);
+            chart.series.extend(branch_series(r, amplitude));
+            let dots: Vec<(f64, f64)> = r
+                .points
+                .iter()
+                .filter(|p| p.period_doubled)
+                .filter_map(|p| Some((p.omega_rad_s, amplitude(p)?)))
+                .collect();
+            if !dots.is_empty() {
+                chart.series.push(Series {
+                    line: LineStyle::Points,
+                    width: 3,
+                    ..Series::new(dots, r.colour)
+                });
+            }
             chart.markers.extend(r.bifurcations.iter().filter_map(|b| {
                 Some(Marker {
                     x: b.omega_rad_s,

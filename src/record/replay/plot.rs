@@ -3,7 +3,9 @@
 //!
 //! * `amplitude_node<id>.png` per dynamic node: RMS amplitude (Eq. 35, µm) against ω,
 //!   stable parts blue, unstable parts red, not-assessed parts grey; bifurcations marked
-//!   with black circles and labelled SN / PD / NS (like the paper's Figs. 7–11);
+//!   with black circles and labelled SN / PD / NS (like the paper's Figs. 7–11); points
+//!   whose `ω/2` share reaches [`PERIOD_DOUBLED_SHARE`] (the period-doubled response,
+//!   see [`half_order_share`]) dotted in purple;
 //! * `clearance.png`: RC variation δv (µm) of every bearing against ω, when recorded;
 //! * `temperatures.png`: mean temperature of every thermal node against ω, when recorded.
 //!
@@ -16,7 +18,8 @@ use std::path::Path;
 use anyhow::Context;
 use plotters::prelude::*;
 
-use crate::figure::{Chart, Marker, PALETTE, Series, draw_chart, font, render_png};
+use crate::figure::{Chart, LineStyle, Marker, PALETTE, Series, draw_chart, font, render_png};
+use crate::record::derive::{PERIOD_DOUBLED_SHARE, half_order_share};
 use crate::record::reader::Recording;
 
 const WIDTH: u32 = 1000;
@@ -47,6 +50,31 @@ fn draw(
 const STABLE: RGBColor = RGBColor(31, 119, 180);
 const UNSTABLE: RGBColor = RGBColor(214, 39, 40);
 const UNKNOWN: RGBColor = RGBColor(127, 127, 127);
+const PERIOD_DOUBLED: RGBColor = RGBColor(148, 103, 189);
+
+/// Dots at the points whose response is period-doubled (see [`PERIOD_DOUBLED_SHARE`]);
+/// `None` when there are none.
+fn period_doubled_dots(rec: &Recording, y: impl Fn(usize) -> f64) -> Option<Series> {
+    let points: Vec<(f64, f64)> = rec
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| {
+            half_order_share(&rec.run.harmonics, rec.run.n_mech, &p.coeffs_mech)
+                .is_some_and(|s| s >= PERIOD_DOUBLED_SHARE)
+        })
+        .map(|(i, p)| (p.omega_rad_s, y(i)))
+        .collect();
+    (!points.is_empty()).then(|| Series {
+        line: LineStyle::Points,
+        width: 3,
+        label: Some(format!(
+            "period-doubled (ω/2 share ≥ {:.0} %)",
+            100.0 * PERIOD_DOUBLED_SHARE
+        )),
+        ..Series::new(points, PERIOD_DOUBLED)
+    })
+}
 
 /// Splits a branch into runs of equal stability; neighbouring runs share their boundary
 /// point so the drawn curve stays connected.
@@ -104,7 +132,9 @@ pub fn run(
     let mut written = Vec::new();
     let run = &rec.run;
     for (k, node) in run.nodes.iter().enumerate() {
-        let series = stability_segments(rec, |i| rec.points[i].amplitude_rms_m[k] * 1e6);
+        let amplitude = |i: usize| rec.points[i].amplitude_rms_m[k] * 1e6;
+        let mut series = stability_segments(rec, amplitude);
+        series.extend(period_doubled_dots(rec, amplitude));
         let markers: Vec<Marker> = rec
             .bifurcations
             .iter()
@@ -120,10 +150,14 @@ pub fn run(
         let path = dir.join(format!("amplitude_node{}.png", node.id));
         draw(
             &path,
-            &format!(
-                "Amplitude–frequency response, node {} ({})",
-                node.id, node.name
-            ),
+            &if node.name == format!("node {}", node.id) {
+                format!("Amplitude–frequency response, node {}", node.id)
+            } else {
+                format!(
+                    "Amplitude–frequency response, node {} ({})",
+                    node.id, node.name
+                )
+            },
             "ω (rad/s)",
             "RMS amplitude (µm), Eq. 35",
             series,
