@@ -26,6 +26,7 @@ use crate::continuation::{
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, HarmonicBalance, Ratio};
 use crate::model::{Dir, Model};
+use crate::record::derive::{Stretch, half_order_share, period_doubled_stretches};
 use crate::record::types::{
     BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, PointRecord,
     RunInfo, RunStatus, ThermalForces, ThermalNode,
@@ -245,6 +246,9 @@ pub struct SweepReport {
     /// Continuation steps refused and retried with half the step (a failed or laboured
     /// corrector, a sharp turn, a fold pair inside the step).
     pub rejected_steps: usize,
+    /// Stretches of points whose response is period-doubled (an `ω/2` share of at least
+    /// [`crate::record::derive::PERIOD_DOUBLED_SHARE`]).
+    pub period_doubled: Vec<Stretch>,
 }
 
 /// A stability method that stops trying after a *setting* error (a system too stiff for
@@ -435,6 +439,8 @@ impl SweepProblem {
         let mut bifs = Vec::new();
         let mut n_bif = 0u32;
         let mut finish = None;
+        // (index, ω, ω/2 share) per point, for the period-doubled stretches
+        let mut shares = Vec::new();
         let result: Result<RunStatus, SweepError> = (|| loop {
             if interrupt
                 .as_ref()
@@ -473,6 +479,11 @@ impl SweepProblem {
                         }
                     }
                     let rec = self.point_record(prog.points as u64, &point)?;
+                    shares.push((
+                        rec.index,
+                        rec.omega_rad_s,
+                        half_order_share(&self.run.harmonics, self.run.n_mech, &rec.coeffs_mech),
+                    ));
                     sink.write_point(&rec)?;
                     prog.points += 1;
                     prog.omega_rad_s = point.solution.omega;
@@ -503,6 +514,7 @@ impl SweepProblem {
                     total_seconds: start.elapsed().as_secs_f64(),
                     stability_note: None,
                     rejected_steps: prog.rejected_steps,
+                    period_doubled: period_doubled_stretches(shares),
                 })
             }
             Err(e) => {

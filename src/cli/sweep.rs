@@ -6,6 +6,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use crate::record::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::{McapOptions, McapSink, install_interrupt_flag};
 use crate::sweep::{StudySettings, SweepProblem};
 
@@ -226,6 +227,13 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     }
     for (w, kind) in &report.bifurcations {
         writeln!(out, "  {kind} at ω = {w:.3} rad/s")?;
+    }
+    for st in &report.period_doubled {
+        writeln!(
+            out,
+            "  period-doubled response (ω/2 share ≥ {:.0} %) on {st}",
+            100.0 * PERIOD_DOUBLED_SHARE
+        )?;
     }
     Ok(())
 }

@@ -400,9 +400,85 @@ pub fn half_order_share(harmonics: &[Ratio], n_mech: usize, coeffs_mech: &[f64])
     })
 }
 
+/// A run of consecutive points whose response is period-doubled (see
+/// [`period_doubled_stretches`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Stretch {
+    /// Indices of the first and last point.
+    pub first: u64,
+    pub last: u64,
+    /// ω of the first and last point (rad/s).
+    pub omega_first: f64,
+    pub omega_last: f64,
+    /// The largest `ω/2` share on the stretch.
+    pub largest_share: f64,
+}
+
+impl std::fmt::Display for Stretch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "points {}–{} (ω {:.3} → {:.3} rad/s), ω/2 share up to {:.2}",
+            self.first, self.last, self.omega_first, self.omega_last, self.largest_share
+        )
+    }
+}
+
+/// The runs of consecutive points (`(index, ω, half_order_share)`, in order) whose share
+/// reaches [`PERIOD_DOUBLED_SHARE`].
+pub fn period_doubled_stretches(
+    points: impl IntoIterator<Item = (u64, f64, Option<f64>)>,
+) -> Vec<Stretch> {
+    let mut out: Vec<Stretch> = Vec::new();
+    let mut open = false;
+    for (index, omega, share) in points {
+        match share.filter(|&s| s >= PERIOD_DOUBLED_SHARE) {
+            Some(s) => {
+                match out.last_mut().filter(|_| open) {
+                    Some(st) => {
+                        st.last = index;
+                        st.omega_last = omega;
+                        st.largest_share = st.largest_share.max(s);
+                    }
+                    None => out.push(Stretch {
+                        first: index,
+                        last: index,
+                        omega_first: omega,
+                        omega_last: omega,
+                        largest_share: s,
+                    }),
+                }
+                open = true;
+            }
+            None => open = false,
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stretches_join_consecutive_period_doubled_points() {
+        let pts = [
+            (0, 600.0, Some(0.001)),
+            (1, 601.0, Some(0.2)),
+            (2, 602.0, Some(0.6)),
+            (3, 603.0, Some(0.05)),
+            (4, 604.0, Some(0.01)),
+            (5, 605.0, None),
+            (6, 606.0, Some(0.9)),
+        ];
+        let st = period_doubled_stretches(pts);
+        assert_eq!(st.len(), 2);
+        assert_eq!((st[0].first, st[0].last), (1, 3));
+        assert_eq!((st[0].omega_first, st[0].omega_last), (601.0, 603.0));
+        assert_eq!(st[0].largest_share, 0.6);
+        assert_eq!((st[1].first, st[1].last, st[1].largest_share), (6, 6, 0.9));
+        assert!(period_doubled_stretches([(0, 1.0, None), (1, 2.0, Some(0.0))]).is_empty());
+    }
 
     fn ratio(num: u32, den: u32) -> Ratio {
         Ratio::new(num, den).expect("ratio")

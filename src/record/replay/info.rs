@@ -2,6 +2,7 @@
 
 use std::io::Write;
 
+use crate::record::derive::{PERIOD_DOUBLED_SHARE, half_order_share, period_doubled_stretches};
 use crate::record::reader::Recording;
 
 fn stable_label(s: Option<bool>) -> &'static str {
@@ -94,6 +95,23 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
             b.omega_rad_s,
             b.after_point
         )?;
+    }
+    let stretches = period_doubled_stretches(rec.points.iter().map(|p| {
+        (
+            p.index,
+            p.omega_rad_s,
+            half_order_share(&r.harmonics, r.n_mech, &p.coeffs_mech),
+        )
+    }));
+    if !stretches.is_empty() {
+        writeln!(
+            out,
+            "period-doubled response (ω/2 share ≥ {:.0} %):",
+            100.0 * PERIOD_DOUBLED_SHARE
+        )?;
+        for st in &stretches {
+            writeln!(out, "  {st}")?;
+        }
     }
     writeln!(out, "topics:")?;
     for t in &rec.topics {
