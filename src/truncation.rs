@@ -79,11 +79,11 @@ pub enum TruncationError {
     Sweep(#[from] SweepError),
     #[error("{what}: {reason}")]
     Setting { what: String, reason: String },
-    #[error("order {order}: {source}")]
+    #[error("order {order}: {cause}")]
     Residual {
         order: u32,
-        #[source]
-        source: crate::hb::HbError,
+        /// (In the message, not a `#[source]`, so that a chain prints it once.)
+        cause: crate::hb::HbError,
     },
 }
 
@@ -484,7 +484,7 @@ fn row(
 ) -> Result<TruncationRow, TruncationError> {
     let sol = &found.solution;
     let order = problem.settings.order;
-    let res = |source| TruncationError::Residual { order, source };
+    let res = |cause| TruncationError::Residual { order, cause };
     let r = TimeResidual::evaluate(&problem.system, sol, Some(samples)).map_err(res)?;
     let mut residual_node_n = Vec::new();
     let mut nonlinear_node_n = Vec::new();

@@ -269,6 +269,9 @@ fn file_errors_name_the_file() {
     let e = Model::from_file("/nonexistent/rotor.toml").expect_err("no such file");
     assert!(matches!(e, ModelError::Io { .. }));
     assert!(e.to_string().contains("/nonexistent/rotor.toml"));
+    // the reason once, also where the whole chain is printed (`error: {:#}`)
+    let chain = format!("{:#}", anyhow::Error::from(e));
+    assert_eq!(chain.matches("os error").count(), 1, "{chain}");
     let dir = tempfile::tempdir().expect("tempdir");
     let path = dir.path().join("bad.toml");
     std::fs::write(&path, edited("inner_node = 12", "inner_node = 40")).expect("write");

@@ -270,18 +270,17 @@ pub enum ContinuationError {
         value: f64,
         reason: &'static str,
     },
-    #[error("no start solution at ω = {omega} rad/s: {source}")]
-    Start {
-        omega: f64,
-        #[source]
-        source: NewtonError,
-    },
-    #[error("no solution at ω = {omega} rad/s between two branch points: {source}")]
-    Target {
-        omega: f64,
-        #[source]
-        source: NewtonError,
-    },
+    // The Newton errors are in the messages, not `#[source]`s: a source would print
+    // them twice in an error chain.
+    #[error(
+        "no start solution at ω = {omega} rad/s: {cause} (the start is solved from the \
+         linear response, or from the initial guess; inside a strongly nonlinear range that \
+         can fail: start the sweep where the response is nearly linear, e.g. below the \
+         resonances)"
+    )]
+    Start { omega: f64, cause: NewtonError },
+    #[error("no solution at ω = {omega} rad/s between two branch points: {cause}")]
+    Target { omega: f64, cause: NewtonError },
     #[error(transparent)]
     Hb(#[from] HbError),
     #[error(transparent)]
@@ -968,7 +967,7 @@ impl<'a> Continuation<'a> {
             None => vec![0.0; nu],
         };
         let (a, stats) = newton::solve_fixed(&self.hb, omega, &guess, &self.opts.newton)
-            .map_err(|source| ContinuationError::Start { omega, source })?;
+            .map_err(|cause| ContinuationError::Start { omega, cause })?;
         let nm = self.hb.n_mech_unknowns();
         let maxabs = |s: &[f64]| s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let or1 = |v: f64| if v > 0.0 && v.is_finite() { v } else { 1.0 };
@@ -1514,7 +1513,7 @@ impl<'a> Continuation<'a> {
         }
         let (a, stats) = self
             .solve_interpolated(&a0, from.omega, &a1, to.omega, omega)
-            .map_err(|source| ContinuationError::Target { omega, source })?;
+            .map_err(|cause| ContinuationError::Target { omega, cause })?;
         Ok(HbSolution::from_unknowns(
             omega,
             self.hb.basis(),

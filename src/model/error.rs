@@ -6,11 +6,12 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum ModelError {
     /// The file could not be read.
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read: {cause}")]
     Io {
         file: String,
-        #[source]
-        source: std::io::Error,
+        /// (Not a `#[source]`: the message carries it, and a source would print it twice
+        /// in an error chain.)
+        cause: std::io::Error,
     },
     /// The file is not valid for the format: `path` is the field path
     /// (`bearings[2].inner_node`), `line` the 1-based line when known.

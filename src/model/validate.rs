@@ -55,9 +55,9 @@ impl Model {
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
         let path = path.as_ref();
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        let text = std::fs::read_to_string(path).map_err(|cause| ModelError::Io {
             file: name.clone(),
-            source,
+            cause,
         })?;
         Self::from_str(&text, &name)
     }
