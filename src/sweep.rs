@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::continuation::{
-    BranchPoint, Continuation, ContinuationOptions, FinishReason, StepOutcome,
+    BranchPoint, Continuation, ContinuationError, ContinuationOptions, FinishReason, StepOutcome,
 };
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, HarmonicBalance, Ratio};
@@ -115,6 +115,12 @@ impl Default for StudySettings {
         }
     }
 }
+
+/// Start speeds of the lead-in continuation that reaches a sweep start inside a nonlinear
+/// range, as fractions of the start speed (their inverses for a sweep down), tried in
+/// order. Why: a response is closer to linear away from the resonance; 0.9 covers a start
+/// just past a fold, 0.5 one in the middle of the paper's range (300–700 rad/s).
+pub const LEAD_IN_FRACTIONS: [f64; 5] = [0.9, 0.8, 0.7, 0.6, 0.5];
 
 /// Bracket tolerance (scaled arclength) of the crossing search that locates bifurcations
 /// in a sweep.
@@ -213,6 +219,12 @@ pub enum SweepError {
     Record(#[from] RecordError),
     #[error("recorded quantity could not be derived: {0}")]
     Derive(String),
+    #[error(
+        "no start solution at ω = {omega} rad/s, neither from the linear response nor by \
+         continuation from a lower speed ({tried}); start the sweep where the response is \
+         nearly linear, e.g. below the resonances"
+    )]
+    LeadIn { omega: f64, tried: String },
     #[error("study setting {field} = {value}: {reason}")]
     Setting {
         field: &'static str,
@@ -249,6 +261,9 @@ pub struct SweepReport {
     /// Stretches of points whose response is period-doubled (an `ω/2` share of at least
     /// [`crate::record::derive::PERIOD_DOUBLED_SHARE`]).
     pub period_doubled: Vec<Stretch>,
+    /// The speed a lead-in continuation started from, when the start could not be solved
+    /// from the linear response (see `SweepProblem::run`).
+    pub lead_in_from: Option<f64>,
 }
 
 /// A stability method that stops trying after a *setting* error (a system too stiff for
@@ -401,12 +416,27 @@ impl SweepProblem {
         stability: Option<&'s dyn StabilityMethod>,
     ) -> Result<Continuation<'s>, SweepError> {
         let s = &self.settings;
+        self.continuation_over(s.omega_start, s.omega_end, None, stability, s.max_points)
+    }
+
+    /// A continuation from `from` to `to` with the study's settings, started from `guess`
+    /// (default: the system's initial guess), of at most `max_points` points.
+    fn continuation_over<'s>(
+        &'s self,
+        from: f64,
+        to: f64,
+        guess: Option<Vec<f64>>,
+        stability: Option<&'s dyn StabilityMethod>,
+        max_points: usize,
+    ) -> Result<Continuation<'s>, SweepError> {
+        let s = &self.settings;
         let hb = HarmonicBalance::new(&self.system, &self.basis, s.aft_samples)?;
-        let mut opts = ContinuationOptions::new(s.omega_start, s.omega_end);
+        let mut opts = ContinuationOptions::new(from, to);
         opts.ds_max = s.ds_max;
         opts.ds_initial = opts.ds_initial.min(s.ds_max);
-        opts.max_points = s.max_points;
-        opts.initial_guess = Some(self.system.initial_guess(self.basis.n_coeffs()));
+        opts.max_points = max_points;
+        opts.initial_guess =
+            Some(guess.unwrap_or_else(|| self.system.initial_guess(self.basis.n_coeffs())));
         // The crossing search stops at a bracket of 1e-4 in scaled arclength (≈ 0.04 rad/s
         // on the default range) or a crossing modulus within 1e-4 of the circle: finer
         // cannot place a crossing better than the multipliers' own accuracy, and each
@@ -414,6 +444,66 @@ impl SweepProblem {
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
         opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
         Ok(Continuation::new(hb, opts, stability)?)
+    }
+
+    /// The solution at the sweep's start reached by continuation, for a start whose Newton
+    /// solve from the system's initial guess (the linear response) fails: that happens
+    /// inside a strongly nonlinear range. The lead-in starts at [`LEAD_IN_FRACTIONS`] of
+    /// the start speed on the side away from the sweep (below it for a sweep up), tried in
+    /// order, and follows the branch to the start speed without stability or recording;
+    /// a lead-in whose own start does not converge, or whose branch turns back out of its
+    /// range or stops, gives way to the next. Returns the lead-in's start speed and the
+    /// coefficients at the sweep's start.
+    fn lead_in(&self, interrupt: Option<&AtomicBool>) -> Result<(f64, Vec<f64>), SweepError> {
+        let s = &self.settings;
+        let up = s.omega_end >= s.omega_start;
+        let mut tried = Vec::new();
+        for frac in LEAD_IN_FRACTIONS {
+            let from = if up {
+                s.omega_start * frac
+            } else {
+                s.omega_start / frac
+            };
+            match self.lead_in_from(from, interrupt)? {
+                Ok(guess) => return Ok((from, guess)),
+                Err(why) => tried.push(format!("from {from:.3} rad/s: {why}")),
+            }
+        }
+        Err(SweepError::LeadIn {
+            omega: s.omega_start,
+            tried: tried.join("; "),
+        })
+    }
+
+    /// One lead-in from `from` (see [`Self::lead_in`]): the coefficients at the start
+    /// speed, or why this lead-in did not get there.
+    fn lead_in_from(
+        &self,
+        from: f64,
+        interrupt: Option<&AtomicBool>,
+    ) -> Result<Result<Vec<f64>, String>, SweepError> {
+        let target = self.settings.omega_start;
+        // not recorded: the sweep's own point budget does not apply
+        let budget = StudySettings::default().max_points;
+        let mut cont = self.continuation_over(from, target, None, None, budget)?;
+        let mut last = None;
+        loop {
+            if interrupt.is_some_and(|f| f.load(Ordering::Relaxed)) {
+                return Ok(Err("interrupted".into()));
+            }
+            match cont.step() {
+                Ok(StepOutcome::Accepted { point, .. }) => last = Some(point),
+                Ok(StepOutcome::Rejected(_)) => {}
+                Ok(StepOutcome::Finished(f)) => {
+                    return Ok(last
+                        .filter(|p| p.solution.omega == target)
+                        .map(|p| p.solution.unknowns())
+                        .ok_or_else(|| format!("the branch {f} before reaching the start")));
+                }
+                Err(e @ ContinuationError::Start { .. }) => return Ok(Err(e.to_string())),
+                Err(e) => return Err(e.into()),
+            }
+        }
     }
 
     /// Runs the sweep, writing into `sink` as it goes, polling `interrupt` between steps
@@ -439,6 +529,7 @@ impl SweepProblem {
         let mut bifs = Vec::new();
         let mut n_bif = 0u32;
         let mut finish = None;
+        let mut lead_in_from = None;
         // (index, ω, ω/2 share) per point, for the period-doubled stretches
         let mut shares = Vec::new();
         let result: Result<RunStatus, SweepError> = (|| loop {
@@ -450,6 +541,19 @@ impl SweepProblem {
             }
             let out = match cont.step() {
                 Ok(o) => o,
+                Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
+                    // reach the start by continuation from where the response is milder
+                    let (from, guess) = self.lead_in(interrupt.as_deref())?;
+                    lead_in_from = Some(from);
+                    cont = self.continuation_over(
+                        s.omega_start,
+                        s.omega_end,
+                        Some(guess),
+                        stab,
+                        s.max_points,
+                    )?;
+                    continue;
+                }
                 Err(e) => return Err(e.into()),
             };
             match out {
@@ -515,6 +619,7 @@ impl SweepProblem {
                     stability_note: None,
                     rejected_steps: prog.rejected_steps,
                     period_doubled: period_doubled_stretches(shares),
+                    lead_in_from,
                 })
             }
             Err(e) => {

@@ -294,3 +294,48 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
         }
     }
 }
+
+/// A sweep that starts inside the nonlinear range (600 rad/s at 2 L/min, past the folds
+/// of the second resonance) cannot solve its start from the linear response; it reaches it
+/// by continuation from a lower speed, and its first point is the one a sweep from that
+/// speed arrives at.
+#[test]
+fn a_start_inside_the_nonlinear_range_is_reached_by_continuation() {
+    use tmrotor::continuation::ContinuationError;
+    let settings = StudySettings {
+        omega_start: 600.0,
+        omega_end: 601.0,
+        stability: false,
+        max_points: 3,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    // the premise: from the linear response the start does not converge
+    let mut plain = problem.continuation(None).expect("continuation");
+    assert!(matches!(plain.step(), Err(ContinuationError::Start { .. })));
+    let mut sink = MemorySink::new();
+    let report = problem.run(&mut sink, None, |_| {}).expect("sweep");
+    let from = report.lead_in_from.expect("a lead-in");
+    assert!(from < 600.0, "{from}");
+    let first = &sink.points[0];
+    assert_eq!(first.omega_rad_s, 600.0);
+    // the reference: a sweep from the lead-in's speed, whose last point is re-solved on
+    // 600 rad/s
+    let reference = StudySettings {
+        omega_start: from,
+        omega_end: 600.0,
+        stability: false,
+        ..Default::default()
+    };
+    let mut ref_sink = MemorySink::new();
+    let ref_report = SweepProblem::new(&reference)
+        .expect("problem")
+        .run(&mut ref_sink, None, |_| {})
+        .expect("reference sweep");
+    assert!(ref_report.lead_in_from.is_none());
+    let last = ref_sink.points.last().expect("points");
+    assert_eq!(last.omega_rad_s, 600.0);
+    for (a, b) in first.amplitude_rms_m.iter().zip(&last.amplitude_rms_m) {
+        assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-9), "{a} vs {b}");
+    }
+}

@@ -212,6 +212,13 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         report.status,
         args.output.display()
     )?;
+    if let Some(from) = report.lead_in_from {
+        writeln!(
+            out,
+            "  the start did not converge from the linear response; it was reached by \
+             continuation from {from:.3} rad/s (not recorded)"
+        )?;
+    }
     if let Some(finish) = &report.finish {
         writeln!(out, "  the branch {finish}")?;
     }
