@@ -543,7 +543,17 @@ impl SweepProblem {
                 Ok(o) => o,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
-                    let (from, guess) = self.lead_in(interrupt.as_deref())?;
+                    let (from, guess) = match self.lead_in(interrupt.as_deref()) {
+                        Ok(found) => found,
+                        Err(_)
+                            if interrupt
+                                .as_ref()
+                                .is_some_and(|f| f.load(Ordering::Relaxed)) =>
+                        {
+                            return Ok(RunStatus::Interrupted);
+                        }
+                        Err(e) => return Err(e),
+                    };
                     lead_in_from = Some(from);
                     cont = self.continuation_over(
                         s.omega_start,
