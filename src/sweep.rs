@@ -242,6 +242,9 @@ pub struct Progress {
     pub rejected_steps: usize,
     /// Fraction of the ω range covered so far (0–1; not monotone through folds).
     pub fraction: f64,
+    /// While the start is reached by a lead-in continuation (see `SweepProblem::run`):
+    /// `omega_rad_s` is the lead-in's current speed, and nothing is recorded yet.
+    pub lead_in: bool,
 }
 
 /// What a finished sweep reports.
@@ -454,7 +457,11 @@ impl SweepProblem {
     /// a lead-in whose own start does not converge, or whose branch turns back out of its
     /// range or stops, gives way to the next. Returns the lead-in's start speed and the
     /// coefficients at the sweep's start.
-    fn lead_in(&self, interrupt: Option<&AtomicBool>) -> Result<(f64, Vec<f64>), SweepError> {
+    fn lead_in(
+        &self,
+        interrupt: Option<&AtomicBool>,
+        at: &mut dyn FnMut(f64),
+    ) -> Result<(f64, Vec<f64>), SweepError> {
         let s = &self.settings;
         let up = s.omega_end >= s.omega_start;
         let mut tried = Vec::new();
@@ -464,7 +471,7 @@ impl SweepProblem {
             } else {
                 s.omega_start / frac
             };
-            match self.lead_in_from(from, interrupt)? {
+            match self.lead_in_from(from, interrupt, at)? {
                 Ok(guess) => return Ok((from, guess)),
                 Err(why) => tried.push(format!("from {from:.3} rad/s: {why}")),
             }
@@ -481,6 +488,7 @@ impl SweepProblem {
         &self,
         from: f64,
         interrupt: Option<&AtomicBool>,
+        at: &mut dyn FnMut(f64),
     ) -> Result<Result<Vec<f64>, String>, SweepError> {
         let target = self.settings.omega_start;
         // not recorded: the sweep's own point budget does not apply
@@ -492,7 +500,10 @@ impl SweepProblem {
                 return Ok(Err("interrupted".into()));
             }
             match cont.step() {
-                Ok(StepOutcome::Accepted { point, .. }) => last = Some(point),
+                Ok(StepOutcome::Accepted { point, .. }) => {
+                    at(point.solution.omega);
+                    last = Some(point);
+                }
                 Ok(StepOutcome::Rejected(_)) => {}
                 Ok(StepOutcome::Finished(f)) => {
                     return Ok(last
@@ -543,7 +554,14 @@ impl SweepProblem {
                 Ok(o) => o,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
-                    let (from, guess) = match self.lead_in(interrupt.as_deref()) {
+                    prog.lead_in = true;
+                    let mut at = |w: f64| {
+                        prog.omega_rad_s = w;
+                        progress(&prog);
+                    };
+                    let found = self.lead_in(interrupt.as_deref(), &mut at);
+                    prog.lead_in = false;
+                    let (from, guess) = match found {
                         Ok(found) => found,
                         Err(_)
                             if interrupt

@@ -9,6 +9,7 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use crate::campaign;
 use crate::campaign::figures::{CampaignFigures, FigureOptions, plot_campaign};
+use crate::cli::sweep::progress_message;
 use crate::record::install_interrupt_flag;
 
 #[derive(Debug, Clone, Args)]
@@ -140,10 +141,7 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
                 }
             };
             bar.set_position((p.fraction * 1000.0) as u64);
-            bar.set_message(format!(
-                "ω {:.1} rad/s, {} points, {} bifurcations",
-                p.omega_rad_s, p.points, p.bifurcations
-            ));
+            bar.set_message(progress_message(p, "ω "));
         }
     };
     let interrupt = install_interrupt_flag().ok();

@@ -8,7 +8,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::record::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::{McapOptions, McapSink, install_interrupt_flag};
-use crate::sweep::{StudySettings, SweepProblem};
+use crate::sweep::{Progress, StudySettings, SweepProblem};
 
 /// The study flags shared by `tmrotor sweep` and `tmrotor truncation`: model, study file,
 /// flow rate and temperatures.
@@ -192,10 +192,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     };
     let report = problem.run(&mut sink, interrupt, |p| {
         bar.set_position((p.fraction * 1000.0) as u64);
-        bar.set_message(format!(
-            "{:.1} rad/s, {} points, {} bifurcations",
-            p.omega_rad_s, p.points, p.bifurcations
-        ));
+        bar.set_message(progress_message(p, ""));
     });
     bar.finish_and_clear();
     let report = report.with_context(|| {
@@ -243,4 +240,20 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         )?;
     }
     Ok(())
+}
+
+/// The progress bar's message: speed, points and bifurcations, or the lead-in's speed while
+/// the start is being reached (`omega` prefixes the speed).
+pub fn progress_message(p: &Progress, omega: &str) -> String {
+    if p.lead_in {
+        format!(
+            "{omega}{:.1} rad/s: reaching the start by continuation (not recorded)",
+            p.omega_rad_s
+        )
+    } else {
+        format!(
+            "{omega}{:.1} rad/s, {} points, {} bifurcations",
+            p.omega_rad_s, p.points, p.bifurcations
+        )
+    }
 }
