@@ -26,7 +26,7 @@ use crate::continuation::{
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, HarmonicBalance, Ratio};
 use crate::model::{Dir, Model};
-use crate::record::derive::{Stretch, half_order_share, period_doubled_stretches};
+use crate::record::derive::{Stretch, period_doubled_stretches, point_half_order_share};
 use crate::record::types::{
     BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, PointRecord,
     RunInfo, RunStatus, ThermalForces, ThermalNode,
@@ -114,6 +114,18 @@ impl Default for StudySettings {
             aft_samples: None,
         }
     }
+}
+
+/// How one lead-in continuation (see `SweepProblem::run`) ended.
+enum LeadIn {
+    /// At the sweep's start: the lead-in's start speed and the coefficients there.
+    Reached {
+        from: f64,
+        coeffs: Vec<f64>,
+    },
+    /// Why this lead-in did not get there.
+    Failed(String),
+    Interrupted,
 }
 
 /// Start speeds of the lead-in continuation that reaches a sweep start inside a nonlinear
@@ -455,13 +467,13 @@ impl SweepProblem {
     /// the start speed on the side away from the sweep (below it for a sweep up), tried in
     /// order, and follows the branch to the start speed without stability or recording;
     /// a lead-in whose own start does not converge, or whose branch turns back out of its
-    /// range or stops, gives way to the next. Returns the lead-in's start speed and the
-    /// coefficients at the sweep's start.
+    /// range or stops, gives way to the next. `at` hears the lead-in's speed after each
+    /// point.
     fn lead_in(
         &self,
-        interrupt: Option<&AtomicBool>,
+        interrupted: &dyn Fn() -> bool,
         at: &mut dyn FnMut(f64),
-    ) -> Result<(f64, Vec<f64>), SweepError> {
+    ) -> Result<LeadIn, SweepError> {
         let s = &self.settings;
         let up = s.omega_end >= s.omega_start;
         let mut tried = Vec::new();
@@ -471,9 +483,9 @@ impl SweepProblem {
             } else {
                 s.omega_start / frac
             };
-            match self.lead_in_from(from, interrupt, at)? {
-                Ok(guess) => return Ok((from, guess)),
-                Err(why) => tried.push(format!("from {from:.3} rad/s: {why}")),
+            match self.lead_in_from(from, interrupted, at)? {
+                LeadIn::Failed(why) => tried.push(format!("from {from:.3} rad/s: {why}")),
+                done => return Ok(done),
             }
         }
         Err(SweepError::LeadIn {
@@ -482,22 +494,21 @@ impl SweepProblem {
         })
     }
 
-    /// One lead-in from `from` (see [`Self::lead_in`]): the coefficients at the start
-    /// speed, or why this lead-in did not get there.
+    /// One lead-in from `from` (see [`Self::lead_in`]).
     fn lead_in_from(
         &self,
         from: f64,
-        interrupt: Option<&AtomicBool>,
+        interrupted: &dyn Fn() -> bool,
         at: &mut dyn FnMut(f64),
-    ) -> Result<Result<Vec<f64>, String>, SweepError> {
+    ) -> Result<LeadIn, SweepError> {
         let target = self.settings.omega_start;
         // not recorded: the sweep's own point budget does not apply
         let budget = StudySettings::default().max_points;
         let mut cont = self.continuation_over(from, target, None, None, budget)?;
         let mut last = None;
         loop {
-            if interrupt.is_some_and(|f| f.load(Ordering::Relaxed)) {
-                return Ok(Err("interrupted".into()));
+            if interrupted() {
+                return Ok(LeadIn::Interrupted);
             }
             match cont.step() {
                 Ok(StepOutcome::Accepted { point, .. }) => {
@@ -506,12 +517,17 @@ impl SweepProblem {
                 }
                 Ok(StepOutcome::Rejected(_)) => {}
                 Ok(StepOutcome::Finished(f)) => {
-                    return Ok(last
-                        .filter(|p| p.solution.omega == target)
-                        .map(|p| p.solution.unknowns())
-                        .ok_or_else(|| format!("the branch {f} before reaching the start")));
+                    return Ok(match last.filter(|p| p.solution.omega == target) {
+                        Some(p) => LeadIn::Reached {
+                            from,
+                            coeffs: p.solution.unknowns(),
+                        },
+                        None => LeadIn::Failed(format!("the branch {f} before reaching the start")),
+                    });
                 }
-                Err(e @ ContinuationError::Start { .. }) => return Ok(Err(e.to_string())),
+                Err(e @ ContinuationError::Start { .. }) => {
+                    return Ok(LeadIn::Failed(e.to_string()));
+                }
                 Err(e) => return Err(e.into()),
             }
         }
@@ -543,11 +559,13 @@ impl SweepProblem {
         let mut lead_in_from = None;
         // (index, ω, ω/2 share) per point, for the period-doubled stretches
         let mut shares = Vec::new();
-        let result: Result<RunStatus, SweepError> = (|| loop {
-            if interrupt
+        let interrupted = || {
+            interrupt
                 .as_ref()
                 .is_some_and(|f| f.load(Ordering::Relaxed))
-            {
+        };
+        let result: Result<RunStatus, SweepError> = (|| loop {
+            if interrupted() {
                 return Ok(RunStatus::Interrupted);
             }
             let out = match cont.step() {
@@ -559,18 +577,12 @@ impl SweepProblem {
                         prog.omega_rad_s = w;
                         progress(&prog);
                     };
-                    let found = self.lead_in(interrupt.as_deref(), &mut at);
+                    let found = self.lead_in(&interrupted, &mut at)?;
                     prog.lead_in = false;
                     let (from, guess) = match found {
-                        Ok(found) => found,
-                        Err(_)
-                            if interrupt
-                                .as_ref()
-                                .is_some_and(|f| f.load(Ordering::Relaxed)) =>
-                        {
-                            return Ok(RunStatus::Interrupted);
-                        }
-                        Err(e) => return Err(e),
+                        LeadIn::Reached { from, coeffs } => (from, coeffs),
+                        // (`lead_in` hands out only a reached start or an interruption)
+                        _ => return Ok(RunStatus::Interrupted),
                     };
                     lead_in_from = Some(from);
                     cont = self.continuation_over(
@@ -614,7 +626,7 @@ impl SweepProblem {
                     shares.push((
                         rec.index,
                         rec.omega_rad_s,
-                        half_order_share(&self.run.harmonics, self.run.n_mech, &rec.coeffs_mech),
+                        point_half_order_share(&self.run, &rec),
                     ));
                     sink.write_point(&rec)?;
                     prog.points += 1;

@@ -38,7 +38,7 @@ use crate::figure::{
     self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
     draw_chart, draw_legend, legend_height, lighter, render_png, tick,
 };
-use crate::record::derive::{PERIOD_DOUBLED_SHARE, half_order_share};
+use crate::record::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::record::{ReadError, read_recording};
 use crate::stability::BifurcationKind;
 
@@ -282,12 +282,7 @@ fn load_run(
             .map(|p| PointData {
                 omega_rad_s: p.omega_rad_s,
                 stable: p.stable,
-                period_doubled: half_order_share(
-                    &rec.run.harmonics,
-                    rec.run.n_mech,
-                    &p.coeffs_mech,
-                )
-                .is_some_and(|s| s >= PERIOD_DOUBLED_SHARE),
+                period_doubled: is_period_doubled(&rec.run, p),
                 amplitude_m: p.amplitude_rms_m.clone(),
                 delta_v_m: p.clearances.iter().map(|c| c.delta_v_m).collect(),
                 effective_m: p.clearances.iter().map(|c| c.effective_m).collect(),

@@ -425,9 +425,9 @@ const RETRACE_TUBE: f64 = 0.05;
 /// backwards point by point, re-finding every bifurcation on it. On the 1 L/min dual rotor
 /// with a step cap of 0.1 the path bent into the period-doubled (ω/2) response near
 /// 618.4 rad/s, came back onto the primary one near 591.7 rad/s, went up it onto the
-/// stretch it had come down, and retraced that down to 300 rad/s (425 points more). Two consecutive points on the reversed path are required so
-/// that the second sheet of a fold, which runs back close to the first near the tip, does
-/// not count.
+/// stretch it had come down, and retraced that down to 300 rad/s (425 points more). Two
+/// consecutive points on the reversed path are required so that the second sheet of a
+/// fold, which runs back close to the first near the tip, does not count.
 pub fn reversing_point(
     history: &[(Vec<f64>, f64)],
     x: &[f64],

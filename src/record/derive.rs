@@ -400,6 +400,17 @@ pub fn half_order_share(harmonics: &[Ratio], n_mech: usize, coeffs_mech: &[f64])
     })
 }
 
+/// [`half_order_share`] of a recorded point of `run`.
+pub fn point_half_order_share(run: &RunInfo, p: &PointRecord) -> Option<f64> {
+    half_order_share(&run.harmonics, run.n_mech, &p.coeffs_mech)
+}
+
+/// Whether a recorded point's response is period-doubled: its `ω/2` share reaches
+/// [`PERIOD_DOUBLED_SHARE`].
+pub fn is_period_doubled(run: &RunInfo, p: &PointRecord) -> bool {
+    point_half_order_share(run, p).is_some_and(|s| s >= PERIOD_DOUBLED_SHARE)
+}
+
 /// A run of consecutive points whose response is period-doubled (see
 /// [`period_doubled_stretches`]).
 #[derive(Clone, Debug, PartialEq)]

@@ -2,7 +2,7 @@
 
 use std::io::Write;
 
-use crate::record::derive::half_order_share;
+use crate::record::derive::point_half_order_share;
 use crate::record::reader::Recording;
 
 /// Column name of a node's amplitude: `amp_<id>_m`.
@@ -12,7 +12,8 @@ pub fn amplitude_column(id: u32) -> String {
 
 /// Writes one row per point: index, ω, arc length, RMS amplitude per node (Eq. 35),
 /// stable (`1`, `0`, empty when not assessed), bifurcation label, residuals, iterations,
-/// and the [`half_order_share`] (empty when the basis has no half-order harmonic).
+/// and the [`crate::record::derive::half_order_share`] (empty when the basis has no
+/// half-order harmonic).
 pub fn run(rec: &Recording, csv: bool, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut header = vec!["index".to_string(), "omega".into(), "arc_length".into()];
     header.extend(rec.run.nodes.iter().map(|n| amplitude_column(n.id)));
@@ -47,10 +48,7 @@ pub fn run(rec: &Recording, csv: bool, out: &mut dyn Write) -> anyhow::Result<()
         row.push(format!("{:e}", p.residual_mech));
         row.push(format!("{:e}", p.residual_therm));
         row.push(p.newton_iterations.to_string());
-        row.push(
-            half_order_share(&rec.run.harmonics, rec.run.n_mech, &p.coeffs_mech)
-                .map_or(String::new(), |v| format!("{v:.4e}")),
-        );
+        row.push(point_half_order_share(&rec.run, p).map_or(String::new(), |v| format!("{v:.4e}")));
         rows.push(row);
     }
     if csv {

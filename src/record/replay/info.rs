@@ -2,7 +2,9 @@
 
 use std::io::Write;
 
-use crate::record::derive::{PERIOD_DOUBLED_SHARE, half_order_share, period_doubled_stretches};
+use crate::record::derive::{
+    PERIOD_DOUBLED_SHARE, period_doubled_stretches, point_half_order_share,
+};
 use crate::record::reader::Recording;
 
 fn stable_label(s: Option<bool>) -> &'static str {
@@ -96,13 +98,11 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
             b.after_point
         )?;
     }
-    let stretches = period_doubled_stretches(rec.points.iter().map(|p| {
-        (
-            p.index,
-            p.omega_rad_s,
-            half_order_share(&r.harmonics, r.n_mech, &p.coeffs_mech),
-        )
-    }));
+    let stretches = period_doubled_stretches(
+        rec.points
+            .iter()
+            .map(|p| (p.index, p.omega_rad_s, point_half_order_share(r, p))),
+    );
     if !stretches.is_empty() {
         writeln!(
             out,

@@ -5,7 +5,7 @@
 //!   stable parts blue, unstable parts red, not-assessed parts grey; bifurcations marked
 //!   with black circles and labelled SN / PD / NS (like the paper's Figs. 7–11); points
 //!   whose `ω/2` share reaches [`PERIOD_DOUBLED_SHARE`] (the period-doubled response,
-//!   see [`half_order_share`]) dotted in purple;
+//!   see [`crate::record::derive::half_order_share`]) dotted in purple;
 //! * `clearance.png`: RC variation δv (µm) of every bearing against ω, when recorded;
 //! * `temperatures.png`: mean temperature of every thermal node against ω, when recorded.
 //!
@@ -19,7 +19,7 @@ use anyhow::Context;
 use plotters::prelude::*;
 
 use crate::figure::{Chart, LineStyle, Marker, PALETTE, Series, draw_chart, font, render_png};
-use crate::record::derive::{PERIOD_DOUBLED_SHARE, half_order_share};
+use crate::record::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::record::reader::Recording;
 
 const WIDTH: u32 = 1000;
@@ -59,10 +59,7 @@ fn period_doubled_dots(rec: &Recording, y: impl Fn(usize) -> f64) -> Option<Seri
         .points
         .iter()
         .enumerate()
-        .filter(|(_, p)| {
-            half_order_share(&rec.run.harmonics, rec.run.n_mech, &p.coeffs_mech)
-                .is_some_and(|s| s >= PERIOD_DOUBLED_SHARE)
-        })
+        .filter(|(_, p)| is_period_doubled(&rec.run, p))
         .map(|(i, p)| (p.omega_rad_s, y(i)))
         .collect();
     (!points.is_empty()).then(|| Series {
