@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 use tmrotor::thermal::contact::{
-    ContactGeometry, Raceway, agm, elliptic_k, f_rec, parallel_conductance,
+    ContactGeometry, ContactResistance, Raceway, agm, elliptic_k, f_rec, parallel_conductance,
 };
 use tmrotor::thermal::convection::{
     Fluid, ball_lubricant, housing_lubricant, ring_lubricant, roller_lubricant,
@@ -326,5 +326,20 @@ fn hamrock_brewe_axes_agree_with_exact_hertz_ellipse() {
             "alpha {alpha}: b {} vs exact {b}",
             ax.b
         );
+    }
+}
+
+#[test]
+fn the_precomputed_contact_law_equals_the_full_evaluation() {
+    // A ball contact's R(W) = R(1 N)·W^(−1/3) (fixed ellipticity) against the full
+    // Hamrock–Brewe semi-axes and elliptic integral at every load; a roller's in full.
+    for (g, ball) in [(ball_inner(), true), (roller_outer(), false)] {
+        let law = ContactResistance::new(g, ball);
+        for w in [0.01, 1.0, 3.7, 150.0, 2.5e3, 8e4] {
+            let (r, d) = law.eval(w);
+            let (r_full, d_full) = g.resistance(ball, w);
+            assert!(rel(r, r_full) < 1e-12, "ball {ball}, W {w}: {r} vs {r_full}");
+            assert!(rel(d, d_full) < 1e-12, "ball {ball}, W {w}: {d} vs {d_full}");
+        }
     }
 }

@@ -393,12 +393,7 @@ impl std::fmt::Display for FinishReason {
 /// direction, so this fires when the continuation has gone round a closed curve: an isola
 /// it was started on, or one it jumped onto. The path-length condition keeps a tight
 /// Z-shaped pair of folds, whose third sheet may pass close to its first, from counting.
-pub fn closing_point(
-    history: &[(Vec<f64>, f64)],
-    x: &[f64],
-    s_x: f64,
-    tangent: &[f64],
-) -> Option<usize> {
+pub fn closing_point(history: &PathHistory, x: &[f64], s_x: f64, tangent: &[f64]) -> Option<usize> {
     let n = history.len();
     (0..n.saturating_sub(2)).find(|&j| {
         segment_fit(history, j, x, s_x, 0.25).is_some_and(|fit| fit.cos_with(tangent) > 0.8)
@@ -429,13 +424,13 @@ const RETRACE_TUBE: f64 = 0.05;
 /// consecutive points on the reversed path are required so that the second sheet of a
 /// fold, which runs back close to the first near the tip, does not count.
 pub fn reversing_point(
-    history: &[(Vec<f64>, f64)],
+    history: &PathHistory,
     x: &[f64],
     s_x: f64,
     tangent: &[f64],
 ) -> Option<usize> {
     let n = history.len();
-    let (prev, s_prev) = history.last()?;
+    let (prev, s_prev) = history.points.last()?;
     (0..n.saturating_sub(2)).find(|&j| {
         segment_fit(history, j, x, s_x, RETRACE_TUBE)
             .is_some_and(|fit| fit.cos_with(tangent) < -0.8)
@@ -464,36 +459,91 @@ impl SegmentFit<'_> {
     }
 }
 
+/// The accepted points of a path in scaled units (unknowns, then ω) with their
+/// arclengths, and the squared lengths of the segments between them (kept so that
+/// [`closing_point`] and [`reversing_point`] pass over far segments without a full
+/// dot product each).
+#[derive(Clone, Debug, Default)]
+pub struct PathHistory {
+    points: Vec<(Vec<f64>, f64)>,
+    /// `len2[j]`: squared length of the segment `points[j] → points[j+1]`.
+    len2: Vec<f64>,
+}
+
+impl PathHistory {
+    /// An empty path.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Appends the point `x` at arclength `s`.
+    pub fn push(&mut self, x: Vec<f64>, s: f64) {
+        if let Some((p, _)) = self.points.last() {
+            self.len2.push(distance2_above(&x, p, f64::INFINITY));
+        }
+        self.points.push((x, s));
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// Whether the path has no point yet.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+}
+
+/// `|u − v|²`, or any value above `limit` once the partial sum passes it (the last
+/// component, ω in a path's points, is taken first: it separates most far points).
+fn distance2_above(u: &[f64], v: &[f64], limit: f64) -> f64 {
+    let n = u.len().min(v.len());
+    if n == 0 {
+        return 0.0;
+    }
+    let mut sum = (u[n - 1] - v[n - 1]).powi(2);
+    for (cu, cv) in u[..n - 1].chunks(64).zip(v[..n - 1].chunks(64)) {
+        if sum > limit {
+            return sum;
+        }
+        sum += cu
+            .iter()
+            .zip(cv)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>();
+    }
+    sum
+}
+
 /// The segment `history[j] → history[j+1]` when `x` (at arclength `s_x`) projects into it,
 /// lies within `tube` of its length from it, and has at least eight of its lengths of
 /// path between them.
 fn segment_fit<'a>(
-    history: &'a [(Vec<f64>, f64)],
+    history: &'a PathHistory,
     j: usize,
     x: &[f64],
     s_x: f64,
     tube: f64,
 ) -> Option<SegmentFit<'a>> {
-    let dot = |u: &[f64], v: &[f64], w: &[f64], z: &[f64]| -> f64 {
-        // (u − v)·(w − z)
-        u.iter()
-            .zip(v)
-            .zip(w.iter().zip(z))
-            .map(|((a, b), (c, e))| (a - b) * (c - e))
-            .sum()
-    };
-    let ((p, _), (q, s_q)) = (history.get(j)?, history.get(j + 1)?);
-    let len2 = dot(q, p, q, p);
+    let ((p, _), (q, s_q)) = (history.points.get(j)?, history.points.get(j + 1)?);
+    let len2 = *history.len2.get(j)?;
     let len = len2.sqrt();
     if len.is_nan() || len <= 0.0 || s_x - s_q < 8.0 * len {
         return None;
     }
     // within a quarter length of the segment, x is at most 1.03·len from its start
-    let dist2 = dot(x, p, x, p);
+    let dist2 = distance2_above(x, p, 1.07 * len2);
     if dist2 > 1.07 * len2 {
         return None;
     }
-    let along = dot(x, p, q, p) / len;
+    let along = x
+        .iter()
+        .zip(p)
+        .zip(q)
+        .map(|((a, b), c)| (a - b) * (c - b))
+        .sum::<f64>()
+        / len;
     if !(-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) {
         return None;
     }
@@ -551,7 +601,7 @@ pub struct Continuation<'a> {
     finish_after: Option<FinishReason>,
     /// Accepted points in scaled units (unknowns, then ω) with their arclengths, for
     /// [`closing_point`].
-    history: Vec<(Vec<f64>, f64)>,
+    history: PathHistory,
     /// With a stability method: the accepted point at `current`, not handed out yet (see
     /// the module docs).
     held: Option<Held>,
@@ -711,7 +761,7 @@ impl<'a> Continuation<'a> {
             n_points: 0,
             finished: None,
             finish_after: None,
-            history: Vec::new(),
+            history: PathHistory::new(),
             held: None,
             previous: None,
         })
@@ -996,7 +1046,8 @@ impl<'a> Continuation<'a> {
         self.scales.push(sw);
         let tangent = self.tangent(&a, omega, None, None, None)?;
         let point = self.bare_point(&a, omega, &stats, 0.0);
-        self.history = vec![(self.scaled(&a, omega), 0.0)];
+        self.history = PathHistory::new();
+        self.history.push(self.scaled(&a, omega), 0.0);
         self.n_points = 1;
         let cur = Current {
             a,
@@ -1291,7 +1342,7 @@ impl<'a> Continuation<'a> {
                 earlier,
             });
         }
-        self.history.push((x, c.arclength));
+        self.history.push(x, c.arclength);
         if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
             self.finish_after = Some(FinishReason::MaxPoints);
         }
@@ -1625,13 +1676,13 @@ mod tests {
         first_hit(path, reversing_point)
     }
 
-    type PathCheck = fn(&[(Vec<f64>, f64)], &[f64], f64, &[f64]) -> Option<usize>;
+    type PathCheck = fn(&PathHistory, &[f64], f64, &[f64]) -> Option<usize>;
 
     fn first_hit(path: &[(Vec<f64>, Vec<f64>)], check: PathCheck) -> Option<(usize, usize)> {
-        let mut history: Vec<(Vec<f64>, f64)> = Vec::new();
+        let mut history = PathHistory::new();
         let mut s = 0.0;
         for (k, (x, t)) in path.iter().enumerate() {
-            if let Some((prev, _)) = history.last() {
+            if let Some((prev, _)) = history.points.last() {
                 s += x
                     .iter()
                     .zip(prev)
@@ -1642,9 +1693,26 @@ mod tests {
             if let Some(j) = check(&history, x, s, t) {
                 return Some((k, j));
             }
-            history.push((x.clone(), s));
+            history.push(x.clone(), s);
         }
         None
+    }
+
+    #[test]
+    fn the_early_exit_distance_is_exact_or_above_its_limit() {
+        let u: Vec<f64> = (0..300).map(|k| (k as f64 * 0.37).sin()).collect();
+        let v: Vec<f64> = (0..300).map(|k| (k as f64 * 0.11).cos()).collect();
+        let exact: f64 = u.iter().zip(&v).map(|(a, b)| (a - b).powi(2)).sum();
+        let full = distance2_above(&u, &v, f64::INFINITY);
+        assert!((full - exact).abs() <= 1e-12 * exact);
+        // a limit below the distance: some partial sum above the limit comes back
+        for limit in [0.0, 1.0, 0.5 * exact, 0.99 * exact] {
+            let d = distance2_above(&u, &v, limit);
+            assert!(d > limit && d <= exact * (1.0 + 1e-12), "{limit}: {d}");
+        }
+        // a limit above it: the exact distance
+        let d = distance2_above(&u, &v, 1.01 * exact);
+        assert!((d - exact).abs() <= 1e-12 * exact);
     }
 
     #[test]

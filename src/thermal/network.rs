@@ -43,7 +43,7 @@
 //! a fixed count) instead of the instantaneous one; `∂g/∂n_b` is provided for either use.
 
 use super::ThermalError;
-use super::contact::{ContactGeometry, Raceway, parallel_conductance};
+use super::contact::{ContactGeometry, ContactResistance, Raceway, parallel_conductance_of};
 use super::convection::{
     Coefficient, Fluid, ball_lubricant, cylinder_conduction, flat_conduction, housing_lubricant,
     ring_lubricant, roller_lubricant, shaft_ambient,
@@ -151,8 +151,8 @@ struct BearingNet {
     lo: usize,
     ll: usize,
     lflanks: Vec<usize>,
-    inner_contact: ContactGeometry,
-    outer_contact: ContactGeometry,
+    inner_contact: ContactResistance,
+    outer_contact: ContactResistance,
     palmgren: Palmgren,
     inner_ratio: f64,
     outer_ratio: f64,
@@ -426,8 +426,14 @@ impl ThermalNetwork {
                 lo: 0,
                 ll: 0,
                 lflanks: Vec::new(),
-                inner_contact: contact(Raceway::Inner, b.inner_raceway_m),
-                outer_contact: contact(Raceway::Outer, b.outer_raceway_m),
+                inner_contact: ContactResistance::new(
+                    contact(Raceway::Inner, b.inner_raceway_m),
+                    ball,
+                ),
+                outer_contact: ContactResistance::new(
+                    contact(Raceway::Outer, b.outer_raceway_m),
+                    ball,
+                ),
                 palmgren: Palmgren {
                     f_l: b.f_l,
                     f_v: b.f_v,
@@ -769,9 +775,9 @@ impl ThermalNetwork {
         };
 
         // Hertz contacts (Eqs. 15–17).
-        for (ring, geom) in [(b.li, &b.inner_contact), (b.lo, &b.outer_contact)] {
+        for (ring, law) in [(b.li, &b.inner_contact), (b.lo, &b.outer_contact)] {
             let (g, dg_df, dg_dn) =
-                parallel_conductance(geom, b.ball, load.fb_n, load.n_loaded, self.min_load_n);
+                parallel_conductance_of(|w| law.eval(w), load.fb_n, load.n_loaded, self.min_load_n);
             link(out, b.lb, ring, g);
             if !derivatives {
                 continue;
@@ -838,16 +844,14 @@ impl ThermalNetwork {
             let w_c = cage_speed_rad_s(b.inner_raceway_m, b.outer_raceway_m, w_i, w_o);
             let (nu_mm, _) = self.viscosity.eval(temps[b.l]);
             let nu = 1e-6 * nu_mm;
-            let (g_bi, _, _) = parallel_conductance(
-                &b.inner_contact,
-                b.ball,
+            let (g_bi, _, _) = parallel_conductance_of(
+                |w| b.inner_contact.eval(w),
                 load.fb_n,
                 load.n_loaded,
                 self.min_load_n,
             );
-            let (g_bo, _, _) = parallel_conductance(
-                &b.outer_contact,
-                b.ball,
+            let (g_bo, _, _) = parallel_conductance_of(
+                |w| b.outer_contact.eval(w),
                 load.fb_n,
                 load.n_loaded,
                 self.min_load_n,
