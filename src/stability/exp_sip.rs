@@ -500,15 +500,17 @@ impl ExpSip {
             y.copy_from(y_t.transpose());
             // innermost Horner factor I + (Δ/N)·Y without a product by the identity
             let order = self.series_order;
+            let first = if order >= 2 {
+                delta / order as f64
+            } else {
+                0.0
+            };
             for j in 0..r {
-                for i in 0..r {
-                    h[(i, j)] = if order >= 2 {
-                        delta / order as f64 * y[(i, j)]
-                    } else {
-                        0.0
-                    };
+                let hj = column_mut(h, j);
+                for (hv, yv) in hj.iter_mut().zip(column(y, j)) {
+                    *hv = first * yv;
                 }
-                h[(j, j)] += 1.0;
+                hj[j] += 1.0;
             }
             for i in (2..order).rev() {
                 matmul(

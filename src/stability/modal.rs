@@ -189,7 +189,7 @@ impl RealModal {
                 }
                 ModalBlock::Pair { re, im, .. } => {
                     let v = f(Complex64::new(re, im));
-                    rotations.push([v.re, v.im, -v.im, v.re]);
+                    rotations.push([v.re, -v.im, v.im, v.re]);
                 }
             }
         }
@@ -208,7 +208,8 @@ impl RealModal {
 pub struct BlockDiagonal {
     /// The `1 × 1` blocks (rows `0..scale.len()`).
     scale: Vec<f64>,
-    /// The `2 × 2` blocks `[e₁₁, e₁₂, e₂₁, e₂₂]`, row pairs after the scalings.
+    /// The `2 × 2` blocks by columns, `[e₁₁, e₂₁, e₁₂, e₂₂]`, row pairs after the
+    /// scalings (by columns so that a block's product is two 2-lane multiply–adds).
     rotations: Vec<[f64; 4]>,
 }
 
@@ -231,8 +232,8 @@ impl BlockDiagonal {
                 }
                 for (k, e) in self.rotations.iter().enumerate() {
                     let (a, b) = (c[nr + 2 * k], c[nr + 2 * k + 1]);
-                    c[nr + 2 * k] = e[0] * a + e[1] * b;
-                    c[nr + 2 * k + 1] = e[2] * a + e[3] * b;
+                    c[nr + 2 * k] = e[0] * a + e[2] * b;
+                    c[nr + 2 * k + 1] = e[1] * a + e[3] * b;
                 }
                 continue;
             };
@@ -241,8 +242,8 @@ impl BlockDiagonal {
             real.iter_mut().zip(&self.scale).for_each(|(v, e)| *v *= e);
             for (p, e) in pairs.chunks_exact_mut(2).zip(&self.rotations) {
                 let (a, b) = (p[0], p[1]);
-                p[0] = e[0] * a + e[1] * b;
-                p[1] = e[2] * a + e[3] * b;
+                p[0] = e[0] * a + e[2] * b;
+                p[1] = e[1] * a + e[3] * b;
             }
         }
     }
@@ -270,7 +271,7 @@ impl BlockDiagonal {
                 let j = row + dc;
                 if (c0..c1).contains(&j) {
                     for dr in 0..2 {
-                        out[(row + dr, j - c0)] = e[dr * 2 + dc];
+                        out[(row + dr, j - c0)] = e[dc * 2 + dr];
                     }
                 }
             }
