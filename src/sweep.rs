@@ -371,6 +371,23 @@ impl StabilityMethod for GivingUp {
     }
 }
 
+/// Which rayon pool a sweep's next continuation step runs in (see
+/// [`SweepProblem::run_in`]); asked before every step, so that a campaign can widen the
+/// pool of its last running sweep once the others are done.
+pub trait StepPools: Sync {
+    /// The pool for the next step; `None`: the pool the sweep was called from.
+    fn for_next_step(&self) -> Option<&rayon::ThreadPool>;
+}
+
+/// Every step in the pool the sweep was called from.
+pub struct CurrentPool;
+
+impl StepPools for CurrentPool {
+    fn for_next_step(&self) -> Option<&rayon::ThreadPool> {
+        None
+    }
+}
+
 /// A built sweep problem: model, coupled system, basis and the run description.
 pub struct SweepProblem {
     pub settings: StudySettings,
@@ -539,7 +556,20 @@ impl SweepProblem {
         &self,
         sink: &mut dyn Sink,
         interrupt: Option<Arc<AtomicBool>>,
+        progress: impl FnMut(&Progress),
+    ) -> Result<SweepReport, SweepError> {
+        self.run_in(sink, interrupt, progress, &CurrentPool)
+    }
+
+    /// [`Self::run`] with every continuation step (corrector, tangent, the previous
+    /// point's stability beside it, bifurcation searches) run in the rayon pool that
+    /// `pools` names at that step.
+    pub fn run_in(
+        &self,
+        sink: &mut dyn Sink,
+        interrupt: Option<Arc<AtomicBool>>,
         mut progress: impl FnMut(&Progress),
+        pools: &dyn StepPools,
     ) -> Result<SweepReport, SweepError> {
         let start = std::time::Instant::now();
         let s = &self.settings;
@@ -568,7 +598,11 @@ impl SweepProblem {
             if interrupted() {
                 return Ok(RunStatus::Interrupted);
             }
-            let out = match cont.step() {
+            let step = match pools.for_next_step() {
+                Some(pool) => pool.install(|| cont.step()),
+                None => cont.step(),
+            };
+            let out = match step {
                 Ok(o) => o,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
