@@ -20,7 +20,8 @@ pub struct CampaignArgs {
     pub file: Option<PathBuf>,
     /// Runs computed at the same time (default: one per core). Each run's parallel parts
     /// get `threads / runs at a time` threads of their own (at least one); with one run
-    /// at a time, it uses every core.
+    /// at a time, it uses every core, and so does the last run still going once all
+    /// have started.
     #[arg(long)]
     pub threads: Option<usize>,
     /// Run only shard I of N (runs whose position p has p mod N = I), e.g. `--shard 0/4`.
