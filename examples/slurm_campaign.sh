@@ -5,6 +5,11 @@
 #   # when all tasks are done:
 #   tmrotor campaign merge examples/paper_campaign-out
 #
+# A task that reaches its time limit gets SIGTERM from Slurm: the run in progress stops after
+# its current step with a complete recording (status `interrupted`), the manifest is
+# written, and tmrotor exits with status 130, so the task shows as not completed.
+# Submitting the same array again resumes: completed runs are skipped.
+#
 #SBATCH --job-name=tmrotor-campaign
 #SBATCH --cpus-per-task=2
 #SBATCH --time=01:00:00

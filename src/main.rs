@@ -10,9 +10,15 @@ fn main() -> std::process::ExitCode {
     let cli = tmrotor::cli::Cli::parse();
     match tmrotor::cli::run(cli) {
         Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(err) => {
-            eprintln!("error: {err:#}");
-            std::process::ExitCode::from(1)
-        }
+        Err(err) => match err.downcast_ref::<tmrotor::cli::Interrupted>() {
+            Some(stop) => {
+                eprintln!("interrupted: {stop}");
+                std::process::ExitCode::from(tmrotor::cli::INTERRUPTED_EXIT)
+            }
+            None => {
+                eprintln!("error: {err:#}");
+                std::process::ExitCode::from(1)
+            }
+        },
     }
 }

@@ -146,7 +146,7 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         }
     };
     let interrupt = install_interrupt_flag().ok();
-    let manifest = campaign::run(file, args.threads, shard, interrupt, &progress)?;
+    let manifest = campaign::run(file, args.threads, shard, interrupt.clone(), &progress)?;
     if let Ok(b) = bars.lock() {
         for (_, bar) in b.iter() {
             bar.finish_and_clear();
@@ -159,16 +159,49 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
             r.name, r.status, r.points, r.seconds, r.recording
         )?;
     }
-    if args.no_figures {
+    if !args.no_figures {
+        figures(&manifest, file, shard.is_some(), out)?;
+    }
+    let stopped = interrupt.is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed));
+    let unfinished: Vec<&str> = manifest
+        .runs
+        .iter()
+        .filter(|r| r.status != "completed")
+        .map(|r| r.name.as_str())
+        .collect();
+    if unfinished.is_empty() {
         return Ok(());
     }
+    let which = unfinished.join(", ");
+    if stopped {
+        return Err(super::Interrupted(format!(
+            "{} of {} runs not completed ({which}); the same command resumes them",
+            unfinished.len(),
+            manifest.runs.len()
+        ))
+        .into());
+    }
+    anyhow::bail!(
+        "{} of {} runs did not complete ({which}); their status and how they ended are in the          manifest",
+        unfinished.len(),
+        manifest.runs.len()
+    )
+}
+
+/// The campaign's figures once every run is complete (or why they are not drawn).
+fn figures(
+    manifest: &campaign::Manifest,
+    file: &std::path::Path,
+    sharded: bool,
+    out: &mut impl std::io::Write,
+) -> anyhow::Result<()> {
     let pending = manifest
         .runs
         .iter()
         .filter(|r| r.status != "completed")
         .count();
     let (_, _, dir) = campaign::load(file)?;
-    if shard.is_some() {
+    if sharded {
         writeln!(
             out,
             "figures: not written for a shard; after `tmrotor campaign merge {0}`, run \

@@ -43,6 +43,23 @@ pub enum Command {
     Truncation(truncation::TruncationArgs),
 }
 
+/// A sweep or campaign stopped by Ctrl-C or a termination signal (SIGTERM, SIGHUP: a
+/// cluster job at its time limit) after writing what it had computed: the process exits
+/// with status 130, not 0, so that scripts and schedulers see the work is not complete.
+#[derive(Debug)]
+pub struct Interrupted(pub String);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Interrupted {}
+
+/// Exit status of an [`Interrupted`] run (128 + SIGINT, the shell's convention).
+pub const INTERRUPTED_EXIT: u8 = 130;
+
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {

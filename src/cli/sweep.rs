@@ -239,6 +239,14 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             100.0 * PERIOD_DOUBLED_SHARE
         )?;
     }
+    if report.status == crate::record::RunStatus::Interrupted {
+        return Err(super::Interrupted(format!(
+            "the sweep stopped after {} points; {} is a complete recording of them",
+            report.points,
+            args.output.display()
+        ))
+        .into());
+    }
     Ok(())
 }
 

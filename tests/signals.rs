@@ -1,0 +1,61 @@
+//! A sweep stopped by Ctrl-C (SIGINT) or by a termination signal (SIGTERM: what a cluster
+//! scheduler sends at a job's time limit) ends cleanly: a complete recording of the points
+//! computed so far with status `interrupted`, and exit status 130 so that scripts and
+//! schedulers see the work is not complete.
+#![cfg(unix)]
+
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use tmrotor::record::{RunStatus, read_recording};
+
+const BIN: &str = env!("CARGO_BIN_EXE_tmrotor");
+
+fn stopped_by(signal: &str) {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sweep.mcap");
+    let mut child = Command::new(BIN)
+        .args(["sweep", "--output"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the sweep starts");
+    // the recording is created when the run begins; a few points later, the signal
+    let start = Instant::now();
+    while !out.exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no recording");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_secs(4));
+    assert!(
+        child.try_wait().expect("status").is_none(),
+        "the sweep ended before the signal"
+    );
+    let kill = Command::new("kill")
+        .args([signal, &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(kill.success());
+    let output = child.wait_with_output().expect("the sweep ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{signal}: {stderr}");
+    assert!(
+        stderr.contains("interrupted: the sweep stopped after"),
+        "{stderr}"
+    );
+    let rec = read_recording(&out).expect("a readable recording");
+    assert!(rec.complete, "{signal}: {:?}", rec.notes);
+    assert_eq!(rec.status, Some(RunStatus::Interrupted));
+    assert!(!rec.points.is_empty(), "{signal}: no point kept");
+}
+
+#[test]
+fn sigterm_stops_a_sweep_with_a_complete_recording() {
+    stopped_by("-TERM");
+}
+
+#[test]
+fn sigint_stops_a_sweep_with_a_complete_recording() {
+    stopped_by("-INT");
+}
