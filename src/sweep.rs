@@ -22,6 +22,7 @@ use thiserror::Error;
 
 use crate::continuation::{
     BranchPoint, Continuation, ContinuationError, ContinuationOptions, FinishReason, StepOutcome,
+    Timings,
 };
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, HarmonicBalance, Ratio};
@@ -279,6 +280,10 @@ pub struct SweepReport {
     /// The speed a lead-in continuation started from, when the start could not be solved
     /// from the linear response (see `SweepProblem::run`).
     pub lead_in_from: Option<f64>,
+    /// Where the recorded continuation's time went (the lead-in not included).
+    pub timings: Timings,
+    /// Time spent deriving the recorded quantities of the points and writing them.
+    pub record_seconds: f64,
 }
 
 /// A stability method that stops trying after a *setting* error (a system too stiff for
@@ -587,6 +592,7 @@ impl SweepProblem {
         let mut n_bif = 0u32;
         let mut finish = None;
         let mut lead_in_from = None;
+        let mut record_seconds = 0.0;
         // (index, ω, ω/2 share) per point, for the period-doubled stretches
         let mut shares = Vec::new();
         let interrupted = || {
@@ -656,6 +662,7 @@ impl SweepProblem {
                             bifs.push((b.solution.omega, kind.label().to_string()));
                         }
                     }
+                    let recording = std::time::Instant::now();
                     let rec = self.point_record(prog.points as u64, &point)?;
                     shares.push((
                         rec.index,
@@ -663,6 +670,7 @@ impl SweepProblem {
                         point_half_order_share(&self.run, &rec),
                     ));
                     sink.write_point(&rec)?;
+                    record_seconds += recording.elapsed().as_secs_f64();
                     prog.points += 1;
                     prog.omega_rad_s = point.solution.omega;
                     prog.bifurcations = bifs.len();
@@ -694,6 +702,8 @@ impl SweepProblem {
                     rejected_steps: prog.rejected_steps,
                     period_doubled: period_doubled_stretches(shares),
                     lead_in_from,
+                    timings: cont.timings(),
+                    record_seconds,
                 })
             }
             Err(e) => {

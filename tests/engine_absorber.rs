@@ -227,3 +227,40 @@ fn a_slow_multiplier_below_one_does_not_stop_the_crossing_search() {
         );
     }
 }
+
+#[test]
+fn the_continuation_accounts_for_its_time() {
+    let sys = Absorber::default();
+    let basis = Basis::integer(7).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let floquet = VariationalFloquet { steps: 400 };
+    let mut cont = Continuation::new(hb, ContinuationOptions::new(0.8, 1.4), Some(&floquet))
+        .expect("continuation");
+    let start = std::time::Instant::now();
+    let branch = cont.run(|_| {}).expect("run");
+    let elapsed = start.elapsed().as_secs_f64();
+    let t = cont.timings();
+    // one corrector step per point after the start and per refused step; one evaluation
+    // per accepted point; a search for each of the branch's Neimark–Sacker points
+    assert_eq!(
+        t.steps,
+        branch.points.len() - 1 + branch.rejected_steps,
+        "{t:?}"
+    );
+    assert_eq!(t.evaluations, branch.points.len(), "{t:?}");
+    assert!(
+        t.searches >= branch.bifurcations.len() / 2 && t.searches > 0,
+        "{t:?}"
+    );
+    // each part took time, and no part more than the whole run (single-part sums)
+    for (what, secs) in [
+        ("steps", t.step_seconds),
+        ("stability", t.stability_seconds),
+        ("searches", t.search_seconds),
+    ] {
+        assert!(
+            secs > 0.0 && secs <= elapsed,
+            "{what}: {secs} s of {elapsed} s"
+        );
+    }
+}

@@ -81,6 +81,8 @@
 
 pub mod csv;
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use thiserror::Error;
 
 use crate::hb::newton::{self, ArcConstraint, NewtonError, NewtonOptions};
@@ -608,6 +610,63 @@ pub struct Continuation<'a> {
     /// With a stability method: the accepted point before `current`, its stability known,
     /// for locating a change between it and `current`.
     previous: Option<Current>,
+    /// Where the time went (see [`Continuation::timings`]).
+    clock: Clock,
+}
+
+/// Time spent in the parts of a continuation, each summed over its calls (wall time of
+/// each call): the corrector steps (predictor, corrector and tangent, accepted or
+/// refused), the stability evaluations of the accepted points, and the location of
+/// bifurcations between points (its correctors and evaluations). With a stability
+/// method on more than one thread a point's evaluation runs beside the next step's
+/// corrector, so the three add up to more than the elapsed time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Timings {
+    /// Corrector steps tried (accepted and refused).
+    pub steps: usize,
+    pub step_seconds: f64,
+    /// Stability evaluations of accepted points.
+    pub evaluations: usize,
+    pub stability_seconds: f64,
+    /// Pairs of neighbouring points searched for a bifurcation between them.
+    pub searches: usize,
+    pub search_seconds: f64,
+}
+
+/// Counters behind [`Timings`], shared by the tasks that run side by side.
+#[derive(Debug, Default)]
+struct Clock {
+    steps: AtomicU64,
+    step_ns: AtomicU64,
+    evaluations: AtomicU64,
+    stability_ns: AtomicU64,
+    searches: AtomicU64,
+    search_ns: AtomicU64,
+}
+
+impl Clock {
+    /// Runs `f`, adding one call and its wall time to `count` and `ns`.
+    fn time<R>(count: &AtomicU64, ns: &AtomicU64, f: impl FnOnce() -> R) -> R {
+        let start = std::time::Instant::now();
+        let out = f();
+        let spent = u64::try_from(start.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        count.fetch_add(1, Ordering::Relaxed);
+        ns.fetch_add(spent, Ordering::Relaxed);
+        out
+    }
+
+    fn read(&self) -> Timings {
+        let n = |c: &AtomicU64| usize::try_from(c.load(Ordering::Relaxed)).unwrap_or(usize::MAX);
+        let secs = |c: &AtomicU64| c.load(Ordering::Relaxed) as f64 * 1e-9;
+        Timings {
+            steps: n(&self.steps),
+            step_seconds: secs(&self.step_ns),
+            evaluations: n(&self.evaluations),
+            stability_seconds: secs(&self.stability_ns),
+            searches: n(&self.searches),
+            search_seconds: secs(&self.search_ns),
+        }
+    }
 }
 
 /// An accepted point waiting for its stability, or for the next step to hand it out.
@@ -764,7 +823,13 @@ impl<'a> Continuation<'a> {
             history: PathHistory::new(),
             held: None,
             previous: None,
+            clock: Clock::default(),
         })
+    }
+
+    /// Where the time went so far (see [`Timings`]).
+    pub fn timings(&self) -> Timings {
+        self.clock.read()
     }
 
     /// The harmonic-balance problem.
@@ -802,7 +867,12 @@ impl<'a> Continuation<'a> {
 
     /// The stability of `solution`, or the method's error message.
     fn assess(&self, solution: &HbSolution) -> (Option<FloquetResult>, Option<String>) {
-        self.assess_with(solution, |m, system, orbit| m.multipliers(system, orbit))
+        if self.stability.is_none() {
+            return (None, None);
+        }
+        Clock::time(&self.clock.evaluations, &self.clock.stability_ns, || {
+            self.assess_with(solution, |m, system, orbit| m.multipliers(system, orbit))
+        })
     }
 
     /// As [`Self::assess`], with the method's evaluation for a bifurcation search
@@ -1188,6 +1258,22 @@ impl<'a> Continuation<'a> {
     /// point where the numbers of unstable multipliers differ and the crossing is not a
     /// real multiplier through +1 (that one belongs to a fold).
     fn located_changes(&self, from: &Current, to: &Current, index: usize) -> Vec<BranchPoint> {
+        let nu = self.hb.n_unknowns();
+        let fold = from.tangent[nu] * to.tangent[nu] < 0.0;
+        let counts_differ = match (&from.stability, &to.stability) {
+            (Some(fa), Some(fb)) => fa.unstable_count() != fb.unstable_count(),
+            _ => false,
+        };
+        if !(fold || counts_differ) {
+            return Vec::new();
+        }
+        Clock::time(&self.clock.searches, &self.clock.search_ns, || {
+            self.locate_between(from, to, index)
+        })
+    }
+
+    /// [`Self::located_changes`] once a fold or a change of the unstable count is seen.
+    fn locate_between(&self, from: &Current, to: &Current, index: usize) -> Vec<BranchPoint> {
         let span = to.arclength - from.arclength;
         let nu = self.hb.n_unknowns();
         let mut found = Vec::new();
@@ -1376,6 +1462,13 @@ impl<'a> Continuation<'a> {
     /// The corrected point of a step of `self.ds` from `cur`, its tangent, and the
     /// re-solve on the ω bound when the step left the range; or why the step is rejected.
     fn candidate(&self, cur: &Current) -> Result<Candidate, RejectReason> {
+        Clock::time(&self.clock.steps, &self.clock.step_ns, || {
+            self.try_step(cur)
+        })
+    }
+
+    /// [`Self::candidate`], untimed.
+    fn try_step(&self, cur: &Current) -> Result<Candidate, RejectReason> {
         let ds = self.ds;
         let nu = self.hb.n_unknowns();
         let corrector = |e: &dyn std::fmt::Display| RejectReason::Corrector {
