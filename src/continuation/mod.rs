@@ -43,7 +43,9 @@
 //! [`HbSolution`]. The bifurcations between neighbouring points are located in arclength
 //! (re-correcting from the earlier point at intermediate arclength) and emitted as
 //! labelled points; the saddle-nodes need no multipliers and are located without a
-//! stability method too:
+//! stability method too. A point is handed out one step late: its stability evaluation,
+//! and then the location of a change between the point before it and it, run beside the
+//! next step's corrector (`rayon::join`), so that both cores have work:
 //!
 //! * **saddle-nodes at folds.** Where the ω-component of the tangent changes sign, the
 //!   branch turns in ω; a real multiplier passes through +1 exactly there. The fold is
@@ -1240,15 +1242,29 @@ impl<'a> Continuation<'a> {
     /// Stores the stability of the held point at `cur` and locates a change of stability
     /// between the previous point and it.
     fn settle(&mut self, cur: &mut Current, result: (Option<FloquetResult>, Option<String>)) {
+        let found = match (&self.previous, &self.held) {
+            (Some(prev), Some(held)) => {
+                Some(self.located_changes_with(prev, cur, result.0.as_ref(), held.point.index))
+            }
+            _ => None,
+        };
+        self.settle_with(cur, result, found);
+    }
+
+    /// [`Self::settle`] with the change between the previous point and the held one
+    /// already located (`found`).
+    fn settle_with(
+        &mut self,
+        cur: &mut Current,
+        result: (Option<FloquetResult>, Option<String>),
+        found: Option<Vec<BranchPoint>>,
+    ) {
         let Some(mut held) = self.held.take() else {
             return;
         };
         cur.stability.clone_from(&result.0);
         (held.point.stability, held.point.stability_error) = result;
-        if let Some(prev) = &self.previous {
-            held.bifurcations
-                .extend(self.located_changes(prev, cur, held.point.index));
-        }
+        held.bifurcations.extend(found.into_iter().flatten());
         self.held = Some(held);
     }
 
@@ -1258,9 +1274,20 @@ impl<'a> Continuation<'a> {
     /// point where the numbers of unstable multipliers differ and the crossing is not a
     /// real multiplier through +1 (that one belongs to a fold).
     fn located_changes(&self, from: &Current, to: &Current, index: usize) -> Vec<BranchPoint> {
+        self.located_changes_with(from, to, to.stability.as_ref(), index)
+    }
+
+    /// [`Self::located_changes`] with `to`'s stability given (not yet stored in it).
+    fn located_changes_with(
+        &self,
+        from: &Current,
+        to: &Current,
+        to_stability: Option<&FloquetResult>,
+        index: usize,
+    ) -> Vec<BranchPoint> {
         let nu = self.hb.n_unknowns();
         let fold = from.tangent[nu] * to.tangent[nu] < 0.0;
-        let counts_differ = match (&from.stability, &to.stability) {
+        let counts_differ = match (&from.stability, to_stability) {
             (Some(fa), Some(fb)) => fa.unstable_count() != fb.unstable_count(),
             _ => false,
         };
@@ -1268,19 +1295,25 @@ impl<'a> Continuation<'a> {
             return Vec::new();
         }
         Clock::time(&self.clock.searches, &self.clock.search_ns, || {
-            self.locate_between(from, to, index)
+            self.locate_between(from, to, to_stability, index)
         })
     }
 
-    /// [`Self::located_changes`] once a fold or a change of the unstable count is seen.
-    fn locate_between(&self, from: &Current, to: &Current, index: usize) -> Vec<BranchPoint> {
+    /// [`Self::located_changes_with`] once a fold or a change of the unstable count is seen.
+    fn locate_between(
+        &self,
+        from: &Current,
+        to: &Current,
+        to_stability: Option<&FloquetResult>,
+        index: usize,
+    ) -> Vec<BranchPoint> {
         let span = to.arclength - from.arclength;
         let nu = self.hb.n_unknowns();
         let mut found = Vec::new();
         if from.tangent[nu] * to.tangent[nu] < 0.0 {
             found.extend(self.locate_fold(from, span, to.tangent[nu], index));
         }
-        let (Some(fa), Some(fb)) = (&from.stability, &to.stability) else {
+        let (Some(fa), Some(fb)) = (&from.stability, to_stability) else {
             return found;
         };
         // each kind whose count outside the circle changed, when the total changed too (a
@@ -1381,16 +1414,31 @@ impl<'a> Continuation<'a> {
 
     fn advance(&mut self, cur: &mut Current) -> Result<StepOutcome, ContinuationError> {
         // the held point's stability alongside this step's corrector
+        // ... and the location of a change between the previous point and the held one
+        // (which needs the held point's stability) after it, still beside the corrector
         let (assessed, candidate) = match self.held.as_ref().filter(|h| !h.assessed()) {
             Some(held) => {
-                let (result, candidate) =
-                    rayon::join(|| self.assess(&held.point.solution), || self.candidate(cur));
-                (Some(result), candidate)
+                let (assessed, candidate) = rayon::join(
+                    || {
+                        let result = self.assess(&held.point.solution);
+                        let found = self.previous.as_ref().map(|prev| {
+                            self.located_changes_with(
+                                prev,
+                                cur,
+                                result.0.as_ref(),
+                                held.point.index,
+                            )
+                        });
+                        (result, found)
+                    },
+                    || self.candidate(cur),
+                );
+                (Some(assessed), candidate)
             }
             None => (None, self.candidate(cur)),
         };
-        if let Some(result) = assessed {
-            self.settle(cur, result);
+        if let Some((result, found)) = assessed {
+            self.settle_with(cur, result, found);
         }
         let c = match candidate {
             Ok(c) => c,
