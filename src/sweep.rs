@@ -286,6 +286,43 @@ pub struct SweepReport {
     pub record_seconds: f64,
 }
 
+impl SweepReport {
+    /// Where the sweep's time went, one line (`corrector … s (… steps, … ms each),
+    /// stability …, bifurcation location …, recording … s`), each part summed over its
+    /// calls (see [`Timings`]).
+    pub fn time_summary(&self) -> String {
+        let t = &self.timings;
+        let per = |secs: f64, n: usize| {
+            if n > 0 {
+                format!(", {:.0} ms each", 1e3 * secs / n as f64)
+            } else {
+                String::new()
+            }
+        };
+        let mut line = format!(
+            "corrector {:.1} s ({} steps{})",
+            t.step_seconds,
+            t.steps,
+            per(t.step_seconds, t.steps)
+        );
+        if t.evaluations > 0 {
+            line += &format!(
+                ", stability {:.1} s ({} evaluations{}, beside the corrector)",
+                t.stability_seconds,
+                t.evaluations,
+                per(t.stability_seconds, t.evaluations)
+            );
+        }
+        if t.searches > 0 {
+            line += &format!(
+                ", bifurcation location {:.1} s ({} searches)",
+                t.search_seconds, t.searches
+            );
+        }
+        line + &format!(", recording {:.1} s", self.record_seconds)
+    }
+}
+
 /// A stability method that stops trying after a *setting* error (a system too stiff for
 /// the method is too stiff at every point): the first reason is kept for the report and
 /// every later point is left unassessed at no cost, instead of failing the same way a

@@ -41,6 +41,11 @@ fn campaign_runs_resumes_shards_and_merges() {
     for r in &m.runs {
         assert_eq!(r.status, "completed", "{r:?}");
         assert!(r.points >= 1);
+        // where its time went
+        assert!(
+            r.time.starts_with("corrector ") && r.time.contains(", recording "),
+            "{r:?}"
+        );
         // how the branch ended: at the bound or at max_points = 3
         assert!(
             r.ended == "reached ω = 402.000 rad/s"

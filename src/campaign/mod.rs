@@ -110,6 +110,10 @@ pub struct ManifestEntry {
     #[serde(default)]
     pub refused_steps: usize,
     pub seconds: f64,
+    /// Where the run's time went ([`crate::sweep::SweepReport::time_summary`]); absent in
+    /// older manifests and for runs that did not finish their sweep.
+    #[serde(default)]
+    pub time: String,
     pub recording: String,
     pub sha256: String,
     pub bifurcations: Vec<String>,
@@ -428,6 +432,7 @@ fn run_one(
     entry.seconds = start.elapsed().as_secs_f64();
     match result {
         Ok(report) => {
+            entry.time = report.time_summary();
             entry.points = report.points;
             entry.refused_steps = report.rejected_steps;
             entry.ended = report

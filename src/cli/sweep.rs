@@ -6,7 +6,6 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use crate::continuation::Timings;
 use crate::record::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::{McapOptions, McapSink, install_interrupt_flag};
 use crate::sweep::{Progress, StudySettings, SweepProblem};
@@ -210,11 +209,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         report.status,
         args.output.display()
     )?;
-    writeln!(
-        out,
-        "  {}",
-        time_summary(&report.timings, report.record_seconds)
-    )?;
+    writeln!(out, "  time: {}", report.time_summary())?;
     if let Some(from) = report.lead_in_from {
         writeln!(
             out,
@@ -254,39 +249,6 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         .into());
     }
     Ok(())
-}
-
-/// Where a sweep's time went, one line: corrector steps, stability evaluations, bifurcation
-/// location and recording, each summed over its calls.
-pub fn time_summary(t: &Timings, record_seconds: f64) -> String {
-    let per = |secs: f64, n: usize| {
-        if n > 0 {
-            format!(", {:.0} ms each", 1e3 * secs / n as f64)
-        } else {
-            String::new()
-        }
-    };
-    let mut line = format!(
-        "time: corrector {:.1} s ({} steps{})",
-        t.step_seconds,
-        t.steps,
-        per(t.step_seconds, t.steps)
-    );
-    if t.evaluations > 0 {
-        line += &format!(
-            ", stability {:.1} s ({} evaluations{}, beside the corrector)",
-            t.stability_seconds,
-            t.evaluations,
-            per(t.stability_seconds, t.evaluations)
-        );
-    }
-    if t.searches > 0 {
-        line += &format!(
-            ", bifurcation location {:.1} s ({} searches)",
-            t.search_seconds, t.searches
-        );
-    }
-    line + &format!(", recording {record_seconds:.1} s")
 }
 
 /// The progress bar's message: speed, points and bifurcations, or the lead-in's speed while
