@@ -1285,52 +1285,37 @@ impl<'a> Continuation<'a> {
         to_stability: Option<&FloquetResult>,
         index: usize,
     ) -> Vec<BranchPoint> {
-        let nu = self.hb.n_unknowns();
-        let fold = from.tangent[nu] * to.tangent[nu] < 0.0;
-        let counts_differ = match (&from.stability, to_stability) {
-            (Some(fa), Some(fb)) => fa.unstable_count() != fb.unstable_count(),
-            _ => false,
-        };
-        if !(fold || counts_differ) {
-            return Vec::new();
-        }
-        Clock::time(&self.clock.searches, &self.clock.search_ns, || {
-            self.locate_between(from, to, to_stability, index)
-        })
-    }
-
-    /// [`Self::located_changes_with`] once a fold or a change of the unstable count is seen.
-    fn locate_between(
-        &self,
-        from: &Current,
-        to: &Current,
-        to_stability: Option<&FloquetResult>,
-        index: usize,
-    ) -> Vec<BranchPoint> {
         let span = to.arclength - from.arclength;
         let nu = self.hb.n_unknowns();
-        let mut found = Vec::new();
-        if from.tangent[nu] * to.tangent[nu] < 0.0 {
-            found.extend(self.locate_fold(from, span, to.tangent[nu], index));
-        }
-        let (Some(fa), Some(fb)) = (&from.stability, to_stability) else {
-            return found;
-        };
+        let fold = from.tangent[nu] * to.tangent[nu] < 0.0;
         // each kind whose count outside the circle changed, when the total changed too (a
         // pair outside that turns into two real multipliers outside changes the kinds'
         // counts, not the stability); a real multiplier through +1 is the fold's
-        if fa.unstable_count() != fb.unstable_count() {
-            for kind in [
-                BifurcationKind::NeimarkSacker,
-                BifurcationKind::PeriodDoubling,
-            ] {
-                if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
-                    found.extend(self.locate(from, fa, span, fb, index, kind));
+        let crossing = match (&from.stability, to_stability) {
+            (Some(fa), Some(fb)) if fa.unstable_count() != fb.unstable_count() => Some((fa, fb)),
+            _ => None,
+        };
+        if !fold && crossing.is_none() {
+            return Vec::new();
+        }
+        Clock::time(&self.clock.searches, &self.clock.search_ns, || {
+            let mut found = Vec::new();
+            if fold {
+                found.extend(self.locate_fold(from, span, to.tangent[nu], index));
+            }
+            if let Some((fa, fb)) = crossing {
+                for kind in [
+                    BifurcationKind::NeimarkSacker,
+                    BifurcationKind::PeriodDoubling,
+                ] {
+                    if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
+                        found.extend(self.locate(from, fa, span, fb, index, kind));
+                    }
                 }
             }
-        }
-        found.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
-        found
+            found.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
+            found
+        })
     }
 
     /// The fold between `from` (σ = 0, tangent ω-component `τ_ω(0)`) and the point at
