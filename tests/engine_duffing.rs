@@ -382,3 +382,48 @@ fn saddle_nodes_sit_on_the_folds_whatever_the_multiplier_accuracy() {
         assert!((a - f).abs() < 1e-7 * f, "saddle-node at {a}, fold at {f}");
     }
 }
+
+/// Corrector iterations summed over a branch's points.
+fn total_iterations(branch: &Branch) -> usize {
+    branch.points.iter().map(|p| p.solution.iterations).sum()
+}
+
+#[test]
+fn the_curved_predictor_saves_corrector_iterations_and_finds_the_same_folds() {
+    // HB-1 is the single-harmonic theory exactly: the located saddle-nodes are checked
+    // against its folds, with the tangent-only predictor and with the curved one
+    let analytic = analytic_folds();
+    let run = |curved: bool| {
+        let sys = Duffing::default();
+        let basis = Basis::integer(1).expect("basis");
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let mut opts = ContinuationOptions::new(0.5, 1.6);
+        opts.ds_max = 0.05;
+        opts.curved_predictor = curved;
+        let mut cont = Continuation::new(hb, opts, None).expect("continuation");
+        cont.run(|_| {}).expect("run")
+    };
+    let (linear, curved) = (run(false), run(true));
+    for branch in [&linear, &curved] {
+        let mut folds: Vec<f64> = branch
+            .bifurcations
+            .iter()
+            .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
+            .map(|b| b.solution.omega)
+            .collect();
+        folds.sort_by(f64::total_cmp);
+        assert_eq!(folds.len(), 2, "{folds:?}");
+        for (h, a) in folds.iter().zip(&analytic) {
+            assert!((h - a).abs() < 1e-4 * a, "located fold {h} vs theory {a}");
+        }
+    }
+    // per point: the curved predictor starts closer, so its correctors iterate less
+    let per_point = |b: &Branch| total_iterations(b) as f64 / b.points.len() as f64;
+    let (il, ic) = (per_point(&linear), per_point(&curved));
+    eprintln!(
+        "iterations per point: tangent predictor {il:.2} ({} points), curved {ic:.2} ({} points)",
+        linear.points.len(),
+        curved.points.len()
+    );
+    assert!(ic < il, "curved {ic} against tangent-only {il}");
+}

@@ -8,7 +8,11 @@
 //! displacements, temperatures and speed weigh comparably in the arclength (see
 //! [`ContinuationOptions`] for the scales). From an accepted point with unit tangent `τ`:
 //!
-//! * predictor `X + ds·τ`; corrector: damped Newton ([`crate::hb::newton`]) on
+//! * predictor `X + ds·τ + ds²/2·κ`, `κ` the change of the unit tangent per unit
+//!   arclength over the step that reached `X` ([`ContinuationOptions::curved_predictor`];
+//!   `X + ds·τ` at the start point), put back onto the step's hyperplane; a search
+//!   inside a step (fold, Neimark–Sacker, period doubling) predicts on the cubic Hermite
+//!   curve through the step's two points and tangents instead; corrector: damped Newton ([`crate::hb::newton`]) on
 //!   `R(A, ω) = 0` plus `τ·(X − X_prev) = ds` (the bordered system stays regular at folds,
 //!   so folds are passed and unstable parts traced). Its first iteration is Keller's: it
 //!   solves with the matrix factored for the tangent at `X_prev`, whose border row is
@@ -234,6 +238,15 @@ pub struct ContinuationOptions {
     /// coefficients, whose first Newton iterate is the linear response. Systems without
     /// linear support (a rotor inside a bearing clearance) need a static guess.
     pub initial_guess: Option<Vec<f64>>,
+    /// Predict along the branch's bend as well as its tangent: `X + ds·τ + ds²/2·κ`, with
+    /// `κ = (τ − τ_prev)/Δσ` the change of the unit tangent over the step that reached
+    /// the point (scaled units). Default true. Why: the linear predictor misses the
+    /// branch by about `|κ| ds²/2`, and on the default sweep the tangent turns by 6–10°
+    /// per step; the curvature term removes that leading error, so the corrector starts
+    /// an order of magnitude closer (see the README's speed section for the measured
+    /// iterations). The step's arclength condition `τ·(X − X_prev) = ds` and the check of
+    /// the corrected point's distance from the linear predictor are unchanged.
+    pub curved_predictor: bool,
 }
 
 impl ContinuationOptions {
@@ -261,6 +274,7 @@ impl ContinuationOptions {
             bifurcation_tol_modulus: 0.0,
             max_bisections: 60,
             initial_guess: None,
+            curved_predictor: true,
         }
     }
 }
@@ -580,6 +594,79 @@ pub struct Branch {
     pub rejected_steps: usize,
 }
 
+/// The cubic Hermite curve `X(θ)` from an accepted point (`θ = 0`, unit tangent `τ₀`) to
+/// the next (`θ = 1`, tangent `τ₁`):
+/// `X(θ) − X₀ = h₀₁(θ) (X₁ − X₀) + L (h₁₀(θ) τ₀ + h₁₁(θ) τ₁)`, with `L` the arclength of
+/// the circular arc through both points with those tangents (`L = c·(α/2)/sin(α/2)`, `c`
+/// the chord, `α` the angle between the tangents): with the tangents scaled by the
+/// curve's own length the interpolation is fourth order (scaled by the pseudo-arclength
+/// or the chord instead it is third). The predictor of a search inside the step.
+#[derive(Clone, Copy, Debug)]
+struct Hermite {
+    /// `L`.
+    scale: f64,
+    /// `τ₀·(X₁ − X₀)`, the step's pseudo-arclength.
+    along_chord: f64,
+    /// `τ₀·τ₁`.
+    along_end: f64,
+}
+
+impl Hermite {
+    /// The curve between two points `x0`, `x1` (their difference `chord`) with unit
+    /// tangents `t0`, `t1`.
+    fn new(chord: &[f64], t0: &[f64], t1: &[f64]) -> Self {
+        let along_end = dot(t0, t1);
+        let half_turn = 0.5 * along_end.clamp(-1.0, 1.0).acos();
+        let c = dot(chord, chord).sqrt();
+        let scale = if half_turn > 1e-8 {
+            c * half_turn / half_turn.sin()
+        } else {
+            c
+        };
+        Self {
+            scale,
+            along_chord: dot(t0, chord),
+            along_end,
+        }
+    }
+
+    /// `X(θ) − X₀`.
+    fn offset(&self, th: f64, chord: &[f64], t0: &[f64], t1: &[f64]) -> Vec<f64> {
+        let [h01, h10, h11] = Self::weights(th);
+        (0..chord.len())
+            .map(|i| h01 * chord[i] + self.scale * (h10 * t0[i] + h11 * t1[i]))
+            .collect()
+    }
+
+    /// `[h₀₁, h₁₀, h₁₁]` at `θ`.
+    fn weights(th: f64) -> [f64; 3] {
+        let (th2, th3) = (th * th, th * th * th);
+        [3.0 * th2 - 2.0 * th3, th3 - 2.0 * th2 + th, th3 - th2]
+    }
+
+    /// `τ₀·(X(θ) − X₀)`, the pseudo-arclength of the curve's point at `θ`.
+    fn arclength(&self, th: f64) -> f64 {
+        let [h01, h10, h11] = Self::weights(th);
+        h01 * self.along_chord + self.scale * (h10 + h11 * self.along_end)
+    }
+
+    /// The `θ ∈ [0, 1]` whose point lies on the hyperplane `τ₀·(X − X₀) = ds` (bisection;
+    /// the arclength rises along the curve when the tangent turns by less than 90°, which
+    /// the step control ensures), so that the corrector starts on its constraint.
+    fn parameter_at(&self, ds: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0, 1.0);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if self.arclength(mid) < ds {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
 struct Current {
     a: Vec<f64>,
     omega: f64,
@@ -590,6 +677,10 @@ struct Current {
     /// `tangent`: the corrector's starting matrix for steps from here (`None` at the
     /// start point, whose tangent comes from the unbordered matrix).
     chord: Option<Factorization>,
+    /// Change of the unit tangent per unit arclength over the step that reached this
+    /// point (scaled units), the predictor's bend ([`ContinuationOptions::curved_predictor`]);
+    /// `None` at the start point.
+    bend: Option<Vec<f64>>,
 }
 
 /// The continuation driver.
@@ -1128,6 +1219,7 @@ impl<'a> Continuation<'a> {
             arclength: 0.0,
             stability: None,
             chord: None,
+            bend: None,
         };
         Ok((cur, point))
     }
@@ -1149,11 +1241,25 @@ impl<'a> Continuation<'a> {
 
     /// Corrects from `cur` at arclength offset `ds` along its tangent.
     fn correct(&self, cur: &Current, ds: f64) -> Result<newton::Converged, NewtonError> {
+        self.correct_toward(cur, ds, None)
+    }
+
+    /// [`Self::correct`]; with `end`, a later accepted point, the predictor is the cubic
+    /// Hermite curve through both points and their tangents (a search inside the step
+    /// between them: the trials start within `O(h⁴)` of the branch instead of the
+    /// `O(h²)`/`O(h³)` of the tangent and bend extrapolations, `h` the step).
+    fn correct_toward(
+        &self,
+        cur: &Current,
+        ds: f64,
+        end: Option<&Current>,
+    ) -> Result<newton::Converged, NewtonError> {
         let nu = self.hb.n_unknowns();
         let s = &self.scales;
         let t = &cur.tangent;
-        let pred: Vec<f64> = (0..nu).map(|i| cur.a[i] + ds * t[i] * s[i]).collect();
-        let w_pred = cur.omega + ds * t[nu] * s[nu];
+        let offset = self.predictor_offset(cur, ds, end);
+        let pred: Vec<f64> = (0..nu).map(|i| cur.a[i] + offset[i] * s[i]).collect();
+        let w_pred = cur.omega + offset[nu] * s[nu];
         let row = self.arc_row(t);
         let arc = ArcConstraint {
             anchor: &cur.a,
@@ -1170,6 +1276,46 @@ impl<'a> Continuation<'a> {
             cur.chord.as_ref(),
             &self.opts.newton,
         )
+    }
+
+    /// The predictor's offset from `cur` in scaled units (unknowns, then ω) for a step of
+    /// `ds`: along the tangent, plus the bend's term when known
+    /// ([`ContinuationOptions::curved_predictor`]); inside the step to `end`, the cubic
+    /// Hermite curve between the two points.
+    fn predictor_offset(&self, cur: &Current, ds: f64, end: Option<&Current>) -> Vec<f64> {
+        let nu = self.hb.n_unknowns();
+        let t = &cur.tangent;
+        let h = end.map_or(0.0, |e| e.arclength - cur.arclength);
+        if let Some(e) = end.filter(|_| self.opts.curved_predictor && h > 0.0) {
+            let s = &self.scales;
+            let chord: Vec<f64> = (0..=nu)
+                .map(|i| {
+                    if i < nu {
+                        (e.a[i] - cur.a[i]) / s[i]
+                    } else {
+                        (e.omega - cur.omega) / s[nu]
+                    }
+                })
+                .collect();
+            let hermite = Hermite::new(&chord, t, &e.tangent);
+            return hermite.offset(hermite.parameter_at(ds), &chord, t, &e.tangent);
+        }
+        match &cur.bend {
+            Some(k) => {
+                let mut offset: Vec<f64> =
+                    (0..=nu).map(|i| ds * t[i] + 0.5 * ds * ds * k[i]).collect();
+                // back onto the step's hyperplane τ·ΔX = ds (the bend is nearly normal to
+                // τ; what it has along τ would only be undone by the corrector's first
+                // iteration)
+                let along = dot(t, &offset) - ds;
+                offset
+                    .iter_mut()
+                    .zip(t)
+                    .for_each(|(o, ti)| *o -= along * ti);
+                offset
+            }
+            None => t.iter().map(|ti| ds * ti).collect(),
+        }
     }
 
     /// Scaled distance of `(a, omega)` from the predictor `cur + ds·τ`.
@@ -1285,7 +1431,6 @@ impl<'a> Continuation<'a> {
         to_stability: Option<&FloquetResult>,
         index: usize,
     ) -> Vec<BranchPoint> {
-        let span = to.arclength - from.arclength;
         let nu = self.hb.n_unknowns();
         let fold = from.tangent[nu] * to.tangent[nu] < 0.0;
         // each kind whose count outside the circle changed, when the total changed too (a
@@ -1301,7 +1446,7 @@ impl<'a> Continuation<'a> {
         Clock::time(&self.clock.searches, &self.clock.search_ns, || {
             let mut found = Vec::new();
             if fold {
-                found.extend(self.locate_fold(from, span, to.tangent[nu], index));
+                found.extend(self.locate_fold(from, to, index));
             }
             if let Some((fa, fb)) = crossing {
                 for kind in [
@@ -1309,7 +1454,7 @@ impl<'a> Continuation<'a> {
                     BifurcationKind::PeriodDoubling,
                 ] {
                     if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
-                        found.extend(self.locate(from, fa, span, fb, index, kind));
+                        found.extend(self.locate(from, to, [fa, fb], index, kind));
                     }
                 }
             }
@@ -1326,21 +1471,17 @@ impl<'a> Continuation<'a> {
     /// larger end value. Returned as a saddle-node without multipliers: one of them is +1
     /// there, which puts the point where a refining stability method is at its most
     /// expensive (up to its finest product) for nothing the fold does not already say.
-    fn locate_fold(
-        &self,
-        from: &Current,
-        span: f64,
-        t_end: f64,
-        index: usize,
-    ) -> Option<BranchPoint> {
+    fn locate_fold(&self, from: &Current, to: &Current, index: usize) -> Option<BranchPoint> {
         let nu = self.hb.n_unknowns();
+        let span = to.arclength - from.arclength;
+        let t_end = to.tangent[nu];
         let g_start = from.tangent[nu];
         let mut bracket = Bracket::new(span, g_start, t_end);
         let stop = FOLD_SLOPE_TOL * g_start.abs().max(t_end.abs());
         let mut best = None;
         for _ in 0..self.opts.max_bisections {
             // τ_ω is smooth through the fold: the secant is trusted to 1 % of the ends
-            let Some((mid, c)) = self.bracket_trial(from, &bracket, 0.01) else {
+            let Some((mid, c)) = self.bracket_trial(from, to, &bracket, 0.01) else {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
@@ -1371,6 +1512,7 @@ impl<'a> Continuation<'a> {
     fn bracket_trial(
         &self,
         from: &Current,
+        to: &Current,
         bracket: &Bracket,
         guard: f64,
     ) -> Option<(f64, newton::Converged)> {
@@ -1386,7 +1528,11 @@ impl<'a> Continuation<'a> {
                     .into_iter()
                     .filter(|m| (m - first).abs() > 0.05 * width),
             )
-            .find_map(|mid| self.correct(from, mid).ok().map(|c| (mid, c)))
+            .find_map(|mid| {
+                self.correct_toward(from, mid, Some(to))
+                    .ok()
+                    .map(|c| (mid, c))
+            })
     }
 
     /// Hands out the held point with its bifurcations.
@@ -1465,6 +1611,14 @@ impl<'a> Continuation<'a> {
         if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
             self.finish_after = Some(FinishReason::MaxPoints);
         }
+        let span = c.arclength - cur.arclength;
+        let bend = (self.opts.curved_predictor && c.bound.is_none() && span > 0.0).then(|| {
+            c.tangent
+                .iter()
+                .zip(&cur.tangent)
+                .map(|(t, t0)| (t - t0) / span)
+                .collect()
+        });
         let mut next = Current {
             a: c.a,
             omega: c.omega,
@@ -1472,6 +1626,7 @@ impl<'a> Continuation<'a> {
             arclength: c.arclength,
             stability: None,
             chord: c.chord,
+            bend,
         };
         if self.stability.is_some() {
             if let Some(out) = self.hand_out() {
@@ -1587,12 +1742,12 @@ impl<'a> Continuation<'a> {
     fn locate(
         &self,
         cur: &Current,
-        f_a: &FloquetResult,
-        span: f64,
-        f_b: &FloquetResult,
+        to: &Current,
+        [f_a, f_b]: [&FloquetResult; 2],
         index: usize,
         kind: BifurcationKind,
     ) -> Option<BranchPoint> {
+        let span = to.arclength - cur.arclength;
         // The crossing multiplier is followed among the multipliers of its kind (complex
         // pairs for a Neimark–Sacker point, negative real ones for a period doubling): the
         // k-th largest modulus of that kind, k = min(n_a, n_b) counted in that kind, is
@@ -1612,7 +1767,7 @@ impl<'a> Continuation<'a> {
         let mut best: Option<(f64, BranchPoint)> = None;
         for _ in 0..self.opts.max_bisections {
             // kept at least a tenth of the bracket from either end
-            let Some((mid, c)) = self.bracket_trial(cur, &bracket, 0.1) else {
+            let Some((mid, c)) = self.bracket_trial(cur, to, &bracket, 0.1) else {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
@@ -1737,6 +1892,41 @@ impl<'a> Continuation<'a> {
 mod tests {
     use super::*;
     use num_complex::Complex64;
+
+    #[test]
+    fn the_hermite_predictor_follows_a_circle_to_fourth_order() {
+        // Unit circle from angle 0 with unit tangents: the step of angle φ has
+        // pseudo-arclength h = τ₀·(X₁ − X₀) = sin φ; the point of the curve on the
+        // hyperplane τ₀·(X − X₀) = h/2 lies on the circle at angle asin(h/2).
+        let error = |phi: f64| {
+            let x0 = [1.0, 0.0];
+            let t0 = [0.0, 1.0];
+            let x1 = [phi.cos(), phi.sin()];
+            let t1 = [-phi.sin(), phi.cos()];
+            let chord = [x1[0] - x0[0], x1[1] - x0[1]];
+            let h = dot(&t0, &chord);
+            let hermite = Hermite::new(&chord, &t0, &t1);
+            assert!((hermite.scale - phi).abs() < 1e-12, "the arc's length");
+            let th = hermite.parameter_at(0.5 * h);
+            assert!((hermite.arclength(th) - 0.5 * h).abs() < 1e-12 * h);
+            let off = hermite.offset(th, &chord, &t0, &t1);
+            let p = [x0[0] + off[0], x0[1] + off[1]];
+            let exact = (0.5 * h).asin();
+            ((p[0] - exact.cos()).powi(2) + (p[1] - exact.sin()).powi(2)).sqrt()
+        };
+        let (coarse, fine) = (error(0.4), error(0.2));
+        // the end points and tangents are matched: the midpoint error falls as h⁴
+        assert!(coarse < 1e-4, "{coarse}");
+        let order = (coarse / fine).log2();
+        eprintln!("midpoint error {coarse:.2e} at φ = 0.4, {fine:.2e} at 0.2: order {order:.2}");
+        assert!(
+            (3.7..4.3).contains(&order),
+            "order {order}: {coarse} / {fine}"
+        );
+        // the weights reproduce both ends and both tangents
+        assert_eq!(Hermite::weights(0.0), [0.0, 0.0, 0.0]);
+        assert_eq!(Hermite::weights(1.0), [1.0, 0.0, 0.0]);
+    }
 
     #[test]
     fn a_pair_crossing_beside_a_fold_is_seen_in_its_own_kind() {
