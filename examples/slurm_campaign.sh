@@ -10,6 +10,10 @@
 # written, and tmrotor exits with status 130, so the task shows as not completed.
 # Submitting the same array again resumes: completed runs are skipped.
 #
+# tmrotor must be on the compute nodes' PATH (`cargo install --path .`), built for their CPU:
+# the default build targets x86-64-v3 (AVX2, FMA; see .cargo/config.toml), so on older nodes
+# build with RUSTFLAGS="-C target-cpu=x86-64".
+#
 #SBATCH --job-name=tmrotor-campaign
 #SBATCH --cpus-per-task=2
 #SBATCH --time=01:00:00
