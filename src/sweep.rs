@@ -430,6 +430,17 @@ impl StepPools for CurrentPool {
     }
 }
 
+/// One continuation step in the pool `pools` names for it.
+fn step_in(
+    pools: &dyn StepPools,
+    cont: &mut Continuation<'_>,
+) -> Result<StepOutcome, ContinuationError> {
+    match pools.for_next_step() {
+        Some(pool) => pool.install(|| cont.step()),
+        None => cont.step(),
+    }
+}
+
 /// A built sweep problem: model, coupled system, basis and the run description.
 pub struct SweepProblem {
     pub settings: StudySettings,
@@ -527,11 +538,12 @@ impl SweepProblem {
     /// order, and follows the branch to the start speed without stability or recording;
     /// a lead-in whose own start does not converge, or whose branch turns back out of its
     /// range or stops, gives way to the next. `at` hears the lead-in's speed after each
-    /// point.
+    /// point. Its steps run in the pools `pools` names, as the sweep's do.
     fn lead_in(
         &self,
         interrupted: &dyn Fn() -> bool,
         at: &mut dyn FnMut(f64),
+        pools: &dyn StepPools,
     ) -> Result<LeadIn, SweepError> {
         let s = &self.settings;
         let up = s.omega_end >= s.omega_start;
@@ -542,7 +554,7 @@ impl SweepProblem {
             } else {
                 s.omega_start / frac
             };
-            match self.lead_in_from(from, interrupted, at)? {
+            match self.lead_in_from(from, interrupted, at, pools)? {
                 LeadIn::Failed(why) => tried.push(format!("from {from:.3} rad/s: {why}")),
                 done => return Ok(done),
             }
@@ -559,6 +571,7 @@ impl SweepProblem {
         from: f64,
         interrupted: &dyn Fn() -> bool,
         at: &mut dyn FnMut(f64),
+        pools: &dyn StepPools,
     ) -> Result<LeadIn, SweepError> {
         let target = self.settings.omega_start;
         // not recorded: the sweep's own point budget does not apply
@@ -569,7 +582,7 @@ impl SweepProblem {
             if interrupted() {
                 return Ok(LeadIn::Interrupted);
             }
-            match cont.step() {
+            match step_in(pools, &mut cont) {
                 Ok(StepOutcome::Accepted { point, .. }) => {
                     at(point.solution.omega);
                     last = Some(point);
@@ -641,11 +654,7 @@ impl SweepProblem {
             if interrupted() {
                 return Ok(RunStatus::Interrupted);
             }
-            let step = match pools.for_next_step() {
-                Some(pool) => pool.install(|| cont.step()),
-                None => cont.step(),
-            };
-            let out = match step {
+            let out = match step_in(pools, &mut cont) {
                 Ok(o) => o,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
@@ -654,7 +663,7 @@ impl SweepProblem {
                         prog.omega_rad_s = w;
                         progress(&prog);
                     };
-                    let found = self.lead_in(&interrupted, &mut at)?;
+                    let found = self.lead_in(&interrupted, &mut at, pools)?;
                     prog.lead_in = false;
                     let (from, guess) = match found {
                         LeadIn::Reached { from, coeffs } => (from, coeffs),

@@ -339,3 +339,69 @@ fn a_start_inside_the_nonlinear_range_is_reached_by_continuation() {
         assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-9), "{a} vs {b}");
     }
 }
+
+/// The lead-in's steps run in the pools a campaign names, as the sweep's own steps do: a
+/// campaign that widens the pool of its last running sweep widens its lead-in too.
+#[test]
+fn the_lead_in_steps_run_in_the_pools_the_caller_names() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+    use tmrotor::sweep::StepPools;
+
+    struct Counting {
+        pool: rayon::ThreadPool,
+        in_lead_in: Arc<AtomicBool>,
+        asked: AtomicUsize,
+        asked_in_lead_in: AtomicUsize,
+    }
+    impl StepPools for Counting {
+        fn for_next_step(&self) -> Option<&rayon::ThreadPool> {
+            self.asked.fetch_add(1, Ordering::Relaxed);
+            if self.in_lead_in.load(Ordering::Relaxed) {
+                self.asked_in_lead_in.fetch_add(1, Ordering::Relaxed);
+            }
+            Some(&self.pool)
+        }
+    }
+    let settings = StudySettings {
+        omega_start: 600.0,
+        omega_end: 601.0,
+        stability: false,
+        max_points: 3,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let in_lead_in = Arc::new(AtomicBool::new(false));
+    let pools = Counting {
+        pool: rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .expect("pool"),
+        in_lead_in: in_lead_in.clone(),
+        asked: AtomicUsize::new(0),
+        asked_in_lead_in: AtomicUsize::new(0),
+    };
+    let mut sink = MemorySink::new();
+    let flag = in_lead_in.clone();
+    let report = problem
+        .run_in(
+            &mut sink,
+            None,
+            move |p| flag.store(p.lead_in, Ordering::Relaxed),
+            &pools,
+        )
+        .expect("sweep");
+    assert!(report.lead_in_from.is_some());
+    let (asked, in_lead) = (
+        pools.asked.load(Ordering::Relaxed),
+        pools.asked_in_lead_in.load(Ordering::Relaxed),
+    );
+    assert!(
+        in_lead >= 5,
+        "{in_lead} of {asked} steps asked during the lead-in"
+    );
+    // the same start point as the sweep in the caller's pool
+    let mut plain = MemorySink::new();
+    problem.run(&mut plain, None, |_| {}).expect("sweep");
+    assert_eq!(sink.points[0].coeffs_mech, plain.points[0].coeffs_mech);
+}
