@@ -295,6 +295,18 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
     }
 }
 
+/// A short sweep from 600 rad/s at 2 L/min, past the folds of the second resonance, which
+/// needs a lead-in to reach its start.
+fn inside_the_nonlinear_range() -> StudySettings {
+    StudySettings {
+        omega_start: 600.0,
+        omega_end: 601.0,
+        stability: false,
+        max_points: 3,
+        ..Default::default()
+    }
+}
+
 /// A sweep that starts inside the nonlinear range (600 rad/s at 2 L/min, past the folds
 /// of the second resonance) cannot solve its start from the linear response; it reaches it
 /// by continuation from a lower speed, and its first point is the one a sweep from that
@@ -302,13 +314,7 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
 #[test]
 fn a_start_inside_the_nonlinear_range_is_reached_by_continuation() {
     use tmrotor::continuation::ContinuationError;
-    let settings = StudySettings {
-        omega_start: 600.0,
-        omega_end: 601.0,
-        stability: false,
-        max_points: 3,
-        ..Default::default()
-    };
+    let settings = inside_the_nonlinear_range();
     let problem = SweepProblem::new(&settings).expect("problem");
     // the premise: from the linear response the start does not converge
     let mut plain = problem.continuation(None).expect("continuation");
@@ -363,13 +369,7 @@ fn the_lead_in_steps_run_in_the_pools_the_caller_names() {
             Some(&self.pool)
         }
     }
-    let settings = StudySettings {
-        omega_start: 600.0,
-        omega_end: 601.0,
-        stability: false,
-        max_points: 3,
-        ..Default::default()
-    };
+    let settings = inside_the_nonlinear_range();
     let problem = SweepProblem::new(&settings).expect("problem");
     let in_lead_in = Arc::new(AtomicBool::new(false));
     let pools = Counting {

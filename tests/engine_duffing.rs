@@ -354,13 +354,7 @@ fn saddle_nodes_sit_on_the_folds_whatever_the_multiplier_accuracy() {
     let sn = |steps: usize| {
         let floquet = VariationalFloquet { steps };
         let branch = trace(11, 0.1, Some(&floquet));
-        let mut w: Vec<f64> = branch
-            .bifurcations
-            .iter()
-            .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
-            .map(|b| b.solution.omega)
-            .collect();
-        w.sort_by(f64::total_cmp);
+        let w = saddle_nodes(&branch);
         let flips: Vec<f64> = branch
             .points
             .windows(2)
@@ -381,6 +375,18 @@ fn saddle_nodes_sit_on_the_folds_whatever_the_multiplier_accuracy() {
         assert!((a - c).abs() < 1e-9 * f, "{a} vs {c}");
         assert!((a - f).abs() < 1e-7 * f, "saddle-node at {a}, fold at {f}");
     }
+}
+
+/// ω of a branch's located saddle-nodes, ascending.
+fn saddle_nodes(branch: &Branch) -> Vec<f64> {
+    let mut w: Vec<f64> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
+        .map(|b| b.solution.omega)
+        .collect();
+    w.sort_by(f64::total_cmp);
+    w
 }
 
 /// Corrector iterations summed over a branch's points.
@@ -405,13 +411,7 @@ fn the_curved_predictor_saves_corrector_iterations_and_finds_the_same_folds() {
     };
     let (linear, curved) = (run(false), run(true));
     for branch in [&linear, &curved] {
-        let mut folds: Vec<f64> = branch
-            .bifurcations
-            .iter()
-            .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
-            .map(|b| b.solution.omega)
-            .collect();
-        folds.sort_by(f64::total_cmp);
+        let folds = saddle_nodes(branch);
         assert_eq!(folds.len(), 2, "{folds:?}");
         for (h, a) in folds.iter().zip(&analytic) {
             assert!((h - a).abs() < 1e-4 * a, "located fold {h} vs theory {a}");

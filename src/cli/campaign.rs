@@ -182,7 +182,8 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         .into());
     }
     anyhow::bail!(
-        "{} of {} runs did not complete ({which}); their status and how they ended are in the          manifest",
+        "{} of {} runs did not complete ({which}); their status and how they ended are in \
+         the manifest",
         unfinished.len(),
         manifest.runs.len()
     )
