@@ -34,7 +34,7 @@ name = "c"
 fn campaign_runs_resumes_shards_and_merges() {
     let dir = tempfile::tempdir().expect("tempdir");
     let file = write_campaign(dir.path());
-    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let quiet = |_: campaign::Event<'_>| {};
     let m = campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
     assert_eq!(m.runs.len(), 3);
     let out = dir.path().join("out");
@@ -97,6 +97,126 @@ fn campaign_runs_resumes_shards_and_merges() {
     assert_eq!(names(&merged), ["a", "b", "c"]);
 }
 
+/// `(kind, run)` pairs, or `(run, points)` pairs.
+type Pairs<T> = Vec<(String, T)>;
+
+/// The events of one campaign invocation, as `(kind, run)` in order (`Plan` with all
+/// names joined); points only counted per run.
+fn events_of(file: &Path, threads: usize) -> (Pairs<String>, Pairs<usize>) {
+    let events = std::sync::Mutex::new(Vec::new());
+    let points = std::sync::Mutex::new(Vec::<(String, usize)>::new());
+    let record = |e: campaign::Event<'_>| {
+        let (kind, run) = match e {
+            campaign::Event::Plan { runs } => ("plan", runs.join(",")),
+            campaign::Event::Skipped { run, entry } => {
+                assert_eq!(entry.status, "completed");
+                ("skipped", run.to_string())
+            }
+            campaign::Event::Point { run, progress } => {
+                let mut p = points.lock().expect("points");
+                match p.iter_mut().find(|(r, _)| r == run) {
+                    Some((_, n)) => *n = (*n).max(progress.points),
+                    None => p.push((run.to_string(), progress.points)),
+                }
+                return;
+            }
+            campaign::Event::Finished { run, entry } => {
+                // the entry is the manifest's, with its points
+                let p = points.lock().expect("points");
+                let seen = p.iter().find(|(r, _)| r == run).map_or(0, |(_, n)| *n);
+                assert_eq!(entry.points, seen, "{run}");
+                ("finished", run.to_string())
+            }
+        };
+        events.lock().expect("events").push((kind.to_string(), run));
+    };
+    campaign::run(file, Some(threads), None, None, &record).expect("campaign");
+    (
+        events.into_inner().expect("events"),
+        points.into_inner().expect("points"),
+    )
+}
+
+#[test]
+fn a_campaign_tells_its_plan_each_run_it_ends_and_each_it_skips() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_campaign(dir.path());
+    let (events, points) = events_of(&file, 2);
+    assert_eq!(events[0], ("plan".into(), "a,b,c".into()));
+    let mut finished: Vec<&str> = events[1..]
+        .iter()
+        .map(|(kind, run)| {
+            assert_eq!(kind, "finished");
+            run.as_str()
+        })
+        .collect();
+    finished.sort_unstable();
+    assert_eq!(finished, ["a", "b", "c"]);
+    assert_eq!(points.len(), 3, "{points:?}");
+    // resumed: every run is skipped, none computes a point
+    let (events, points) = events_of(&file, 2);
+    let expected: Vec<(String, String)> = [("plan", "a,b,c"), ("skipped", "a"), ("skipped", "b")]
+        .into_iter()
+        .chain([("skipped", "c")])
+        .map(|(k, r)| (k.to_string(), r.to_string()))
+        .collect();
+    let mut sorted = events.clone();
+    sorted[1..].sort();
+    assert_eq!(sorted, expected);
+    assert!(points.is_empty(), "{points:?}");
+}
+
+#[test]
+fn a_campaign_writing_to_a_file_logs_runs_and_progress_lines() {
+    let exe = env!("CARGO_BIN_EXE_tmrotor");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_campaign(dir.path());
+    // stderr is a pipe, not a terminal: lines instead of bars
+    let run = Command::new(exe)
+        .args(["campaign", "--no-figures"])
+        .arg(&file)
+        .output()
+        .expect("run tmrotor");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(
+        stderr.starts_with("campaign: 3 runs (a, b, c)\n"),
+        "{stderr}"
+    );
+    for name in ["a", "b", "c"] {
+        assert!(
+            stderr
+                .lines()
+                .any(|l| l.starts_with(&format!("{name}: completed, ")) && l.contains(" points, ")),
+            "{stderr}"
+        );
+    }
+    assert!(stderr.contains("(3/3 runs completed)"), "{stderr}");
+    assert!(
+        !stderr.contains('\u{1b}'),
+        "terminal escapes in a file: {stderr}"
+    );
+    // resumed: the runs are named as done before
+    let run = Command::new(exe)
+        .args(["campaign", "--no-figures"])
+        .arg(&file)
+        .output()
+        .expect("run tmrotor");
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(stderr.contains("a: completed before ("), "{stderr}");
+    // and --quiet says nothing
+    let run = Command::new(exe)
+        .args(["campaign", "-q", "--no-figures"])
+        .arg(&file)
+        .output()
+        .expect("run tmrotor");
+    assert!(
+        run.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
 #[test]
 fn an_interrupt_starts_no_further_run_and_keeps_earlier_recordings() {
     use std::sync::Arc;
@@ -107,8 +227,8 @@ fn an_interrupt_starts_no_further_run_and_keeps_earlier_recordings() {
     // Ctrl-C during run "a" (one run at a time): "a" stops where it is, "b" and "c" are
     // never started.
     let flag = Arc::new(AtomicBool::new(false));
-    let during_a = |name: &str, _: &tmrotor::sweep::Progress| {
-        if name == "a" {
+    let during_a = |e: campaign::Event<'_>| {
+        if let campaign::Event::Point { run: "a", .. } = e {
             flag.store(true, Ordering::Relaxed);
         }
     };
@@ -127,7 +247,7 @@ fn an_interrupt_starts_no_further_run_and_keeps_earlier_recordings() {
     assert_eq!(m.runs[0].sha256, a_hash);
     assert_eq!(sha256_file(&out.join("a.mcap")).expect("a"), a_hash);
     // Without an interrupt everything completes.
-    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let quiet = |_: campaign::Event<'_>| {};
     let m = campaign::run(&file, Some(1), None, None, &quiet).expect("resume");
     assert_eq!(status(&m), ["completed", "completed", "completed"]);
 }
@@ -222,7 +342,7 @@ fn options() -> FigureOptions {
 fn campaign_plot_overlays_the_runs_and_marks_incomplete_ones() {
     let dir = tempfile::tempdir().expect("tempdir");
     let file = write_thermal_campaign(dir.path());
-    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let quiet = |_: campaign::Event<'_>| {};
     let m = campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
     assert!(
         m.runs
@@ -319,7 +439,7 @@ fn campaign_plot_errors_name_the_file_and_reason() {
         "{msg}"
     );
 
-    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let quiet = |_: campaign::Event<'_>| {};
     campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
     // A recording that is missing…
     let rec = out.join("q2.mcap");

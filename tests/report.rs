@@ -28,7 +28,7 @@ flow_l_min = 2.0
 "#,
     )
     .expect("write campaign");
-    let quiet = |_: &str, _: &tmrotor::sweep::Progress| {};
+    let quiet = |_: tmrotor::campaign::Event<'_>| {};
     let m = campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
     let out = dir.path().join("out");
     let runs = campaign_findings(&out).expect("findings");

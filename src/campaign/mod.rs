@@ -236,13 +236,37 @@ pub fn manifest_name(shard: Option<(usize, usize)>) -> String {
     }
 }
 
-/// Runs a campaign. `progress(run name, progress)` is called from worker threads.
+/// What a campaign reports while it runs (to [`run`]'s `progress`), in this order for each
+/// run: [`Event::Skipped`], or [`Event::Point`]s then [`Event::Finished`].
+#[derive(Clone, Copy, Debug)]
+pub enum Event<'a> {
+    /// Before anything starts: the names of the runs this invocation covers (its shard's),
+    /// in file order.
+    Plan { runs: &'a [String] },
+    /// A run completed by an earlier invocation, whose recording is unchanged: not redone.
+    Skipped {
+        run: &'a str,
+        entry: &'a ManifestEntry,
+    },
+    /// A run's continuation accepted a point (or is leading in to its start).
+    Point {
+        run: &'a str,
+        progress: &'a Progress,
+    },
+    /// A run ended (completed, interrupted or failed), with its manifest entry.
+    Finished {
+        run: &'a str,
+        entry: &'a ManifestEntry,
+    },
+}
+
+/// Runs a campaign. `progress` is told what happens ([`Event`]), from the worker threads.
 pub fn run(
     campaign_path: &Path,
     threads: Option<usize>,
     shard: Option<(usize, usize)>,
     interrupt: Option<Arc<AtomicBool>>,
-    progress: &(dyn Fn(&str, &Progress) + Sync),
+    progress: &(dyn Fn(Event<'_>) + Sync),
 ) -> Result<Manifest, CampaignError> {
     let (_, runs, out) = load(campaign_path)?;
     std::fs::create_dir_all(&out).map_err(|source| CampaignError::Io {
@@ -257,6 +281,8 @@ pub fn run(
         .filter(|(p, _)| shard.is_none_or(|(i, n)| p % n == i))
         .map(|(_, r)| r)
         .collect();
+    let names: Vec<String> = selected.iter().map(|r| r.name.clone()).collect();
+    progress(Event::Plan { runs: &names });
     let manifest = Mutex::new(Manifest {
         campaign: campaign_path.display().to_string(),
         tool_version: env!("CARGO_PKG_VERSION").to_string(),
@@ -306,6 +332,10 @@ pub fn run(
                 if let Ok(mut m) = manifest.lock() {
                     m.runs[k] = prev.clone();
                 }
+                progress(Event::Skipped {
+                    run: &r.name,
+                    entry: prev,
+                });
                 return;
             }
         }
@@ -327,13 +357,18 @@ pub fn run(
             },
             None => run_one(r, &rec_path, interrupt.clone(), progress, &CurrentPool),
         };
+        let entry = ManifestEntry {
+            settings: settings_table,
+            ..entry
+        };
         if let Ok(mut m) = manifest.lock() {
-            m.runs[k] = ManifestEntry {
-                settings: settings_table,
-                ..entry
-            };
+            m.runs[k] = entry.clone();
             let _ = write_manifest(&manifest_path, &m);
         }
+        progress(Event::Finished {
+            run: &r.name,
+            entry: &entry,
+        });
     };
     // After an interrupt no further run is started (it would only write an empty recording
     // over whatever an earlier attempt left).
@@ -407,7 +442,7 @@ fn run_one(
     r: &CampaignRun,
     rec_path: &Path,
     interrupt: Option<Arc<AtomicBool>>,
-    progress: &(dyn Fn(&str, &Progress) + Sync),
+    progress: &(dyn Fn(Event<'_>) + Sync),
     pools: &dyn StepPools,
 ) -> ManifestEntry {
     let start = std::time::Instant::now();
@@ -426,7 +461,17 @@ fn run_one(
             let mut sink =
                 McapSink::create(rec_path, McapOptions::default()).map_err(|e| e.to_string())?;
             problem
-                .run_in(&mut sink, interrupt, |p| progress(&r.name, p), pools)
+                .run_in(
+                    &mut sink,
+                    interrupt,
+                    |p| {
+                        progress(Event::Point {
+                            run: &r.name,
+                            progress: p,
+                        })
+                    },
+                    pools,
+                )
                 .map_err(|e| e.to_string())
         });
     entry.seconds = start.elapsed().as_secs_f64();

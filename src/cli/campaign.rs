@@ -1,8 +1,10 @@
 //! `tmrotor campaign`: several sweeps from one file, in parallel, with a manifest; and
 //! `campaign plot DIR`: the runs overlaid in PNG figures ([`campaign::figures`]).
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
 use clap::{Args, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
@@ -27,7 +29,9 @@ pub struct CampaignArgs {
     /// Run only shard I of N (runs whose position p has p mod N = I), e.g. `--shard 0/4`.
     #[arg(long, value_name = "I/N")]
     pub shard: Option<String>,
-    /// No progress bars.
+    /// No progress: no bars on a terminal (one per run and one for the campaign), no
+    /// progress lines when the output goes to a file (a line per run that ends and one on
+    /// the whole campaign every 15 s).
     #[arg(long, short)]
     pub quiet: bool,
     /// Do not write the figures (`figures/` in the output directory) when every run has
@@ -121,37 +125,11 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`)")
     })?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
-    let multi = MultiProgress::new();
-    if args.quiet {
-        multi.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
-    let style = ProgressStyle::with_template("{prefix:>10} {elapsed_precise} [{bar:25}] {msg}")
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
-    let bars: Mutex<Vec<(String, ProgressBar)>> = Mutex::new(Vec::new());
-    let progress = |name: &str, p: &crate::sweep::Progress| {
-        if let Ok(mut b) = bars.lock() {
-            let bar = match b.iter().find(|(n, _)| n == name) {
-                Some((_, bar)) => bar.clone(),
-                None => {
-                    let bar = multi.add(ProgressBar::new(1000));
-                    bar.set_style(style.clone());
-                    bar.set_prefix(name.to_string());
-                    b.push((name.to_string(), bar.clone()));
-                    bar
-                }
-            };
-            bar.set_position((p.fraction * 1000.0) as u64);
-            bar.set_message(progress_message(p, "ω "));
-        }
-    };
+    let display = Display::new(args.quiet);
+    let progress = |e: campaign::Event<'_>| display.show(e);
     let interrupt = install_interrupt_flag().ok();
     let manifest = campaign::run(file, args.threads, shard, interrupt.clone(), &progress)?;
-    if let Ok(b) = bars.lock() {
-        for (_, bar) in b.iter() {
-            bar.finish_and_clear();
-        }
-    }
+    display.clear();
     for r in &manifest.runs {
         writeln!(
             out,
@@ -222,4 +200,237 @@ fn figures(
         report(&figures, out)?;
     }
     Ok(())
+}
+
+/// How often a campaign whose progress goes to a file (not a terminal) writes a line on
+/// the whole campaign.
+const LOG_EVERY: Duration = Duration::from_secs(15);
+
+/// What a campaign shows while it runs: on a terminal a bar for the whole campaign and one
+/// per run (points, current ω, bifurcations); anywhere else (a log file, a cluster job's
+/// output) a line when a run ends or is skipped and a line on the whole campaign every
+/// [`LOG_EVERY`]; nothing with `--quiet`.
+struct Display {
+    bars: Option<Bars>,
+    log: bool,
+    state: Mutex<Tally>,
+}
+
+struct Bars {
+    multi: MultiProgress,
+    overall: ProgressBar,
+    style: ProgressStyle,
+}
+
+/// The campaign so far.
+struct Tally {
+    runs: Vec<RunTally>,
+    skipped: usize,
+    start: Instant,
+    last_log: Instant,
+}
+
+#[derive(Default)]
+struct RunTally {
+    name: String,
+    fraction: f64,
+    points: usize,
+    bifurcations: usize,
+    omega: Option<f64>,
+    /// Completed (now or before).
+    completed: bool,
+    /// Ended, however (completed, interrupted, failed).
+    ended: bool,
+    bar: Option<ProgressBar>,
+}
+
+impl Tally {
+    fn run(&mut self, name: &str) -> Option<&mut RunTally> {
+        self.runs.iter_mut().find(|r| r.name == name)
+    }
+
+    fn completed(&self) -> usize {
+        self.runs.iter().filter(|r| r.completed).count()
+    }
+
+    /// Mean of the runs' fractions of their ω ranges (a completed run counts whole).
+    fn fraction(&self) -> f64 {
+        if self.runs.is_empty() {
+            return 0.0;
+        }
+        let sum: f64 = self
+            .runs
+            .iter()
+            .map(|r| {
+                if r.completed {
+                    1.0
+                } else {
+                    r.fraction.clamp(0.0, 1.0)
+                }
+            })
+            .sum();
+        sum / self.runs.len() as f64
+    }
+
+    /// `2/6 runs completed (1 before), 843 points, 12 bifurcations`.
+    fn summary(&self) -> String {
+        let before = if self.skipped > 0 {
+            format!(" ({} before)", self.skipped)
+        } else {
+            String::new()
+        };
+        format!(
+            "{}/{} runs completed{before}, {} points, {} bifurcations",
+            self.completed(),
+            self.runs.len(),
+            self.runs.iter().map(|r| r.points).sum::<usize>(),
+            self.runs.iter().map(|r| r.bifurcations).sum::<usize>()
+        )
+    }
+}
+
+impl Display {
+    fn new(quiet: bool) -> Self {
+        let terminal = std::io::stderr().is_terminal();
+        let bars = (!quiet && terminal).then(|| {
+            let multi = MultiProgress::new();
+            let style =
+                ProgressStyle::with_template("{prefix:>10} {elapsed_precise} [{bar:25}] {msg}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar())
+                    .progress_chars("=> ");
+            let overall = multi.add(ProgressBar::new(1000));
+            overall.set_style(style.clone());
+            overall.set_prefix("campaign");
+            Bars {
+                multi,
+                overall,
+                style,
+            }
+        });
+        let now = Instant::now();
+        Self {
+            bars,
+            log: !quiet && !terminal,
+            state: Mutex::new(Tally {
+                runs: Vec::new(),
+                skipped: 0,
+                start: now,
+                last_log: now,
+            }),
+        }
+    }
+
+    fn show(&self, event: campaign::Event<'_>) {
+        use campaign::Event;
+        let Ok(mut t) = self.state.lock() else {
+            return;
+        };
+        match event {
+            Event::Plan { runs } => {
+                t.runs = runs
+                    .iter()
+                    .map(|name| RunTally {
+                        name: name.clone(),
+                        ..RunTally::default()
+                    })
+                    .collect();
+                if self.log {
+                    eprintln!("campaign: {} runs ({})", runs.len(), runs.join(", "));
+                }
+            }
+            Event::Skipped { run, entry } => {
+                t.skipped += 1;
+                if let Some(r) = t.run(run) {
+                    (r.completed, r.ended) = (true, true);
+                    r.points = entry.points;
+                    r.bifurcations = entry.bifurcations.len();
+                }
+                if self.log {
+                    eprintln!(
+                        "{run}: completed before ({} points), not redone",
+                        entry.points
+                    );
+                }
+            }
+            Event::Point { run, progress } => {
+                let bars = self.bars.as_ref();
+                if let Some(r) = t.run(run) {
+                    r.fraction = progress.fraction;
+                    r.points = progress.points;
+                    r.bifurcations = progress.bifurcations;
+                    r.omega = Some(progress.omega_rad_s);
+                    if let Some(b) = bars {
+                        let bar = r.bar.get_or_insert_with(|| {
+                            let bar = b.multi.add(ProgressBar::new(1000));
+                            bar.set_style(b.style.clone());
+                            bar.set_prefix(run.to_string());
+                            bar
+                        });
+                        bar.set_position((progress.fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+                        bar.set_message(progress_message(progress, "ω "));
+                    }
+                }
+                if self.log && t.last_log.elapsed() >= LOG_EVERY {
+                    t.last_log = Instant::now();
+                    let running: Vec<String> = t
+                        .runs
+                        .iter()
+                        .filter(|r| !r.ended)
+                        .filter_map(|r| r.omega.map(|w| format!("{} at {w:.1} rad/s", r.name)))
+                        .collect();
+                    eprintln!(
+                        "campaign: {} after {:.0} s; running: {}",
+                        t.summary(),
+                        t.start.elapsed().as_secs_f64(),
+                        running.join(", ")
+                    );
+                }
+            }
+            Event::Finished { run, entry } => {
+                if let Some(r) = t.run(run) {
+                    r.ended = true;
+                    r.completed = entry.status == "completed";
+                    r.points = entry.points;
+                    r.bifurcations = entry.bifurcations.len();
+                    if let Some(bar) = &r.bar {
+                        bar.set_position(1000);
+                        bar.set_message(format!(
+                            "{}, {} points, {} bifurcations",
+                            entry.status,
+                            entry.points,
+                            entry.bifurcations.len()
+                        ));
+                    }
+                }
+                if self.log {
+                    eprintln!(
+                        "{run}: {}, {} points, {} bifurcations, {:.1} s ({}/{} runs completed)",
+                        entry.status,
+                        entry.points,
+                        entry.bifurcations.len(),
+                        entry.seconds,
+                        t.completed(),
+                        t.runs.len()
+                    );
+                }
+            }
+        }
+        if let Some(b) = &self.bars {
+            b.overall
+                .set_position((t.fraction() * 1000.0).round() as u64);
+            b.overall.set_message(t.summary());
+        }
+    }
+
+    /// Takes the bars off the terminal (the table of runs follows).
+    fn clear(&self) {
+        if let Some(b) = &self.bars {
+            if let Ok(t) = self.state.lock() {
+                for bar in t.runs.iter().filter_map(|r| r.bar.as_ref()) {
+                    bar.finish_and_clear();
+                }
+            }
+            b.overall.finish_and_clear();
+        }
+    }
 }
