@@ -10,6 +10,9 @@
 # written, and tmrotor exits with status 130, so the task shows as not completed.
 # Submitting the same array again resumes: completed runs are skipped.
 #
+# The task's log (slurm-JOB_TASK.out) gets plain progress lines, not bars: one for each run
+# that ends or is skipped as complete, and one on the shard every 15 s (`--quiet`: none).
+#
 # tmrotor must be on the compute nodes' PATH (`cargo install --path .`), built for their CPU:
 # the default build targets x86-64-v3 (AVX2, FMA; see .cargo/config.toml), so on older nodes
 # build with RUSTFLAGS="-C target-cpu=x86-64".
@@ -20,4 +23,4 @@
 set -euo pipefail
 campaign=${1:?campaign file}
 shards=${2:?number of shards}
-tmrotor campaign "$campaign" --shard "${SLURM_ARRAY_TASK_ID}/${shards}" --threads "${SLURM_CPUS_PER_TASK:-1}" --quiet
+tmrotor campaign "$campaign" --shard "${SLURM_ARRAY_TASK_ID}/${shards}" --threads "${SLURM_CPUS_PER_TASK:-1}"
