@@ -272,6 +272,119 @@ fn campaign_file_errors_name_the_run() {
     );
 }
 
+#[test]
+fn a_grid_gives_every_combination_named_by_its_values() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("grid.toml");
+    std::fs::write(
+        &path,
+        r#"
+[defaults]
+order = 1
+[grid]
+name = "q{flow_l_min}-{cooling_temp_c}C"
+flow_l_min = [20.0, 2.5]
+cooling_temp_c = [25.0, 50.0, 60]
+[[runs]]
+name = "extra"
+flow_l_min = 1.0
+"#,
+    )
+    .expect("write");
+    let (_, runs, out) = campaign::load(&path).expect("grid");
+    let got: Vec<(&str, f64, f64, u32)> = runs
+        .iter()
+        .map(|r| {
+            let s = &r.settings;
+            (r.name.as_str(), s.flow_l_min, s.cooling_temp_c, s.order)
+        })
+        .collect();
+    // keys alphabetically, the first (cooling_temp_c) slowest; the listed run after
+    assert_eq!(
+        got,
+        [
+            ("q20-25C", 20.0, 25.0, 1),
+            ("q2.5-25C", 2.5, 25.0, 1),
+            ("q20-50C", 20.0, 50.0, 1),
+            ("q2.5-50C", 2.5, 50.0, 1),
+            ("q20-60C", 20.0, 60.0, 1),
+            ("q2.5-60C", 2.5, 60.0, 1),
+            ("extra", 1.0, 25.0, 1),
+        ]
+    );
+    assert_eq!(out, dir.path().join("grid-out"));
+    // without a template: key=value parts
+    std::fs::write(
+        &path,
+        "[grid]\nflow_l_min = [20.0]\nthermal = [true, false]\n",
+    )
+    .expect("write");
+    let (_, runs, _) = campaign::load(&path).expect("grid");
+    let names: Vec<&str> = runs.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(
+        names,
+        ["flow_l_min=20_thermal=true", "flow_l_min=20_thermal=false"]
+    );
+    assert!(runs[0].settings.thermal && !runs[1].settings.thermal);
+}
+
+#[test]
+fn grid_errors_name_the_key_or_the_run() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("bad.toml");
+    let err = |text: &str| {
+        std::fs::write(&path, text).expect("write");
+        campaign::load(&path).expect_err(text).to_string()
+    };
+    for (text, expected) in [
+        (
+            "[grid]\nflow_l_min = 2.0\n",
+            "grid.flow_l_min: must be an array",
+        ),
+        (
+            "[grid]\nflow_l_min = []\n",
+            "grid.flow_l_min: has no values",
+        ),
+        (
+            "[grid]\nflow_l_min = [[1.0]]\n",
+            "grid.flow_l_min: values must be",
+        ),
+        (
+            "[grid]\nname = \"q{flow}\"\nflow_l_min = [1.0]\n",
+            "{flow} in \"q{flow}\" is not a key",
+        ),
+        (
+            "[grid]\nname = \"q{flow_l_min\"\nflow_l_min = [1.0]\n",
+            "unclosed",
+        ),
+        (
+            "[grid]\nname = 3\nflow_l_min = [1.0]\n",
+            "grid.name: must be a string",
+        ),
+        ("[grid]\nname = \"x\"\n", "grid: no keys"),
+        (
+            "[grid]\nname = \"same\"\nflow_l_min = [1.0, 2.0]\n",
+            "unique",
+        ),
+        (
+            "[grid]\nflow_l_min = [1.0]\n[[runs]]\nname = \"flow_l_min=1\"\n",
+            "runs[0]",
+        ),
+        (
+            "[grid]\nflow_l_min = [\"fast\"]\n",
+            "grid run flow_l_min=fast: ",
+        ),
+        ("[grid]\nflow_rate = [1.0]\n", "flow_rate"),
+        ("output_dir = \"o\"\n", "no runs"),
+    ] {
+        let msg = err(text);
+        assert!(
+            msg.contains("bad.toml") && msg.contains(expected),
+            "{text:?}: {msg}"
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Figures: `campaign plot DIR` overlays the runs.
 
@@ -608,4 +721,20 @@ fn campaign_plot_draws_unstable_parts_differently() {
         "{:?}",
         done.notes
     );
+}
+
+#[test]
+fn the_example_campaign_files_load() {
+    let examples = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let (_, paper, _) = campaign::load(&examples.join("paper_campaign.toml")).expect("paper");
+    let names: Vec<&str> = paper.iter().map(|r| r.name.as_str()).collect();
+    assert_eq!(names, ["q20", "q10", "q5", "q2", "q1", "q2-50C"]);
+    let (_, grid, out) = campaign::load(&examples.join("grid_campaign.toml")).expect("grid");
+    assert_eq!(grid.len(), 10);
+    assert_eq!(
+        (grid[0].name.as_str(), grid[9].name.as_str()),
+        ("q20-25C", "q1-50C")
+    );
+    assert!(grid.iter().all(|r| r.settings.order == 3));
+    assert_eq!(out, examples.join("grid_campaign-out"));
 }

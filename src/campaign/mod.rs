@@ -14,6 +14,16 @@
 //! cooling_temp_c = 50.0
 //! ```
 //!
+//! or a grid, every combination of the values one run (named `q20-25C`, … by the
+//! template; without one, `cooling_temp_c=25_flow_l_min=20`, …), before any `[[runs]]`:
+//!
+//! ```toml
+//! [grid]
+//! name = "q{flow_l_min}-{cooling_temp_c}C"
+//! flow_l_min = [20.0, 10.0, 5.0, 2.0, 1.0]
+//! cooling_temp_c = [25.0, 50.0]
+//! ```
+//!
 //! * runs execute in parallel, `threads` at a time (default: one per core), each on its
 //!   own thread with its own rayon pool of `threads / concurrent runs` threads (one each
 //!   when there are at least as many runs as threads), so that one run's parallel parts
@@ -56,7 +66,13 @@ pub struct CampaignFile {
     /// Settings shared by all runs (keys of [`StudySettings`]).
     #[serde(default)]
     pub defaults: toml::Table,
-    /// The runs: a unique `name` plus any [`StudySettings`] keys.
+    /// A grid of runs: each key a [`StudySettings`] key with an array of values, every
+    /// combination one run (see [`expand_grid`]); optional `name`, a template such as
+    /// `"q{flow_l_min}-{cooling_temp_c}C"`.
+    #[serde(default)]
+    pub grid: Option<toml::Table>,
+    /// The runs: a unique `name` plus any [`StudySettings`] keys (after the grid's).
+    #[serde(default)]
     pub runs: Vec<toml::Table>,
 }
 
@@ -76,6 +92,20 @@ pub enum CampaignError {
     Run {
         file: String,
         index: usize,
+        reason: String,
+    },
+    /// A run's settings are refused by the sweep (checked before any run starts).
+    #[error("{file}: run {run}: {reason}")]
+    Invalid {
+        file: String,
+        run: String,
+        reason: String,
+    },
+    /// A run of the grid (named by its values) is not a valid study.
+    #[error("{file}: grid run {run}: {reason}")]
+    GridRun {
+        file: String,
+        run: String,
         reason: String,
     },
     #[error("{path}: {source}")]
@@ -140,49 +170,63 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
         file: file.clone(),
         reason: e.to_string().trim_end().to_string(),
     })?;
-    if spec.runs.is_empty() {
+    let grid = match &spec.grid {
+        Some(g) => expand_grid(g).map_err(|reason| CampaignError::File {
+            file: file.clone(),
+            reason,
+        })?,
+        None => Vec::new(),
+    };
+    if spec.runs.is_empty() && grid.is_empty() {
         return Err(CampaignError::File {
             file,
-            reason: "no [[runs]]".into(),
+            reason: "no runs: give [[runs]] tables, a [grid], or both".into(),
         });
     }
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut runs = Vec::new();
-    for (index, table) in spec.runs.iter().enumerate() {
-        let mut merged = spec.defaults.clone();
-        let mut name = None;
-        for (k, v) in table {
-            if k == "name" {
-                name = v.as_str().map(str::to_string);
-            } else {
-                merged.insert(k.clone(), v.clone());
-            }
-        }
-        let name = name.ok_or_else(|| CampaignError::Run {
+    let mut runs: Vec<CampaignRun> = Vec::new();
+    // where a run came from, for its errors
+    enum Origin<'a> {
+        Grid(&'a str),
+        Runs(usize),
+    }
+    let error = |origin: &Origin<'_>, reason: String| match origin {
+        Origin::Grid(run) => CampaignError::GridRun {
             file: file.clone(),
-            index,
-            reason: "missing `name` (a string)".into(),
-        })?;
-        if name.is_empty()
-            || name.contains(['/', '\\'])
-            || runs.iter().any(|r: &CampaignRun| r.name == name)
-        {
-            return Err(CampaignError::Run {
-                file: file.clone(),
-                index,
-                reason: format!(
-                    "name {name:?} must be unique, non-empty and contain no path separator"
-                ),
-            });
+            run: run.to_string(),
+            reason,
+        },
+        Origin::Runs(index) => CampaignError::Run {
+            file: file.clone(),
+            index: *index,
+            reason,
+        },
+    };
+    let listed = spec.runs.iter().enumerate().map(|(index, table)| {
+        let name = table
+            .get("name")
+            .and_then(toml::Value::as_str)
+            .map(str::to_string);
+        (Origin::Runs(index), name, table)
+    });
+    let gridded = grid
+        .iter()
+        .map(|(name, table)| (Origin::Grid(name), Some(name.clone()), table));
+    for (origin, name, table) in gridded.chain(listed) {
+        let mut merged = spec.defaults.clone();
+        for (k, v) in table.iter().filter(|(k, _)| k.as_str() != "name") {
+            merged.insert(k.clone(), v.clone());
         }
-        let mut settings: StudySettings =
-            toml::Value::Table(merged)
-                .try_into()
-                .map_err(|e: toml::de::Error| CampaignError::Run {
-                    file: file.clone(),
-                    index,
-                    reason: e.to_string().trim_end().to_string(),
-                })?;
+        let name = name.ok_or_else(|| error(&origin, "missing `name` (a string)".into()))?;
+        if name.is_empty() || name.contains(['/', '\\']) || runs.iter().any(|r| r.name == name) {
+            return Err(error(
+                &origin,
+                format!("name {name:?} must be unique, non-empty and contain no path separator"),
+            ));
+        }
+        let mut settings: StudySettings = toml::Value::Table(merged)
+            .try_into()
+            .map_err(|e: toml::de::Error| error(&origin, e.to_string().trim_end().to_string()))?;
         if let Some(m) = &settings.model {
             if m.is_relative() {
                 settings.model = Some(base.join(m));
@@ -201,6 +245,93 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
         )),
     };
     Ok((spec, runs, out))
+}
+
+/// The runs of a `[grid]` table: `(name, settings)` for every combination of the values
+/// of its keys, the keys in alphabetical order with the first varying slowest. Each key is
+/// a [`StudySettings`] key with a non-empty array of numbers, strings or booleans; the
+/// optional `name` is a template whose `{key}` parts are replaced by that run's values
+/// (default: `key=value` parts joined by `_`, e.g. `cooling_temp_c=25_flow_l_min=2`).
+/// Numbers print without a trailing `.0` (20.0 → `20`, 2.5 → `2.5`). The error names the
+/// key.
+pub fn expand_grid(grid: &toml::Table) -> Result<Vec<(String, toml::Table)>, String> {
+    let template = match grid.get("name") {
+        None => None,
+        Some(toml::Value::String(t)) => Some(t.as_str()),
+        Some(_) => return Err("grid.name: must be a string (a template)".into()),
+    };
+    let mut axes: Vec<(&str, Vec<(toml::Value, String)>)> = Vec::new();
+    for (key, values) in grid.iter().filter(|(k, _)| k.as_str() != "name") {
+        let toml::Value::Array(values) = values else {
+            return Err(format!("grid.{key}: must be an array of values"));
+        };
+        if values.is_empty() {
+            return Err(format!("grid.{key}: has no values"));
+        }
+        let mut axis = Vec::with_capacity(values.len());
+        for v in values {
+            let text = match v {
+                toml::Value::Float(x) if x.fract() == 0.0 && x.abs() < 1e15 => format!("{x:.0}"),
+                toml::Value::Float(x) => x.to_string(),
+                toml::Value::Integer(i) => i.to_string(),
+                toml::Value::String(s) => s.clone(),
+                toml::Value::Boolean(b) => b.to_string(),
+                _ => {
+                    return Err(format!(
+                        "grid.{key}: values must be numbers, strings or booleans"
+                    ));
+                }
+            };
+            axis.push((v.clone(), text));
+        }
+        axes.push((key.as_str(), axis));
+    }
+    if axes.is_empty() {
+        return Err("grid: no keys with values".into());
+    }
+    if let Some(t) = template {
+        // every `{…}` in the template must name a key of the grid
+        let mut rest = t;
+        while let Some(open) = rest.find('{') {
+            let Some(close) = rest[open..].find('}') else {
+                return Err(format!("grid.name: unclosed `{{` in {t:?}"));
+            };
+            let key = &rest[open + 1..open + close];
+            if !axes.iter().any(|(k, _)| *k == key) {
+                return Err(format!(
+                    "grid.name: {{{key}}} in {t:?} is not a key of the grid"
+                ));
+            }
+            rest = &rest[open + close + 1..];
+        }
+    }
+    let count: usize = axes.iter().map(|(_, a)| a.len()).product();
+    let mut runs = Vec::with_capacity(count);
+    for mut index in (0..count).rev() {
+        // mixed radix, the last key fastest; built backwards, reversed below
+        let mut table = toml::Table::new();
+        let mut picked = Vec::with_capacity(axes.len());
+        for (key, axis) in axes.iter().rev() {
+            let (value, text) = &axis[index % axis.len()];
+            index /= axis.len();
+            table.insert((*key).to_string(), value.clone());
+            picked.push((*key, text.as_str()));
+        }
+        picked.reverse();
+        let name = match template {
+            Some(t) => picked
+                .iter()
+                .fold(t.to_string(), |n, (k, v)| n.replace(&format!("{{{k}}}"), v)),
+            None => picked
+                .iter()
+                .map(|(k, v)| format!("{k}={v}"))
+                .collect::<Vec<_>>()
+                .join("_"),
+        };
+        runs.push((name, table));
+    }
+    runs.reverse();
+    Ok(runs)
 }
 
 /// SHA-256 of a file, hex.
@@ -281,6 +412,15 @@ pub fn run(
         .filter(|(p, _)| shard.is_none_or(|(i, n)| p % n == i))
         .map(|(_, r)| r)
         .collect();
+    // a run the sweep would refuse stops the campaign before anything is computed (a bad
+    // value in a grid is found now, not hours later)
+    for r in &selected {
+        SweepProblem::new(&r.settings).map_err(|e| CampaignError::Invalid {
+            file: campaign_path.display().to_string(),
+            run: r.name.clone(),
+            reason: e.to_string(),
+        })?;
+    }
     let names: Vec<String> = selected.iter().map(|r| r.name.clone()).collect();
     progress(Event::Plan { runs: &names });
     let manifest = Mutex::new(Manifest {
