@@ -45,6 +45,15 @@ fn stopped_by(signal: &str) {
         stderr.contains("interrupted: the sweep stopped after"),
         "{stderr}"
     );
+    // stderr is a pipe: a plain line on what runs instead of a progress bar
+    assert!(
+        stderr.starts_with("sweep: ω 300 → 700 rad/s, order 3, writing "),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains('\u{1b}'),
+        "terminal escapes in a pipe: {stderr}"
+    );
     let rec = read_recording(&out).expect("a readable recording");
     assert!(rec.complete, "{signal}: {:?}", rec.notes);
     assert_eq!(rec.status, Some(RunStatus::Interrupted));

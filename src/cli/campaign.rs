@@ -4,7 +4,7 @@
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use clap::{Args, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
@@ -202,14 +202,10 @@ fn figures(
     Ok(())
 }
 
-/// How often a campaign whose progress goes to a file (not a terminal) writes a line on
-/// the whole campaign.
-const LOG_EVERY: Duration = Duration::from_secs(15);
-
 /// What a campaign shows while it runs: on a terminal a bar for the whole campaign and one
 /// per run (points, current ω, bifurcations); anywhere else (a log file, a cluster job's
 /// output) a line when a run ends or is skipped and a line on the whole campaign every
-/// [`LOG_EVERY`]; nothing with `--quiet`.
+/// [`super::LOG_EVERY`]; nothing with `--quiet`.
 struct Display {
     bars: Option<Bars>,
     log: bool,
@@ -370,7 +366,7 @@ impl Display {
                         bar.set_message(progress_message(progress, "ω "));
                     }
                 }
-                if self.log && t.last_log.elapsed() >= LOG_EVERY {
+                if self.log && t.last_log.elapsed() >= super::LOG_EVERY {
                     t.last_log = Instant::now();
                     let running: Vec<String> = t
                         .runs

@@ -11,6 +11,11 @@ pub mod truncation;
 
 use clap::{Parser, Subcommand};
 
+/// How often a long command whose progress goes to a file (not a terminal) writes a
+/// progress line: often enough to follow a cluster job's log, rarely enough to keep it
+/// short (a default sweep writes one line, a paper campaign about seven).
+pub const LOG_EVERY: std::time::Duration = std::time::Duration::from_secs(15);
+
 /// Nonlinear thermo-mechanical rotor dynamics: harmonic balance, continuation, Floquet
 /// stability, MCAP recordings.
 #[derive(Debug, Parser)]

@@ -1,6 +1,8 @@
 //! `tmrotor sweep`: one continuation sweep written to an MCAP recording.
 
+use std::io::IsTerminal;
 use std::path::PathBuf;
+use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
@@ -95,7 +97,7 @@ pub struct SweepArgs {
     /// Output recording.
     #[arg(short, long, default_value = "sweep.mcap")]
     pub output: PathBuf,
-    /// No progress bar.
+    /// No progress: no bar on a terminal, no progress lines when the output goes to a file.
     #[arg(long, short)]
     pub quiet: bool,
 }
@@ -190,9 +192,30 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         );
         b
     };
+    // not on a terminal (a log file, a cluster job's output): plain lines instead of a bar
+    let log = !args.quiet && !std::io::stderr().is_terminal();
+    if log {
+        eprintln!(
+            "sweep: ω {} → {} rad/s, order {}, writing {}",
+            settings.omega_start,
+            settings.omega_end,
+            settings.order,
+            args.output.display()
+        );
+    }
+    let start = Instant::now();
+    let mut last_line = start;
     let report = problem.run(&mut sink, interrupt, |p| {
         bar.set_position((p.fraction * 1000.0) as u64);
         bar.set_message(progress_message(p, ""));
+        if log && last_line.elapsed() >= super::LOG_EVERY {
+            last_line = Instant::now();
+            eprintln!(
+                "sweep: {} after {:.0} s",
+                progress_message(p, "ω "),
+                start.elapsed().as_secs_f64()
+            );
+        }
     });
     bar.finish_and_clear();
     let report = report.with_context(|| {
