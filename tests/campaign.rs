@@ -551,6 +551,8 @@ fn campaign_plot_errors_name_the_file_and_reason() {
         msg.contains("manifest.toml") && msg.contains("not a campaign manifest"),
         "{msg}"
     );
+    // (a campaign refuses to run over it: moved away)
+    std::fs::remove_file(out.join("manifest.toml")).expect("remove");
 
     let quiet = |_: campaign::Event<'_>| {};
     campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
@@ -737,4 +739,42 @@ fn the_example_campaign_files_load() {
     );
     assert!(grid.iter().all(|r| r.settings.order == 3));
     assert_eq!(out, examples.join("grid_campaign-out"));
+}
+
+#[test]
+fn a_damaged_manifest_stops_the_campaign_and_keeps_the_recordings() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_campaign(dir.path());
+    let quiet = |_: campaign::Event<'_>| {};
+    let m = campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
+    let out = dir.path().join("out");
+    let manifest = out.join("manifest.toml");
+    let text = std::fs::read_to_string(&manifest).expect("manifest");
+    // cut in the middle, as by a full disk
+    std::fs::write(&manifest, &text[..text.len() / 2]).expect("truncate");
+    let err = campaign::run(&file, Some(2), None, None, &quiet)
+        .expect_err("damaged manifest")
+        .to_string();
+    assert!(
+        err.contains("manifest.toml") && err.contains("not a campaign manifest"),
+        "{err}"
+    );
+    assert!(err.contains("recordings beside it are kept"), "{err}");
+    for r in &m.runs {
+        assert_eq!(
+            sha256_file(&out.join(&r.recording)).expect("recording"),
+            r.sha256,
+            "{} was touched",
+            r.name
+        );
+    }
+    // a damaged shard manifest is named by merge
+    std::fs::write(out.join("manifest-shard-0-of-2.toml"), "runs = 3").expect("write");
+    let err = campaign::merge_manifests(&out)
+        .expect_err("merge")
+        .to_string();
+    assert!(
+        err.contains("manifest-shard-0-of-2.toml") && err.contains("not a campaign manifest"),
+        "{err}"
+    );
 }

@@ -131,17 +131,7 @@ impl RunData {
 /// Reads `path` as a campaign manifest; errors name the file.
 pub fn read_manifest_file(path: &Path) -> Result<Manifest, CampaignError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| CampaignError::File {
-        file: file.clone(),
-        reason: format!("cannot read the campaign manifest: {e}"),
-    })?;
-    let manifest: Manifest = toml::from_str(&text).map_err(|e| CampaignError::File {
-        file: file.clone(),
-        reason: format!(
-            "not a campaign manifest: {}",
-            e.to_string().trim_end().replace('\n', " ")
-        ),
-    })?;
+    let manifest = super::parse_manifest(path)?;
     if manifest.runs.is_empty() {
         return Err(CampaignError::File {
             file,

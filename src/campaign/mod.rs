@@ -341,8 +341,20 @@ pub fn sha256_file(path: &Path) -> Result<String, std::io::Error> {
     Ok(digest.iter().map(|b| format!("{b:02x}")).collect())
 }
 
-fn read_manifest(path: &Path) -> Option<Manifest> {
-    toml::from_str(&std::fs::read_to_string(path).ok()?).ok()
+/// Reads `path` as a campaign manifest; errors name the file and the reason.
+pub fn parse_manifest(path: &Path) -> Result<Manifest, CampaignError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| CampaignError::File {
+        file: file.clone(),
+        reason: format!("cannot read the campaign manifest: {e}"),
+    })?;
+    toml::from_str(&text).map_err(|e| CampaignError::File {
+        file,
+        reason: format!(
+            "not a campaign manifest: {}",
+            e.to_string().trim_end().replace('\n', " ")
+        ),
+    })
 }
 
 fn write_manifest(path: &Path, m: &Manifest) -> Result<(), CampaignError> {
@@ -405,7 +417,22 @@ pub fn run(
         source,
     })?;
     let manifest_path = out.join(manifest_name(shard));
-    let previous = read_manifest(&manifest_path).unwrap_or_default();
+    // An unreadable manifest stops the campaign: taking it as empty would run every run
+    // again and overwrite recordings that may be complete.
+    let previous = if manifest_path.exists() {
+        parse_manifest(&manifest_path).map_err(|e| match e {
+            CampaignError::File { file, reason } => CampaignError::File {
+                file,
+                reason: format!(
+                    "{reason}; nothing was run and the recordings beside it are kept: repair \
+                     the manifest, or move it away to run every run again"
+                ),
+            },
+            other => other,
+        })?
+    } else {
+        Manifest::default()
+    };
     let selected: Vec<CampaignRun> = runs
         .into_iter()
         .enumerate()
@@ -656,10 +683,7 @@ pub fn merge_manifests(dir: &Path) -> Result<Manifest, CampaignError> {
         if !(name.starts_with("manifest-shard-") && name.ends_with(".toml")) {
             continue;
         }
-        let m = read_manifest(&entry.path()).ok_or_else(|| CampaignError::File {
-            file: entry.path().display().to_string(),
-            reason: "not a readable manifest".into(),
-        })?;
+        let m = parse_manifest(&entry.path())?;
         found += 1;
         merged.campaign = m.campaign.clone();
         merged.tool_version = m.tool_version.clone();
