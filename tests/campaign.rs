@@ -778,3 +778,50 @@ fn a_damaged_manifest_stops_the_campaign_and_keeps_the_recordings() {
         "{err}"
     );
 }
+
+#[test]
+fn a_grid_of_twelve_runs_is_drawn_in_twelve_colours() {
+    use tmrotor::campaign::figures::run_colour;
+    // twenty distinct colours, then again
+    let colours: Vec<_> = (0..20).map(run_colour).collect();
+    for (i, a) in colours.iter().enumerate() {
+        assert!(
+            colours[i + 1..].iter().all(|b| b != a),
+            "colour {i} repeats"
+        );
+    }
+    assert_eq!(run_colour(20), run_colour(0));
+    assert_eq!(run_colour(0), PALETTE[0]);
+    // a campaign of twelve short runs: the eleventh and twelfth have colours of their own
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("g.toml");
+    std::fs::write(
+        &path,
+        r#"
+[defaults]
+order = 1
+omega_start = 400.0
+omega_end = 440.0
+max_points = 6
+stability = false
+[grid]
+name = "q{flow_l_min}-{cooling_temp_c}C"
+flow_l_min = [20.0, 10.0, 5.0, 2.0, 1.0, 0.5]
+cooling_temp_c = [25.0, 50.0]
+"#,
+    )
+    .expect("write");
+    let quiet = |_: campaign::Event<'_>| {};
+    let m = campaign::run(&path, None, None, None, &quiet).expect("campaign");
+    assert_eq!(m.runs.len(), 12);
+    let out = dir.path().join("g-out");
+    let figs = out.join("figs");
+    plot_campaign(&out, &figs, &options()).expect("plot");
+    let (_, _, px) = png_pixels(&figs.join("amplitude_node8.png"));
+    for k in 0..12 {
+        assert!(
+            has_colour(&px, run_colour(k)),
+            "run {k} not drawn in its colour"
+        );
+    }
+}

@@ -181,6 +181,31 @@ fn run_label(entry: &ManifestEntry, rec_settings: &[(String, String)]) -> String
     }
 }
 
+/// Lighter companions of [`PALETTE`]'s colours (the second half of the "tab20" set; for its
+/// light grey, too close to the grid lines, an indigo), for runs 11–20 of a campaign (a
+/// grid of five flow rates at three temperatures has 15).
+const PALETTE_LIGHT: [RGBColor; 10] = [
+    RGBColor(174, 199, 232),
+    RGBColor(255, 187, 120),
+    RGBColor(152, 223, 138),
+    RGBColor(255, 152, 150),
+    RGBColor(197, 176, 213),
+    RGBColor(196, 156, 148),
+    RGBColor(247, 182, 210),
+    RGBColor(82, 84, 163),
+    RGBColor(219, 219, 141),
+    RGBColor(158, 218, 229),
+];
+
+/// The colour of run `k` in the overlays: [`PALETTE`], then [`PALETTE_LIGHT`], then again.
+pub fn run_colour(k: usize) -> RGBColor {
+    let n = PALETTE.len() + PALETTE_LIGHT.len();
+    match k % n {
+        i if i < PALETTE.len() => PALETTE[i],
+        i => PALETTE_LIGHT[i - PALETTE.len()],
+    }
+}
+
 fn load_run(
     dir: &Path,
     entry: &ManifestEntry,
@@ -192,7 +217,7 @@ fn load_run(
         entry.recording.clone()
     };
     let path = dir.join(&file);
-    let colour = PALETTE[k % PALETTE.len()];
+    let colour = run_colour(k);
     let rec = match read_recording(&path) {
         Ok(rec) => rec,
         // A run that has not started, or failed before it could record, has no file:
