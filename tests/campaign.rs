@@ -825,3 +825,68 @@ cooling_temp_c = [25.0, 50.0]
         );
     }
 }
+
+#[test]
+fn a_dry_run_lists_what_would_run_and_writes_nothing() {
+    let exe = env!("CARGO_BIN_EXE_tmrotor");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_campaign(dir.path());
+    let out = dir.path().join("out");
+    let dry = |extra: &[&str]| {
+        let run = Command::new(exe)
+            .args(["campaign", "--dry-run"])
+            .args(extra)
+            .arg(&file)
+            .output()
+            .expect("run tmrotor");
+        let stdout = String::from_utf8_lossy(&run.stdout).into_owned();
+        assert!(
+            run.status.success(),
+            "{stdout}{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        stdout
+    };
+    let listed = dry(&[]);
+    assert!(
+        listed.contains(": 3 runs, 3 to run, 0 complete"),
+        "{listed}"
+    );
+    for name in ["a", "b", "c"] {
+        assert!(
+            listed
+                .lines()
+                .any(|l| l.contains(&format!(" {name}  run "))),
+            "{listed}"
+        );
+    }
+    assert!(
+        listed.contains("ambient 30 °C"),
+        "run b's own setting: {listed}"
+    );
+    assert!(!out.exists(), "a dry run wrote {}", out.display());
+    // a shard lists its runs with their positions in the file
+    let shard = dry(&["--shard", "1/2"]);
+    assert!(shard.contains("shard 1/2: 1 run, 1 to run"), "{shard}");
+    assert!(shard.contains("#1   b"), "{shard}");
+    // after a campaign: complete runs would be skipped, a damaged one run again
+    let quiet = |_: campaign::Event<'_>| {};
+    campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
+    std::fs::write(out.join("c.mcap"), b"garbage").expect("damage");
+    let (planned, _) = campaign::plan(&file, None).expect("plan");
+    let skip: Vec<(&str, bool)> = planned
+        .iter()
+        .map(|p| (p.run.name.as_str(), p.skip))
+        .collect();
+    assert_eq!(skip, [("a", true), ("b", true), ("c", false)]);
+    let listed = dry(&[]);
+    assert!(listed.contains("3 runs, 1 to run, 2 complete"), "{listed}");
+    assert!(listed.contains("skip: completed"), "{listed}");
+    // and a setting the sweep refuses is found by the dry run too
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "[grid]\nflow_l_min = [2.0, -1.0]\n").expect("write");
+    let err = campaign::plan(&bad, None)
+        .expect_err("negative flow")
+        .to_string();
+    assert!(err.contains("run flow_l_min=-1"), "{err}");
+}

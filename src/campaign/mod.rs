@@ -403,19 +403,21 @@ pub enum Event<'a> {
     },
 }
 
-/// Runs a campaign. `progress` is told what happens ([`Event`]), from the worker threads.
-pub fn run(
-    campaign_path: &Path,
-    threads: Option<usize>,
-    shard: Option<(usize, usize)>,
-    interrupt: Option<Arc<AtomicBool>>,
-    progress: &(dyn Fn(Event<'_>) + Sync),
-) -> Result<Manifest, CampaignError> {
+/// What an invocation of a campaign starts from: this shard's runs (checked), the
+/// manifest of an earlier invocation, where everything goes.
+struct Prepared {
+    runs: Vec<CampaignRun>,
+    previous: Manifest,
+    out: PathBuf,
+    manifest_path: PathBuf,
+}
+
+/// Loads the campaign file, selects the shard's runs, checks each with the sweep's own
+/// check (a run the sweep would refuse stops everything before anything is computed: a bad
+/// value in a grid is found now, not hours later) and reads the earlier manifest. Writes
+/// nothing.
+fn prepare(campaign_path: &Path, shard: Option<(usize, usize)>) -> Result<Prepared, CampaignError> {
     let (_, runs, out) = load(campaign_path)?;
-    std::fs::create_dir_all(&out).map_err(|source| CampaignError::Io {
-        path: out.display().to_string(),
-        source,
-    })?;
     let manifest_path = out.join(manifest_name(shard));
     // An unreadable manifest stops the campaign: taking it as empty would run every run
     // again and overwrite recordings that may be complete.
@@ -433,21 +435,102 @@ pub fn run(
     } else {
         Manifest::default()
     };
-    let selected: Vec<CampaignRun> = runs
+    let runs: Vec<CampaignRun> = runs
         .into_iter()
         .enumerate()
         .filter(|(p, _)| shard.is_none_or(|(i, n)| p % n == i))
         .map(|(_, r)| r)
         .collect();
-    // a run the sweep would refuse stops the campaign before anything is computed (a bad
-    // value in a grid is found now, not hours later)
-    for r in &selected {
+    for r in &runs {
         SweepProblem::new(&r.settings).map_err(|e| CampaignError::Invalid {
             file: campaign_path.display().to_string(),
             run: r.name.clone(),
             reason: e.to_string(),
         })?;
     }
+    Ok(Prepared {
+        runs,
+        previous,
+        out,
+        manifest_path,
+    })
+}
+
+/// The earlier manifest's entry of run `r` when the run is complete and need not run
+/// again: status `completed`, the same settings, and its recording in `out` unchanged
+/// (the checksum the manifest recorded).
+fn completed_before<'m>(
+    previous: &'m Manifest,
+    r: &CampaignRun,
+    out: &Path,
+) -> Option<&'m ManifestEntry> {
+    let prev = previous.runs.iter().find(|e| e.name == r.name)?;
+    let settings = toml::Table::try_from(&r.settings).unwrap_or_default();
+    let rec_path = out.join(format!("{}.mcap", r.name));
+    (prev.status == "completed"
+        && prev.settings == settings
+        && sha256_file(&rec_path).ok().as_deref() == Some(prev.sha256.as_str()))
+    .then_some(prev)
+}
+
+/// One run of a campaign as its next invocation would take it ([`plan`]).
+#[derive(Clone, Debug)]
+pub struct PlannedRun {
+    pub run: CampaignRun,
+    /// Its position in the campaign file's run list (grid first), which decides its shard.
+    pub position: usize,
+    /// What the earlier manifest says of it (`completed`, `interrupted`, `failed: …`,
+    /// `pending`), if it lists it.
+    pub previous: Option<String>,
+    /// Complete and unchanged: it would be skipped.
+    pub skip: bool,
+}
+
+/// What `run` would do, without running or writing anything: this shard's runs (checked
+/// like [`run`] checks them), with their positions and whether each would be skipped; and
+/// the output directory.
+pub fn plan(
+    campaign_path: &Path,
+    shard: Option<(usize, usize)>,
+) -> Result<(Vec<PlannedRun>, PathBuf), CampaignError> {
+    let p = prepare(campaign_path, shard)?;
+    let planned = p
+        .runs
+        .iter()
+        .enumerate()
+        .map(|(k, r)| PlannedRun {
+            run: r.clone(),
+            position: shard.map_or(k, |(i, n)| i + k * n),
+            previous: p
+                .previous
+                .runs
+                .iter()
+                .find(|e| e.name == r.name)
+                .map(|e| e.status.clone()),
+            skip: completed_before(&p.previous, r, &p.out).is_some(),
+        })
+        .collect();
+    Ok((planned, p.out))
+}
+
+/// Runs a campaign. `progress` is told what happens ([`Event`]), from the worker threads.
+pub fn run(
+    campaign_path: &Path,
+    threads: Option<usize>,
+    shard: Option<(usize, usize)>,
+    interrupt: Option<Arc<AtomicBool>>,
+    progress: &(dyn Fn(Event<'_>) + Sync),
+) -> Result<Manifest, CampaignError> {
+    let Prepared {
+        runs: selected,
+        previous,
+        out,
+        manifest_path,
+    } = prepare(campaign_path, shard)?;
+    std::fs::create_dir_all(&out).map_err(|source| CampaignError::Io {
+        path: out.display().to_string(),
+        source,
+    })?;
     let names: Vec<String> = selected.iter().map(|r| r.name.clone()).collect();
     progress(Event::Plan { runs: &names });
     let manifest = Mutex::new(Manifest {
@@ -491,20 +574,15 @@ pub fn run(
         let rec_path = out.join(format!("{}.mcap", r.name));
         let settings_table = toml::Table::try_from(&r.settings).unwrap_or_default();
         // Resume: skip a completed run whose recording is unchanged.
-        if let Some(prev) = previous.runs.iter().find(|e| e.name == r.name) {
-            if prev.status == "completed"
-                && prev.settings == settings_table
-                && sha256_file(&rec_path).ok().as_deref() == Some(prev.sha256.as_str())
-            {
-                if let Ok(mut m) = manifest.lock() {
-                    m.runs[k] = prev.clone();
-                }
-                progress(Event::Skipped {
-                    run: &r.name,
-                    entry: prev,
-                });
-                return;
+        if let Some(prev) = completed_before(&previous, r, &out) {
+            if let Ok(mut m) = manifest.lock() {
+                m.runs[k] = prev.clone();
             }
+            progress(Event::Skipped {
+                run: &r.name,
+                entry: prev,
+            });
+            return;
         }
         let entry = match &run_pool {
             Some(threads) => match rayon::ThreadPoolBuilder::new()

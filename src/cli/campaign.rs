@@ -38,6 +38,11 @@ pub struct CampaignArgs {
     /// completed.
     #[arg(long)]
     pub no_figures: bool,
+    /// List the runs (a grid expanded, with `--shard` that shard's) with their settings and
+    /// whether each would run or be skipped as complete; check them; run and write
+    /// nothing.
+    #[arg(long)]
+    pub dry_run: bool,
 }
 
 #[derive(Debug, Clone, Subcommand)]
@@ -125,6 +130,9 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`)")
     })?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    if args.dry_run {
+        return dry_run(file, shard, out);
+    }
     let display = Display::new(args.quiet);
     let progress = |e: campaign::Event<'_>| display.show(e);
     let interrupt = install_interrupt_flag().ok();
@@ -165,6 +173,61 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         unfinished.len(),
         manifest.runs.len()
     )
+}
+
+/// `--dry-run`: the runs and what would happen to each.
+fn dry_run(
+    file: &std::path::Path,
+    shard: Option<(usize, usize)>,
+    out: &mut impl std::io::Write,
+) -> anyhow::Result<()> {
+    let (planned, dir) = campaign::plan(file, shard)?;
+    let which = match shard {
+        Some((i, n)) => format!("shard {i}/{n}: "),
+        None => String::new(),
+    };
+    let to_run = planned.iter().filter(|p| !p.skip).count();
+    writeln!(
+        out,
+        "{}: {which}{} run{}, {to_run} to run, {} complete → {} (dry run: nothing run or written)",
+        file.display(),
+        planned.len(),
+        if planned.len() == 1 { "" } else { "s" },
+        planned.len() - to_run,
+        dir.display()
+    )?;
+    let what = |p: &campaign::PlannedRun| match (&p.previous, p.skip) {
+        (_, true) => "skip: completed".to_string(),
+        (Some(status), false) if status != "pending" => {
+            format!(
+                "run ({} before)",
+                status.split(':').next().unwrap_or(status)
+            )
+        }
+        _ => "run".to_string(),
+    };
+    let width = planned.iter().map(|p| p.run.name.len()).max().unwrap_or(0);
+    let what_width = planned.iter().map(|p| what(p).len()).max().unwrap_or(0);
+    for p in &planned {
+        let s = &p.run.settings;
+        writeln!(
+            out,
+            "  #{:<3} {:<width$}  {:<what_width$}  flow {} L/min, cooling {} °C, ambient {} °C, \
+             order {}, ω {} → {} rad/s{}{}",
+            p.position,
+            p.run.name,
+            what(p),
+            s.flow_l_min,
+            s.cooling_temp_c,
+            s.ambient_temp_c,
+            s.order,
+            s.omega_start,
+            s.omega_end,
+            if s.thermal { "" } else { ", no thermal" },
+            if s.stability { "" } else { ", no stability" },
+        )?;
+    }
+    Ok(())
 }
 
 /// The campaign's figures once every run is complete (or why they are not drawn).
