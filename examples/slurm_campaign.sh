@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Split a campaign over a Slurm job array: each array task runs one deterministic shard.
 #
+#   tmrotor campaign examples/paper_campaign.toml --dry-run --shard 0/6   # what task 0 runs
 #   sbatch --array=0-5 examples/slurm_campaign.sh examples/paper_campaign.toml 6
 #   # when all tasks are done:
 #   tmrotor campaign merge examples/paper_campaign-out
