@@ -18,7 +18,8 @@ use crate::record::install_interrupt_flag;
 pub struct CampaignArgs {
     #[command(subcommand)]
     pub command: Option<CampaignCommand>,
-    /// Campaign file (TOML; see `examples/paper_campaign.toml`).
+    /// Campaign file (TOML: a list of runs as in `examples/paper_campaign.toml`, a grid as
+    /// in `examples/grid_campaign.toml`, or both).
     pub file: Option<PathBuf>,
     /// Runs computed at the same time (default: one per core). Each run's parallel parts
     /// get `threads / runs at a time` threads of their own (at least one); with one run
