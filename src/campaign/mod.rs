@@ -456,21 +456,28 @@ fn prepare(campaign_path: &Path, shard: Option<(usize, usize)>) -> Result<Prepar
     })
 }
 
-/// The earlier manifest's entry of run `r` when the run is complete and need not run
-/// again: status `completed`, the same settings, and its recording in `out` unchanged
-/// (the checksum the manifest recorded).
+/// The earlier manifest's entry of run `name` when the run is complete and need not run
+/// again: status `completed`, the same `settings`, and its recording at `rec_path`
+/// unchanged (the checksum the manifest recorded).
 fn completed_before<'m>(
     previous: &'m Manifest,
-    r: &CampaignRun,
-    out: &Path,
+    name: &str,
+    settings: &toml::Table,
+    rec_path: &Path,
 ) -> Option<&'m ManifestEntry> {
-    let prev = previous.runs.iter().find(|e| e.name == r.name)?;
-    let settings = toml::Table::try_from(&r.settings).unwrap_or_default();
-    let rec_path = out.join(format!("{}.mcap", r.name));
+    let prev = previous.runs.iter().find(|e| e.name == name)?;
     (prev.status == "completed"
-        && prev.settings == settings
-        && sha256_file(&rec_path).ok().as_deref() == Some(prev.sha256.as_str()))
+        && prev.settings == *settings
+        && sha256_file(rec_path).ok().as_deref() == Some(prev.sha256.as_str()))
     .then_some(prev)
+}
+
+/// Where run `r`'s recording goes in `out`, and its settings as a manifest table.
+fn recording_and_settings(r: &CampaignRun, out: &Path) -> (PathBuf, toml::Table) {
+    (
+        out.join(format!("{}.mcap", r.name)),
+        toml::Table::try_from(&r.settings).unwrap_or_default(),
+    )
 }
 
 /// One run of a campaign as its next invocation would take it ([`plan`]).
@@ -507,7 +514,10 @@ pub fn plan(
                 .iter()
                 .find(|e| e.name == r.name)
                 .map(|e| e.status.clone()),
-            skip: completed_before(&p.previous, r, &p.out).is_some(),
+            skip: {
+                let (rec_path, settings) = recording_and_settings(r, &p.out);
+                completed_before(&p.previous, &r.name, &settings, &rec_path).is_some()
+            },
         })
         .collect();
     Ok((planned, p.out))
@@ -571,10 +581,9 @@ pub fn run(
         wide: std::sync::OnceLock::new(),
     };
     let work = |k: usize, r: &CampaignRun| {
-        let rec_path = out.join(format!("{}.mcap", r.name));
-        let settings_table = toml::Table::try_from(&r.settings).unwrap_or_default();
+        let (rec_path, settings_table) = recording_and_settings(r, &out);
         // Resume: skip a completed run whose recording is unchanged.
-        if let Some(prev) = completed_before(&previous, r, &out) {
+        if let Some(prev) = completed_before(&previous, &r.name, &settings_table, &rec_path) {
             if let Ok(mut m) = manifest.lock() {
                 m.runs[k] = prev.clone();
             }
