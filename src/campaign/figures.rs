@@ -197,7 +197,8 @@ const PALETTE_LIGHT: [RGBColor; 10] = [
     RGBColor(158, 218, 229),
 ];
 
-/// The colour of run `k` in the overlays: [`PALETTE`], then [`PALETTE_LIGHT`], then again.
+/// The colour of run `k` in the overlays: the ten colours of `PALETTE`, then the ten of
+/// `PALETTE_LIGHT` (tab20's light set), then again.
 pub fn run_colour(k: usize) -> RGBColor {
     let n = PALETTE.len() + PALETTE_LIGHT.len();
     match k % n {

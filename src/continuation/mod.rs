@@ -65,16 +65,19 @@
 //!   points' stable flags.
 //! * **Neimark–Sacker and period doubling.** When the number of multipliers outside the
 //!   unit circle differs between neighbours, each kind whose own count differs (complex
-//!   pairs, negative real multipliers: [`BifurcationKind::of_multiplier`]) is located by
-//!   a safeguarded regula falsi on the modulus of the crossing multiplier, until the
-//!   bracket is shorter than `bifurcation_tol_arclength` or that modulus is within
-//!   `bifurcation_tol_modulus` of the circle. Counted per kind, a pair crossing in the
+//!   pairs, negative real multipliers: [`BifurcationKind::of_multiplier`]) is located on
+//!   the modulus of the crossing multiplier, by the secant of the last two trials while
+//!   it converges and a safeguarded regula falsi otherwise (bisection when the bracket's
+//!   ends lie on one side of the circle), until the bracket is shorter than
+//!   `bifurcation_tol_arclength` or that modulus is within `bifurcation_tol_modulus` of
+//!   the circle. Counted per kind, a pair crossing in the
 //!   same step as a real multiplier through +1 at a fold is not hidden by it; the crossing
 //!   multiplier is ranked among the multipliers of its kind only, so that slow thermal
 //!   multipliers just below +1 do not stand in for it. A search that does not bring it
 //!   within `CROSSING_MODULUS_TOL` (0.02) of the circle found a jump of the count (a
 //!   collision of two real multipliers into a pair), not a crossing, and reports
-//!   nothing. The trials use the method's search evaluation
+//!   nothing; it ends once its bracket is below `JUMP_BRACKET_FRACTION` of the step with
+//!   the modulus that far from the circle, on one side, at both ends. The trials use the method's search evaluation
 //!   ([`StabilityMethod::search_multipliers`]: for [`crate::stability::ExpSip`] the
 //!   product on the intervals of the finer end, without further refinement), and the
 //!   located point carries those multipliers.
@@ -446,8 +449,8 @@ pub fn closing_point(history: &PathHistory, x: &[f64], s_x: f64, tangent: &[f64]
 const RETRACE_TUBE: f64 = 0.05;
 
 /// Whether the point `x` (as in [`closing_point`]) runs back along the earlier path: it
-/// lies within [`RETRACE_TUBE`] of an earlier segment `history[j] → history[j+1]`, with the
-/// projection and path-length conditions of [`closing_point`], but goes the other way (the
+/// lies within `RETRACE_TUBE` (0.05, scaled) of an earlier segment
+/// `history[j] → history[j+1]`, with the projection and path-length conditions of [`closing_point`], but goes the other way (the
 /// segment's direction within about 37° of `−tangent`), and the point before it lies as
 /// close to that segment or one of the two after it. Returns `j`.
 ///
