@@ -450,9 +450,10 @@ const RETRACE_TUBE: f64 = 0.05;
 
 /// Whether the point `x` (as in [`closing_point`]) runs back along the earlier path: it
 /// lies within `RETRACE_TUBE` (0.05, scaled) of an earlier segment
-/// `history[j] → history[j+1]`, with the projection and path-length conditions of [`closing_point`], but goes the other way (the
-/// segment's direction within about 37° of `−tangent`), and the point before it lies as
-/// close to that segment or one of the two after it. Returns `j`.
+/// `history[j] → history[j+1]`, with the projection and path-length conditions of
+/// [`closing_point`], but goes the other way (the segment's direction within about 37° of
+/// `−tangent`), and the point before it lies as close to that segment or one of the two
+/// after it. Returns `j`.
 ///
 /// A branch is a curve: it does not come back onto itself reversed. When the path does,
 /// it has jumped between sheets where they meet (a branch point, or the sharp bend of an
