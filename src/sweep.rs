@@ -145,6 +145,15 @@ pub const BIFURCATION_TOL_ARCLENGTH: f64 = 1e-4;
 /// see [`ExpSip::default`]).
 pub const BIFURCATION_TOL_MODULUS: f64 = 1e-4;
 
+/// ω resolution (rad/s) of a located Neimark–Sacker or period-doubling point in a sweep:
+/// the crossing search also stops once its bracket spans less than this in ω on a step
+/// without a fold. Why: the points are reported to 1e-3 rad/s (`tmrotor sweep`'s summary)
+/// and 1e-4 (`replay info`), and on refined products the crossing modulus is noisier
+/// than the modulus tolerance (about 3e-4 from trial to trial on 4096 intervals on the
+/// 20 L/min run), so that the searches there went on to the arclength tolerance, moving
+/// the point by less than 1e-3 rad/s with each trial of 0.4 s.
+pub const BIFURCATION_TOL_OMEGA: f64 = 1e-3;
+
 /// Default SIP intervals per period of a sweep: [`ExpSip`]'s default, 512 extrapolated
 /// with 256 and refined up to 4096 intervals near the unit circle (the reason, with the
 /// measured errors, is on [`ExpSip::default`]).
@@ -528,6 +537,7 @@ impl SweepProblem {
         // search step costs a Newton solve plus a stability evaluation.
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
         opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
+        opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;
         Ok(Continuation::new(hb, opts, stability)?)
     }
 

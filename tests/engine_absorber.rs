@@ -264,3 +264,70 @@ fn the_continuation_accounts_for_its_time() {
         );
     }
 }
+
+/// Counts the evaluations of a bifurcation search.
+struct CountingSearches<M> {
+    method: M,
+    searches: std::sync::atomic::AtomicUsize,
+}
+
+impl<M: StabilityMethod> StabilityMethod for CountingSearches<M> {
+    fn multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError> {
+        self.method.multipliers(system, orbit)
+    }
+
+    fn search_multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+        ends: [&FloquetResult; 2],
+    ) -> Result<FloquetResult, StabilityError> {
+        self.searches
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.method.search_multipliers(system, orbit, ends)
+    }
+}
+
+#[test]
+fn the_omega_resolution_ends_the_crossing_search_within_it() {
+    // The search with only the (tight) arclength tolerance against the same search that
+    // also stops once its bracket spans less than 1e-5 in ω: the same two
+    // Neimark–Sacker points to that resolution, with fewer trials.
+    let run = |tol_omega: f64| {
+        let sys = Absorber::default();
+        let basis = Basis::integer(7).expect("basis");
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let opts = ContinuationOptions {
+            bifurcation_tol_omega: tol_omega,
+            ..ContinuationOptions::new(0.8, 1.4)
+        };
+        let floquet = CountingSearches {
+            method: VariationalFloquet { steps: 400 },
+            searches: 0.into(),
+        };
+        let mut cont = Continuation::new(hb, opts, Some(&floquet)).expect("continuation");
+        let branch = cont.run(|_| {}).expect("run");
+        let ns: Vec<f64> = branch
+            .bifurcations
+            .iter()
+            .filter(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker))
+            .map(|b| b.solution.omega)
+            .collect();
+        (ns, floquet.searches.into_inner())
+    };
+    let (fine, fine_trials) = run(0.0);
+    let (resolved, resolved_trials) = run(1e-5);
+    assert_eq!(fine.len(), 2, "{fine:?}");
+    assert_eq!(resolved.len(), 2, "{resolved:?}");
+    for (a, b) in fine.iter().zip(&resolved) {
+        assert!((a - b).abs() <= 1e-5, "ω {b} against {a}");
+    }
+    assert!(
+        resolved_trials < fine_trials,
+        "{resolved_trials} trials against {fine_trials}"
+    );
+}
