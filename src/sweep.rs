@@ -532,9 +532,10 @@ impl SweepProblem {
         opts.initial_guess =
             Some(guess.unwrap_or_else(|| self.system.initial_guess(self.basis.n_coeffs())));
         // The crossing search stops at a bracket of 1e-4 in scaled arclength (≈ 0.04 rad/s
-        // on the default range) or a crossing modulus within 1e-4 of the circle: finer
-        // cannot place a crossing better than the multipliers' own accuracy, and each
-        // search step costs a Newton solve plus a stability evaluation.
+        // on the default range), a crossing modulus within 1e-4 of the circle, or (on a
+        // step without a fold) a bracket 1e-3 rad/s wide: finer cannot place a crossing
+        // better than the multipliers' own accuracy, and each search step costs a Newton
+        // solve plus a stability evaluation.
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
         opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
         opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;

@@ -78,8 +78,8 @@
 //!   within `CROSSING_MODULUS_TOL` (0.02) of the circle found a jump of the count (a
 //!   collision of two real multipliers into a pair), not a crossing, and reports
 //!   nothing; it ends once its bracket is below `JUMP_BRACKET_FRACTION` of the step with
-//!   the modulus that far from the circle, on one side, at both ends. The trials use the method's search evaluation
-//!   ([`StabilityMethod::search_multipliers`]: for [`crate::stability::ExpSip`] the
+//!   the modulus that far from the circle, on one side, at both ends. The trials use the
+//!   method's search evaluation ([`StabilityMethod::search_multipliers`]: for [`crate::stability::ExpSip`] the
 //!   product on the intervals of the finer end, without further refinement), and the
 //!   located point carries those multipliers.
 //!
@@ -1577,8 +1577,8 @@ impl<'a> Continuation<'a> {
     }
 
     /// The trial of a bracket search from `from` at the arclength offset `first` (inside
-    /// the bracket): its arclength offset and corrected point, or `None` when the bracket is already narrower
-    /// than `bifurcation_tol_arclength` or the corrector fails there. A corrector that
+    /// the bracket): its arclength offset and corrected point, or `None` when the bracket
+    /// is already narrower than `bifurcation_tol_arclength` or the corrector fails there. A corrector that
     /// fails at the secant's trial is tried again at the bracket's midpoint and quarter
     /// points: on the dual rotor's non-smooth bearing model Newton can stall at a single
     /// arclength (a contact event on an AFT sample, see [`crate::hb::newton`]), and a fold
