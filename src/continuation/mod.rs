@@ -887,15 +887,6 @@ impl Bracket {
             .unwrap_or_else(|| self.trial(guard))
     }
 
-    /// Whether a crossing search on a step of length `span` has closed in on a jump of
-    /// the count rather than a crossing (see [`JUMP_BRACKET_FRACTION`]); `end_g`: the test
-    /// function as evaluated at the ends.
-    fn closed_on_a_jump(&self, span: f64, end_g: [f64; 2]) -> bool {
-        self.width() < span * JUMP_BRACKET_FRACTION
-            && end_g[0].signum() == end_g[1].signum()
-            && end_g[0].abs().min(end_g[1].abs()) > CROSSING_MODULUS_TOL
-    }
-
     /// Moves the `lo` end (when `lo_side`: `g(mid)` is on `lo`'s side) or the `hi` end to
     /// `mid`; when the same end moves twice in a row the other end's `g` is halved
     /// (Illinois), so that the secant does not stall against it.
@@ -915,6 +906,71 @@ impl Bracket {
             }
             self.moved = -1;
         }
+    }
+}
+
+/// The state of a Neimark–Sacker or period-doubling search ([`Continuation::locate`]) on
+/// the arclength offset `s ∈ [0, span]` of a step, apart from the points themselves: the
+/// bracket, the test function `g` and ω at its ends as evaluated (the bracket's own `g`
+/// are halved by Illinois), and the trials so far.
+struct CrossingSearch {
+    span: f64,
+    bracket: Bracket,
+    end_g: [f64; 2],
+    end_omega: [f64; 2],
+    /// The trials' `(s, g)`, for the secant through the last two.
+    trials: Vec<(f64, f64)>,
+}
+
+impl CrossingSearch {
+    fn new(span: f64, end_g: [f64; 2], end_omega: [f64; 2]) -> Self {
+        Self {
+            span,
+            bracket: Bracket::new(span, end_g[0], end_g[1]),
+            end_g,
+            end_omega,
+            trials: Vec::new(),
+        }
+    }
+
+    /// The converging secant of the last two trials, else regula falsi kept at least a
+    /// tenth of the bracket from either end ([`Bracket::next_trial`]).
+    fn next_trial(&self) -> f64 {
+        self.bracket.next_trial(&self.trials, 0.1)
+    }
+
+    /// Records the trial at `s` (test function `g`, on the `lo` end's side when `lo_side`,
+    /// at speed `omega`) and says whether the search is over: the crossing found to
+    /// `tol_modulus`, the accuracy the multipliers themselves have; a jump of the count
+    /// ([`Self::closed_on_a_jump`]); or, with `tol_omega` (given on a step without a
+    /// fold), the bracket narrower than that in ω.
+    fn record(
+        &mut self,
+        s: f64,
+        g: f64,
+        lo_side: bool,
+        omega: f64,
+        tol_modulus: f64,
+        tol_omega: Option<f64>,
+    ) -> bool {
+        self.bracket.narrow(s, g, lo_side);
+        let end = usize::from(!lo_side);
+        self.end_g[end] = g;
+        self.end_omega[end] = omega;
+        self.trials.push((s, g));
+        g.abs() <= tol_modulus
+            || self.closed_on_a_jump()
+            || tol_omega.is_some_and(|tol| (self.end_omega[1] - self.end_omega[0]).abs() <= tol)
+    }
+
+    /// Whether the search has closed in on a jump of the count rather than a crossing (see
+    /// [`JUMP_BRACKET_FRACTION`]): the bracket has narrowed on the change while the
+    /// multiplier stays on one side of the circle, far from it, at both ends.
+    fn closed_on_a_jump(&self) -> bool {
+        let g = self.end_g;
+        self.bracket.width() < self.span * JUMP_BRACKET_FRACTION
+            && g[0].signum() == g[1].signum()
+            && g[0].abs().min(g[1].abs()) > CROSSING_MODULUS_TOL
     }
 }
 
@@ -1835,22 +1891,16 @@ impl<'a> Continuation<'a> {
         let g = |f: &FloquetResult| {
             moduli_of_kind(f, kind).get(k).copied().unwrap_or(0.0) - (1.0 + UNIT_CIRCLE_TOL)
         };
-        let mut bracket = Bracket::new(span, g(f_a), g(f_b));
-        // g at the bracket's ends as evaluated (the bracket's own are halved by Illinois)
-        let mut end_g = [g(f_a), g(f_b)];
-        // ω at the bracket's ends, which bracket the crossing's ω on a step without a fold
-        let mut end_omega = [cur.omega, to.omega];
         let nu = self.hb.n_unknowns();
-        let monotone = cur.tangent[nu] * to.tangent[nu] > 0.0;
-        // the trials' (arclength offset, g), for the secant through the last two
-        let mut trials: Vec<(f64, f64)> = Vec::new();
+        // on a step without a fold ω is monotone along the bracket
+        let tol_omega =
+            (cur.tangent[nu] * to.tangent[nu] > 0.0).then_some(self.opts.bifurcation_tol_omega);
+        let mut search = CrossingSearch::new(span, [g(f_a), g(f_b)], [cur.omega, to.omega]);
         // the trial closest to the circle
         let mut best: Option<(f64, BranchPoint)> = None;
         for _ in 0..self.opts.max_bisections {
-            // the converging secant of the last two trials, else regula falsi kept at
-            // least a tenth of the bracket from either end
-            let first = bracket.next_trial(&trials, 0.1);
-            let Some((mid, c)) = self.bracket_trial(cur, to, &bracket, first) else {
+            let first = search.next_trial();
+            let Some((mid, c)) = self.bracket_trial(cur, to, &search.bracket, first) else {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
@@ -1861,27 +1911,21 @@ impl<'a> Continuation<'a> {
             };
             let g_mid = g(fm);
             let lo_side = outside_of_kind(fm, kind) == n_a;
-            bracket.narrow(mid, g_mid, lo_side);
-            end_g[usize::from(!lo_side)] = g_mid;
-            end_omega[usize::from(!lo_side)] = w;
-            trials.push((mid, g_mid));
+            let done = search.record(
+                mid,
+                g_mid,
+                lo_side,
+                w,
+                self.opts.bifurcation_tol_modulus,
+                tol_omega,
+            );
             if best
                 .as_ref()
                 .is_none_or(|(g_best, _)| g_mid.abs() < g_best.abs())
             {
                 best = Some((g_mid, p));
             }
-            // the crossing is found to the accuracy the multipliers themselves have
-            if g_mid.abs() <= self.opts.bifurcation_tol_modulus {
-                break;
-            }
-            // a jump of the count, not a crossing: the bracket has closed in on the
-            // change while the multiplier stays on one side of the circle, far from it
-            if bracket.closed_on_a_jump(span, end_g) {
-                break;
-            }
-            // the crossing's ω is known to the resolution asked
-            if monotone && (end_omega[1] - end_omega[0]).abs() <= self.opts.bifurcation_tol_omega {
+            if done {
                 break;
             }
         }
@@ -1999,28 +2043,21 @@ mod tests {
         secant: bool,
         tol: f64,
     ) -> Vec<(f64, f64)> {
-        let mut bracket = Bracket::new(span, g(0.0), g(span));
-        let mut end_g = [g(0.0), g(span)];
-        let mut trials = Vec::new();
+        let mut search = CrossingSearch::new(span, [g(0.0), g(span)], [0.0, span]);
         for _ in 0..60 {
-            if bracket.width() <= 1e-6 {
+            if search.bracket.width() <= 1e-6 {
                 break;
             }
             let s = if secant {
-                bracket.next_trial(&trials, 0.1)
+                search.next_trial()
             } else {
-                bracket.trial(0.1)
+                search.bracket.trial(0.1)
             };
-            let gs = g(s);
-            let lo = lo_side(s);
-            bracket.narrow(s, gs, lo);
-            end_g[usize::from(!lo)] = gs;
-            trials.push((s, gs));
-            if gs.abs() <= tol || bracket.closed_on_a_jump(span, end_g) {
+            if search.record(s, g(s), lo_side(s), s, tol, None) {
                 break;
             }
         }
-        trials
+        search.trials
     }
 
     /// The converging secant of the last two trials reaches smooth crossings in fewer
