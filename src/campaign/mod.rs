@@ -456,16 +456,20 @@ fn prepare(campaign_path: &Path, shard: Option<(usize, usize)>) -> Result<Prepar
     })
 }
 
-/// The earlier manifest's entry of run `name` when the run is complete and need not run
-/// again: status `completed`, the same `settings`, and its recording at `rec_path`
-/// unchanged (the checksum the manifest recorded).
+/// The earlier manifest's entry of run `name`, if it lists the run.
+fn previous_entry<'m>(previous: &'m Manifest, name: &str) -> Option<&'m ManifestEntry> {
+    previous.runs.iter().find(|e| e.name == name)
+}
+
+/// The earlier entry `prev` when its run is complete and need not run again: status
+/// `completed`, the same `settings`, and its recording at `rec_path` unchanged (the
+/// checksum the manifest recorded).
 fn completed_before<'m>(
-    previous: &'m Manifest,
-    name: &str,
+    prev: Option<&'m ManifestEntry>,
     settings: &toml::Table,
     rec_path: &Path,
 ) -> Option<&'m ManifestEntry> {
-    let prev = previous.runs.iter().find(|e| e.name == name)?;
+    let prev = prev?;
     (prev.status == "completed"
         && prev.settings == *settings
         && sha256_file(rec_path).ok().as_deref() == Some(prev.sha256.as_str()))
@@ -505,19 +509,15 @@ pub fn plan(
         .runs
         .iter()
         .enumerate()
-        .map(|(k, r)| PlannedRun {
-            run: r.clone(),
-            position: shard.map_or(k, |(i, n)| i + k * n),
-            previous: p
-                .previous
-                .runs
-                .iter()
-                .find(|e| e.name == r.name)
-                .map(|e| e.status.clone()),
-            skip: {
-                let (rec_path, settings) = recording_and_settings(r, &p.out);
-                completed_before(&p.previous, &r.name, &settings, &rec_path).is_some()
-            },
+        .map(|(k, r)| {
+            let prev = previous_entry(&p.previous, &r.name);
+            let (rec_path, settings) = recording_and_settings(r, &p.out);
+            PlannedRun {
+                run: r.clone(),
+                position: shard.map_or(k, |(i, n)| i + k * n),
+                previous: prev.map(|e| e.status.clone()),
+                skip: completed_before(prev, &settings, &rec_path).is_some(),
+            }
         })
         .collect();
     Ok((planned, p.out))
@@ -583,7 +583,8 @@ pub fn run(
     let work = |k: usize, r: &CampaignRun| {
         let (rec_path, settings_table) = recording_and_settings(r, &out);
         // Resume: skip a completed run whose recording is unchanged.
-        if let Some(prev) = completed_before(&previous, &r.name, &settings_table, &rec_path) {
+        let prev = previous_entry(&previous, &r.name);
+        if let Some(prev) = completed_before(prev, &settings_table, &rec_path) {
             if let Ok(mut m) = manifest.lock() {
                 m.runs[k] = prev.clone();
             }
