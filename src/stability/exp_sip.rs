@@ -103,6 +103,10 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use num_complex::Complex64;
 
+mod panel;
+
+use panel::Flat;
+
 use super::expm::expm;
 use super::modal::{BlockDiagonal, MAX_CONDITION, RealModal};
 use super::sip::{axpy_derivs, by_column_blocks, gauss_legendre, interval_means, state_space_for};
@@ -149,6 +153,13 @@ pub struct ExpSip {
     /// every-interval product's to rounding (5e-9), and 32 was no faster (the updates'
     /// five `q × m` products against the per-interval `q × 2q` one).
     pub thermal_block: usize,
+    /// Take the modal product (exponential map) through its intervals on panels of eight
+    /// columns stored by rows, with the crate's own kernels, instead of the general matrix
+    /// kernels on column blocks: the same arithmetic in another order (the monodromy
+    /// matrices agree to rounding, test
+    /// `panels_equal_the_column_blocks_on_the_dual_rotor`). Default `true`: see the
+    /// README's speed section.
+    pub panels: bool,
 }
 
 /// How one interval's map combines the exact mean part and the fluctuation (module docs).
@@ -215,6 +226,7 @@ impl Default for ExpSip {
             modal: true,
             interval_map: IntervalMap::Exponential,
             thermal_block: 16,
+            panels: true,
         }
     }
 }
@@ -396,7 +408,7 @@ impl ExpSip {
             Some(fields) => {
                 let kicks = Kicks::new(space, fields, delta, self.interval_map, self.thermal_block);
                 let factors = self.fluctuation_factors(space, &means, delta, &kicks.k);
-                Self::modal_product(space, &factors, fields, &kicks)
+                self.modal_product(space, &factors, fields, &kicks)
             }
             None => {
                 let k = space.gather_of_spread();
@@ -413,14 +425,21 @@ impl ExpSip {
     /// The product in the modal coordinates of `fields`, returned in the physical ones:
     /// `M = V M̂ V⁻¹` with `V` block diagonal.
     fn modal_product(
+        &self,
         space: &StateSpace<'_>,
-        factors: &[Mat<f64>],
+        factors: &[Flat],
         fields: &[ModalField],
         kicks: &Kicks,
     ) -> Mat<f64> {
         let d = space.dim();
-        let prod = by_column_blocks(d, |c0, c1| {
-            Self::product_block_modal(space, factors, fields, kicks, c0, c1)
+        let panels = self
+            .panels
+            .then(|| Self::modal_product_panels(space, factors, fields, kicks))
+            .flatten();
+        let prod = panels.unwrap_or_else(|| {
+            by_column_blocks(d, |c0, c1| {
+                Self::product_block_modal(space, factors, fields, kicks, c0, c1)
+            })
         });
         let mut v = Mat::<f64>::zeros(d, d);
         let mut v_inv = Mat::<f64>::zeros(d, d);
@@ -442,7 +461,7 @@ impl ExpSip {
         &self,
         space: &StateSpace<'_>,
         b_bar: &Mat<f64>,
-        factors: &[Mat<f64>],
+        factors: &[Flat],
         delta: f64,
         omega: f64,
     ) -> Result<Mat<f64>, StabilityError> {
@@ -482,7 +501,7 @@ impl ExpSip {
         fluctuations: &[NonlinearEval],
         delta: f64,
         k_mat: &Mat<f64>,
-    ) -> Vec<Mat<f64>> {
+    ) -> Vec<Flat> {
         use rayon::prelude::*;
         let (g, r) = space.low_rank_dims();
         let k_t = k_mat.transpose().to_owned();
@@ -527,11 +546,11 @@ impl ExpSip {
                 std::mem::swap(h, tmp);
             }
             // G = Δ H D over D's nonzeros: column j of G gathers H's columns i
-            let mut gk = Mat::<f64>::zeros(r, g);
+            let mut gk = Flat::zeros(r, g);
             for &(i, j, v) in nonzeros.iter() {
                 let w = delta * v;
                 let hi = column(h, i);
-                for (gv, hv) in column_mut(&mut gk, j).iter_mut().zip(hi) {
+                for (gv, hv) in gk.col_mut(j).iter_mut().zip(hi) {
                     *gv += w * hv;
                 }
             }
@@ -558,7 +577,7 @@ impl ExpSip {
     /// Columns `c0..c1` of the product.
     fn product_block(
         space: &StateSpace<'_>,
-        factors: &[Mat<f64>],
+        factors: &[Flat],
         exps: &Exponentials<'_>,
         c0: usize,
         c1: usize,
@@ -616,7 +635,7 @@ impl ExpSip {
     /// the weighted gather and spread of `kicks`.
     fn product_block_modal(
         space: &StateSpace<'_>,
-        factors: &[Mat<f64>],
+        factors: &[Flat],
         fields: &[ModalField],
         kicks: &Kicks,
         c0: usize,
@@ -1272,7 +1291,7 @@ mod tests {
                 want += coeff * &power * &d;
                 power = &power * &dk;
             }
-            let err = (&factors[0] - &want).norm_max();
+            let err = (factors[0].as_ref() - &want).norm_max();
             assert!(err < 1e-13 * want.norm_max(), "order {order}: {err:e}");
         }
     }

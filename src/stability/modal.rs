@@ -248,6 +248,23 @@ impl BlockDiagonal {
         }
     }
 
+    /// `X ← E X` for `x` stored by rows of `W` columns each (the panels of the
+    /// exponential-split product), `dim` rows.
+    pub fn apply_rows<const W: usize>(&self, x: &mut [[f64; W]]) {
+        debug_assert_eq!(x.len(), self.dim());
+        let (real, pairs) = x.split_at_mut(self.scale.len());
+        for (row, &e) in real.iter_mut().zip(&self.scale) {
+            row.iter_mut().for_each(|v| *v *= e);
+        }
+        for (p, e) in pairs.chunks_exact_mut(2).zip(&self.rotations) {
+            let (a, b) = (p[0], p[1]);
+            for l in 0..W {
+                p[0][l] = e[0] * a[l] + e[2] * b[l];
+                p[1][l] = e[1] * a[l] + e[3] * b[l];
+            }
+        }
+    }
+
     /// The matrix as a dense one.
     pub fn to_dense(&self) -> Mat<f64> {
         let mut m = Mat::zeros(self.dim(), self.dim());

@@ -1,0 +1,415 @@
+//! The modal product on panels of [`W`] columns stored by rows.
+//!
+//! The same arithmetic as [`ExpSip::product_block_modal`] with the exponential interval
+//! map, in another memory layout. A panel holds `W` columns of the product with each state
+//! row's `W` entries side by side, so every operation of an interval (the gather, `G_k`,
+//! the spread, the rotations of `e^{ΔΛ}`, the thermal field's updates) is a loop over
+//! rows whose body is one `W`-wide multiply–add, and a row of a small matrix times a
+//! panel reuses each loaded panel row for four output rows. The general matrix kernels do
+//! the same products through one call per operation and interval (about ten thousand
+//! calls per product on the dual rotor, each with its own dispatch and packing of the
+//! small operands).
+//!
+//! A thread takes a group of panels through all the intervals, so each interval's factor
+//! is read once per group.
+
+use faer::{Mat, MatRef};
+
+use super::{ExpSip, IntervalMap, Kicks, ModalField};
+use crate::stability::modal::BlockDiagonal;
+
+/// Columns per panel.
+pub(super) const W: usize = 8;
+
+/// One state row of a panel.
+type Row = [f64; W];
+
+/// A dense matrix by columns without padding (`data[j·rows + i]`), the operand layout of
+/// the panel kernels.
+#[derive(Clone, Debug)]
+pub(in crate::stability) struct Flat {
+    rows: usize,
+    cols: usize,
+    data: Vec<f64>,
+}
+
+impl Flat {
+    pub(super) fn zeros(rows: usize, cols: usize) -> Self {
+        Self {
+            rows,
+            cols,
+            data: vec![0.0; rows * cols],
+        }
+    }
+
+    pub(super) fn from_mat(m: MatRef<'_, f64>) -> Self {
+        let (rows, cols) = (m.nrows(), m.ncols());
+        let mut data = Vec::with_capacity(rows * cols);
+        for j in 0..cols {
+            data.extend(m.col(j).iter().copied());
+        }
+        Self { rows, cols, data }
+    }
+
+    pub(super) fn as_ref(&self) -> MatRef<'_, f64> {
+        MatRef::from_column_major_slice(&self.data, self.rows, self.cols)
+    }
+
+    /// Column `j` as a slice.
+    pub(super) fn col_mut(&mut self, j: usize) -> &mut [f64] {
+        &mut self.data[j * self.rows..(j + 1) * self.rows]
+    }
+}
+
+/// `a·b + c`, fused where the target has the instruction (a library call otherwise).
+#[inline(always)]
+fn fma(a: f64, b: f64, c: f64) -> f64 {
+    if cfg!(target_feature = "fma") {
+        a.mul_add(b, c)
+    } else {
+        a * b + c
+    }
+}
+
+/// `out ← a x` (`add`: `out ← out + a x`) for panel rows `x` (`a.cols` of them) and `out`
+/// (`a.rows`).
+fn mul(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
+    let m = a.rows;
+    debug_assert_eq!(x.len(), a.cols);
+    debug_assert_eq!(out.len(), m);
+    if m == 0 {
+        return;
+    }
+    let mut i = 0;
+    while i + 4 <= m {
+        let mut acc = [[0.0; W]; 4];
+        if add {
+            acc.copy_from_slice(&out[i..i + 4]);
+        }
+        for (col, xj) in a.data.chunks_exact(m).zip(x) {
+            let c = &col[i..i + 4];
+            for (acc_r, &c_r) in acc.iter_mut().zip(c) {
+                for (s, &v) in acc_r.iter_mut().zip(xj) {
+                    *s = fma(c_r, v, *s);
+                }
+            }
+        }
+        out[i..i + 4].copy_from_slice(&acc);
+        i += 4;
+    }
+    for (r, out_r) in out.iter_mut().enumerate().skip(i) {
+        let mut acc = if add { *out_r } else { [0.0; W] };
+        for (col, xj) in a.data.chunks_exact(m).zip(x) {
+            let c_r = col[r];
+            for (s, &v) in acc.iter_mut().zip(xj) {
+                *s = fma(c_r, v, *s);
+            }
+        }
+        *out_r = acc;
+    }
+}
+
+/// `y ← y + x`.
+fn add_rows(y: &mut [Row], x: &[Row]) {
+    for (yr, xr) in y.iter_mut().zip(x) {
+        for (a, b) in yr.iter_mut().zip(xr) {
+            *a += b;
+        }
+    }
+}
+
+/// One field's operands in the panel layout.
+struct Field {
+    rows: (usize, usize),
+    gather: (usize, usize),
+    spread: (usize, usize),
+    /// `e^{ΔΛ}` of the field.
+    full: BlockDiagonal,
+    /// `S̃` (gathered rows × field rows) and `L̃` (field rows × spread columns).
+    s: Flat,
+    l: Flat,
+}
+
+/// The thermal field's block operands (see `SlowField`).
+struct Slow {
+    field: usize,
+    block: usize,
+    k01: Flat,
+    sn: Flat,
+    sn2: Flat,
+    nl: Flat,
+    exp_block: BlockDiagonal,
+    /// `e^{nΔΛ}` for the shorter last block, when there is one.
+    exp_last: Option<BlockDiagonal>,
+}
+
+/// The thermal field's state of one panel between two updates (see `SlowState`).
+struct SlowRows {
+    y: Vec<Row>,
+    a1: Vec<Row>,
+    a2: Vec<Row>,
+    /// `[u_n; U_n]`.
+    stack: Vec<Row>,
+    v: Vec<Row>,
+    n: usize,
+}
+
+/// One panel: its columns of the product, its gathered rows, `G_k`'s output and the
+/// thermal field's block state.
+struct Panel {
+    prod: Vec<Row>,
+    gathered: Vec<Row>,
+    mixed: Vec<Row>,
+    slow: Option<SlowRows>,
+}
+
+/// Everything the intervals apply, shared by the panels.
+struct Plan<'p> {
+    fields: Vec<Field>,
+    slow: Option<Slow>,
+    factors: &'p [Flat],
+}
+
+impl ExpSip {
+    /// The product of [`Self::product_block_modal`] (exponential map) on panels, all
+    /// columns, in the modal coordinates; `None` when it does not apply (another map, or
+    /// nothing gathered).
+    pub(super) fn modal_product_panels(
+        space: &crate::integrate::StateSpace<'_>,
+        factors: &[Flat],
+        fields: &[ModalField],
+        kicks: &Kicks,
+    ) -> Option<Mat<f64>> {
+        let (g, r) = space.low_rank_dims();
+        if kicks.map != IntervalMap::Exponential || r == 0 || g == 0 {
+            return None;
+        }
+        let plan = Plan::new(fields, kicks, factors);
+        let d = space.dim();
+        let n_panels = d.div_ceil(W);
+        let groups = rayon::current_num_threads().clamp(1, n_panels);
+        let per_group = n_panels.div_ceil(groups);
+        let ranges: Vec<(usize, usize)> = (0..n_panels)
+            .step_by(per_group)
+            .map(|p0| (p0, (p0 + per_group).min(n_panels)))
+            .collect();
+        let run = |&(p0, p1): &(usize, usize)| plan.run(d, g, r, p0, p1);
+        let parts: Vec<Vec<Panel>> = if ranges.len() > 1 {
+            use rayon::prelude::*;
+            ranges.par_iter().map(run).collect()
+        } else {
+            ranges.iter().map(run).collect()
+        };
+        let mut prod = Mat::<f64>::zeros(d, d);
+        for (p, panel) in parts.iter().flatten().enumerate() {
+            let c0 = p * W;
+            for (i, row) in panel.prod.iter().enumerate() {
+                for (l, &v) in row.iter().enumerate().take(d - c0) {
+                    prod[(i, c0 + l)] = v;
+                }
+            }
+        }
+        Some(prod)
+    }
+}
+
+impl<'p> Plan<'p> {
+    fn new(fields: &[ModalField], kicks: &Kicks, factors: &'p [Flat]) -> Self {
+        let fields_p = fields
+            .iter()
+            .enumerate()
+            .map(|(i, f)| Field {
+                rows: f.rows,
+                gather: f.gather,
+                spread: f.spread,
+                full: kicks.exps[i][1].clone(),
+                s: Flat::from_mat(kicks.gather[i].as_ref()),
+                l: Flat::from_mat(kicks.spread[i].as_ref()),
+            })
+            .collect();
+        let slow = kicks.slow.as_ref().map(|s| {
+            let n = factors.len();
+            let last = (n + s.block - 1) % s.block + 1;
+            Slow {
+                field: s.field,
+                block: s.block,
+                k01: Flat::from_mat(s.k01.as_ref()),
+                sn: Flat::from_mat(s.sn.as_ref()),
+                sn2: Flat::from_mat(s.sn2.as_ref()),
+                nl: Flat::from_mat(s.nl.as_ref()),
+                exp_block: s.exp_block.clone(),
+                exp_last: (last != s.block)
+                    .then(|| fields[s.field].modal.exp(last as f64 * kicks.delta)),
+            }
+        });
+        Self {
+            fields: fields_p,
+            slow,
+            factors,
+        }
+    }
+
+    /// Panels `p0..p1` (columns `p0·W..`) through all the intervals.
+    fn run(&self, d: usize, g: usize, r: usize, p0: usize, p1: usize) -> Vec<Panel> {
+        let mut panels: Vec<Panel> = (p0..p1)
+            .map(|p| {
+                let mut prod = vec![[0.0; W]; d];
+                for l in 0..W {
+                    if let Some(row) = prod.get_mut(p * W + l) {
+                        row[l] = 1.0;
+                    }
+                }
+                let slow = self.slow.as_ref().map(|s| {
+                    let f = &self.fields[s.field];
+                    let q = f.gather.1 - f.gather.0;
+                    let mut st = SlowRows {
+                        y: vec![[0.0; W]; q],
+                        a1: vec![[0.0; W]; q],
+                        a2: vec![[0.0; W]; q],
+                        stack: vec![[0.0; W]; 2 * q],
+                        v: vec![[0.0; W]; q],
+                        n: 0,
+                    };
+                    st.restart(s, f, &prod[f.rows.0..f.rows.1]);
+                    st
+                });
+                Panel {
+                    prod,
+                    gathered: vec![[0.0; W]; g],
+                    mixed: vec![[0.0; W]; r],
+                    slow,
+                }
+            })
+            .collect();
+        let last = self.factors.len().saturating_sub(1);
+        for (k, gk) in self.factors.iter().enumerate() {
+            for panel in &mut panels {
+                self.interval(panel, k, k == last, gk);
+            }
+        }
+        panels
+    }
+
+    /// One interval of one panel: `prod ← e^{ΔΛ} prod + L̃ G_k S̃ prod`, the thermal field
+    /// by its block update.
+    fn interval(&self, panel: &mut Panel, k: usize, last: bool, gk: &Flat) {
+        let slow_index = self.slow.as_ref().map(|s| s.field);
+        let Panel {
+            prod,
+            gathered,
+            mixed,
+            slow,
+        } = panel;
+        for (i, f) in self.fields.iter().enumerate() {
+            if f.gather.1 <= f.gather.0 {
+                continue;
+            }
+            let out = &mut gathered[f.gather.0..f.gather.1];
+            match slow {
+                Some(st) if Some(i) == slow_index => out.copy_from_slice(&st.y),
+                _ => mul(&f.s, &prod[f.rows.0..f.rows.1], out, false),
+            }
+        }
+        mul(gk, gathered, mixed, false);
+        for (i, f) in self.fields.iter().enumerate() {
+            if Some(i) == slow_index {
+                continue;
+            }
+            let rows = &mut prod[f.rows.0..f.rows.1];
+            f.full.apply_rows(rows);
+            if f.spread.1 > f.spread.0 {
+                mul(&f.l, &mixed[f.spread.0..f.spread.1], rows, true);
+            }
+        }
+        if let (Some(st), Some(s)) = (slow.as_mut(), self.slow.as_ref()) {
+            let f = &self.fields[s.field];
+            st.advance(s, &mixed[f.spread.0..f.spread.1]);
+            if st.n == s.block || last {
+                let rows = &mut prod[f.rows.0..f.rows.1];
+                st.finish(s, f, rows);
+                if !last {
+                    st.restart(s, f, rows);
+                }
+            }
+        }
+        debug_assert!(k < self.factors.len());
+    }
+}
+
+impl SlowRows {
+    /// Starts a block from the field's rows `t`: `y = S̃ t`, `a₁ = S̃N t`, `a₂ = S̃N² t`.
+    fn restart(&mut self, s: &Slow, f: &Field, t: &[Row]) {
+        mul(&f.s, t, &mut self.y, false);
+        mul(&s.sn, t, &mut self.a1, false);
+        mul(&s.sn2, t, &mut self.a2, false);
+        self.stack.iter_mut().for_each(|r| *r = [0.0; W]);
+        self.v.iter_mut().for_each(|r| *r = [0.0; W]);
+        self.n = 0;
+    }
+
+    /// One interval with kick `u`:
+    /// `y ← y + S̃N t₀ + n S̃N² t₀ + K₀ u + K₁ U`, then `V ← V + U`, `U ← U + u`.
+    fn advance(&mut self, s: &Slow, u: &[Row]) {
+        let q = self.y.len();
+        self.stack[..q].copy_from_slice(u);
+        let n = self.n as f64;
+        for ((y, a1), a2) in self.y.iter_mut().zip(&self.a1).zip(&self.a2) {
+            for l in 0..W {
+                y[l] += a1[l] + n * a2[l];
+            }
+        }
+        mul(&s.k01, &self.stack, &mut self.y, true);
+        let (kick, sum) = self.stack.split_at_mut(q);
+        add_rows(&mut self.v, sum);
+        add_rows(sum, kick);
+        self.n += 1;
+    }
+
+    /// Brings the field's rows `t` to the end of the block:
+    /// `t ← e^{nΔΛ} t + L̃ U + N L̃ V`.
+    fn finish(&self, s: &Slow, f: &Field, t: &mut [Row]) {
+        let q = self.y.len();
+        match (&s.exp_last, self.n == s.block) {
+            (Some(e), false) => e.apply_rows(t),
+            _ => s.exp_block.apply_rows(t),
+        }
+        mul(&f.l, &self.stack[q..], t, true);
+        mul(&s.nl, &self.v, t, true);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_panel_kernel_equals_the_dense_product() {
+        // every row count from 0 to 9 (the four-row blocks and the rest), both modes
+        for m in 0..10 {
+            let k = 7;
+            let a = Mat::from_fn(m, k, |i, j| (i as f64 + 1.0) * 0.3 - j as f64 * 0.7);
+            let x = Mat::from_fn(k, W, |i, j| ((i * W + j) as f64).sin());
+            let c = Mat::from_fn(m, W, |i, j| ((i + 2 * j) as f64).cos());
+            let rows = |b: &Mat<f64>| -> Vec<Row> {
+                (0..b.nrows())
+                    .map(|i| std::array::from_fn(|l| b[(i, l)]))
+                    .collect()
+            };
+            let flat = Flat::from_mat(a.as_ref());
+            for add in [false, true] {
+                let mut out = rows(&c);
+                mul(&flat, &rows(&x), &mut out, add);
+                let want = if add { &c + &a * &x } else { &a * &x };
+                for (i, row) in out.iter().enumerate() {
+                    for (l, &v) in row.iter().enumerate() {
+                        assert!(
+                            (v - want[(i, l)]).abs() < 1e-12 * (1.0 + want[(i, l)].abs()),
+                            "m = {m}, add = {add}: ({i}, {l}) {v} against {}",
+                            want[(i, l)]
+                        );
+                    }
+                }
+            }
+        }
+    }
+}
