@@ -172,8 +172,8 @@ struct Plan<'p> {
 
 impl ExpSip {
     /// The product of [`Self::product_block_modal`] (exponential map) on panels, all
-    /// columns, in the modal coordinates; `None` when it does not apply (another map, or
-    /// nothing gathered).
+    /// columns, in the modal coordinates; `None` when it does not apply (another map,
+    /// nothing gathered, or no state).
     pub(super) fn modal_product_panels(
         space: &crate::integrate::StateSpace<'_>,
         factors: &[Flat],
@@ -181,11 +181,11 @@ impl ExpSip {
         kicks: &Kicks,
     ) -> Option<Mat<f64>> {
         let (g, r) = space.low_rank_dims();
-        if kicks.map != IntervalMap::Exponential || r == 0 || g == 0 {
+        let d = space.dim();
+        if kicks.map != IntervalMap::Exponential || r == 0 || g == 0 || d == 0 {
             return None;
         }
         let plan = Plan::new(fields, kicks, factors);
-        let d = space.dim();
         let n_panels = d.div_ceil(W);
         let groups = rayon::current_num_threads().clamp(1, n_panels);
         let per_group = n_panels.div_ceil(groups);
@@ -284,7 +284,7 @@ impl<'p> Plan<'p> {
         let last = self.factors.len().saturating_sub(1);
         for (k, gk) in self.factors.iter().enumerate() {
             for panel in &mut panels {
-                self.interval(panel, k, k == last, gk);
+                self.interval(panel, k == last, gk);
             }
         }
         panels
@@ -292,7 +292,7 @@ impl<'p> Plan<'p> {
 
     /// One interval of one panel: `prod ← e^{ΔΛ} prod + L̃ G_k S̃ prod`, the thermal field
     /// by its block update.
-    fn interval(&self, panel: &mut Panel, k: usize, last: bool, gk: &Flat) {
+    fn interval(&self, panel: &mut Panel, last: bool, gk: &Flat) {
         let slow_index = self.slow.as_ref().map(|s| s.field);
         let Panel {
             prod,
@@ -332,7 +332,6 @@ impl<'p> Plan<'p> {
                 }
             }
         }
-        debug_assert!(k < self.factors.len());
     }
 }
 
