@@ -72,41 +72,41 @@ fn fma(a: f64, b: f64, c: f64) -> f64 {
 }
 
 /// `out ← a x` (`add`: `out ← out + a x`) for panel rows `x` (`a.cols` of them) and `out`
-/// (`a.rows`).
+/// (`a.rows`): output rows four at a time, the rest two and one at a time.
 fn mul(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
     let m = a.rows;
     debug_assert_eq!(x.len(), a.cols);
     debug_assert_eq!(out.len(), m);
-    if m == 0 {
-        return;
-    }
     let mut i = 0;
     while i + 4 <= m {
-        let mut acc = [[0.0; W]; 4];
-        if add {
-            acc.copy_from_slice(&out[i..i + 4]);
-        }
-        for (col, xj) in a.data.chunks_exact(m).zip(x) {
-            let c = &col[i..i + 4];
-            for (acc_r, &c_r) in acc.iter_mut().zip(c) {
-                for (s, &v) in acc_r.iter_mut().zip(xj) {
-                    *s = fma(c_r, v, *s);
-                }
-            }
-        }
-        out[i..i + 4].copy_from_slice(&acc);
+        rows_of::<4>(a, x, out, i, add);
         i += 4;
     }
-    for (r, out_r) in out.iter_mut().enumerate().skip(i) {
-        let mut acc = if add { *out_r } else { [0.0; W] };
-        for (col, xj) in a.data.chunks_exact(m).zip(x) {
-            let c_r = col[r];
-            for (s, &v) in acc.iter_mut().zip(xj) {
+    if i + 2 <= m {
+        rows_of::<2>(a, x, out, i, add);
+        i += 2;
+    }
+    if i < m {
+        rows_of::<1>(a, x, out, i, add);
+    }
+}
+
+/// Output rows `i..i + R` of [`mul`]: each loaded panel row `x[j]` serves `R` rows.
+#[inline(always)]
+fn rows_of<const R: usize>(a: &Flat, x: &[Row], out: &mut [Row], i: usize, add: bool) {
+    let mut acc = [[0.0; W]; R];
+    if add {
+        acc.copy_from_slice(&out[i..i + R]);
+    }
+    for (col, xj) in a.data.chunks_exact(a.rows).zip(x) {
+        let c = &col[i..i + R];
+        for (acc_r, &c_r) in acc.iter_mut().zip(c) {
+            for (s, &v) in acc_r.iter_mut().zip(xj) {
                 *s = fma(c_r, v, *s);
             }
         }
-        *out_r = acc;
     }
+    out[i..i + R].copy_from_slice(&acc);
 }
 
 /// `y ← y + x`.
