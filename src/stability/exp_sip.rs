@@ -69,6 +69,11 @@
 //! eigenvalues). The dense exponentials remain the fallback for a block without a
 //! well-conditioned eigenvector basis. The columns are split over the rayon threads.
 //!
+//! With the exponential map the intervals run on panels of eight columns stored by rows,
+//! through the crate's own multiply–add loops (`panel`, [`ExpSip::panels`]) instead of
+//! one general matrix product per operation and interval: the same arithmetic, about
+//! 1.6 times as many multiply–adds per second on the dual rotor.
+//!
 //! ## The slow thermal field
 //!
 //! In its modal coordinates the thermal field's gather `S̃` (`q × m`) and spread `L̃`
