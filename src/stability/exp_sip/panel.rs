@@ -10,13 +10,15 @@
 //! calls per product on the dual rotor, each with its own dispatch and packing of the
 //! small operands).
 //!
-//! A thread takes a group of panels through all the intervals, so each interval's factor
-//! is read once per group.
+//! A thread takes its block of columns (`by_column_blocks`, as the column-block product)
+//! through all the intervals as a group of panels, so each interval's factor is read once
+//! per group.
 
 use faer::{Mat, MatRef};
 
 use super::{ExpSip, IntervalMap, Kicks, ModalField};
 use crate::stability::modal::BlockDiagonal;
+use crate::stability::sip::by_column_blocks;
 
 /// Columns per panel.
 pub(super) const W: usize = 8;
@@ -172,8 +174,8 @@ struct Plan<'p> {
 
 impl ExpSip {
     /// The product of [`Self::product_block_modal`] (exponential map) on panels, all
-    /// columns, in the modal coordinates; `None` when it does not apply (another map,
-    /// nothing gathered, or no state).
+    /// columns, in the modal coordinates; `None` when it does not apply (another map, or
+    /// nothing gathered).
     pub(super) fn modal_product_panels(
         space: &crate::integrate::StateSpace<'_>,
         factors: &[Flat],
@@ -181,35 +183,12 @@ impl ExpSip {
         kicks: &Kicks,
     ) -> Option<Mat<f64>> {
         let (g, r) = space.low_rank_dims();
-        let d = space.dim();
-        if kicks.map != IntervalMap::Exponential || r == 0 || g == 0 || d == 0 {
+        if kicks.map != IntervalMap::Exponential || r == 0 || g == 0 {
             return None;
         }
         let plan = Plan::new(fields, kicks, factors);
-        let n_panels = d.div_ceil(W);
-        let groups = rayon::current_num_threads().clamp(1, n_panels);
-        let per_group = n_panels.div_ceil(groups);
-        let ranges: Vec<(usize, usize)> = (0..n_panels)
-            .step_by(per_group)
-            .map(|p0| (p0, (p0 + per_group).min(n_panels)))
-            .collect();
-        let run = |&(p0, p1): &(usize, usize)| plan.run(d, g, r, p0, p1);
-        let parts: Vec<Vec<Panel>> = if ranges.len() > 1 {
-            use rayon::prelude::*;
-            ranges.par_iter().map(run).collect()
-        } else {
-            ranges.iter().map(run).collect()
-        };
-        let mut prod = Mat::<f64>::zeros(d, d);
-        for (p, panel) in parts.iter().flatten().enumerate() {
-            let c0 = p * W;
-            for (i, row) in panel.prod.iter().enumerate() {
-                for (l, &v) in row.iter().enumerate().take(d - c0) {
-                    prod[(i, c0 + l)] = v;
-                }
-            }
-        }
-        Some(prod)
+        let d = space.dim();
+        Some(by_column_blocks(d, |c0, c1| plan.run(d, g, r, c0, c1)))
     }
 }
 
@@ -249,15 +228,15 @@ impl<'p> Plan<'p> {
         }
     }
 
-    /// Panels `p0..p1` (columns `p0·W..`) through all the intervals.
-    fn run(&self, d: usize, g: usize, r: usize, p0: usize, p1: usize) -> Vec<Panel> {
-        let mut panels: Vec<Panel> = (p0..p1)
-            .map(|p| {
+    /// Columns `c0..c1` through all the intervals, on panels of `W` of them (the last one
+    /// padded).
+    fn run(&self, d: usize, g: usize, r: usize, c0: usize, c1: usize) -> Mat<f64> {
+        let mut panels: Vec<Panel> = (c0..c1)
+            .step_by(W)
+            .map(|p0| {
                 let mut prod = vec![[0.0; W]; d];
-                for l in 0..W {
-                    if let Some(row) = prod.get_mut(p * W + l) {
-                        row[l] = 1.0;
-                    }
+                for (l, c) in (p0..c1.min(p0 + W)).enumerate() {
+                    prod[c][l] = 1.0;
                 }
                 let slow = self.slow.as_ref().map(|s| {
                     let f = &self.fields[s.field];
@@ -287,7 +266,7 @@ impl<'p> Plan<'p> {
                 self.interval(panel, k == last, gk);
             }
         }
-        panels
+        Mat::from_fn(d, c1 - c0, |i, j| panels[j / W].prod[i][j % W])
     }
 
     /// One interval of one panel: `prod ← e^{ΔΛ} prod + L̃ G_k S̃ prod`, the thermal field
