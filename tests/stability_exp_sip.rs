@@ -451,6 +451,18 @@ fn modal_and_dense_products_agree_on_the_dual_rotor() {
     assert!(diff < 1e-10, "coupled split: relative difference {diff:e}");
 }
 
+/// The matched distance from the reference multipliers above 1/2 in modulus (the dual
+/// rotor's 66 thermal ones at least) to `mu`.
+fn distance_above_half(reference: &[Complex64], mu: &[Complex64]) -> f64 {
+    let near: Vec<Complex64> = reference
+        .iter()
+        .copied()
+        .filter(|m| m.norm() > 0.5)
+        .collect();
+    assert!(near.len() >= 66, "the thermal multipliers at least");
+    matched_distance(&near, mu, near.len())
+}
+
 #[test]
 fn thermal_field_in_blocks_equals_the_per_interval_product_on_the_dual_rotor() {
     // The thermal rows brought forward every 16 (or 24: a shorter last block) intervals
@@ -479,13 +491,7 @@ fn thermal_field_in_blocks_equals_the_per_interval_product_on_the_dual_rotor() {
             .multipliers(&rs, &view)
             .expect("blocks")
             .multipliers;
-        let near: Vec<Complex64> = mu_every
-            .iter()
-            .copied()
-            .filter(|m| m.norm() > 0.5)
-            .collect();
-        assert!(near.len() >= 66, "the thermal multipliers at least");
-        let d = matched_distance(&near, &mu, near.len());
+        let d = distance_above_half(&mu_every, &mu);
         assert!(
             d < 1e-9,
             "block {block}: multipliers above 1/2 differ by {d:e}"
@@ -521,13 +527,7 @@ fn panels_equal_the_column_blocks_on_the_dual_rotor() {
         .multipliers(&rs, &view)
         .expect("panels")
         .multipliers;
-    let near: Vec<Complex64> = mu_blocks
-        .iter()
-        .copied()
-        .filter(|m| m.norm() > 0.5)
-        .collect();
-    assert!(near.len() >= 66, "the thermal multipliers at least");
-    let d = matched_distance(&near, &mu_panels, near.len());
+    let d = distance_above_half(&mu_blocks, &mu_panels);
     assert!(d < 1e-10, "multipliers above 1/2 differ by {d:e}");
 }
 
