@@ -148,6 +148,31 @@ impl NonlinearEval {
         }
     }
 
+    /// The six derivative arrays in the order `df_dx, df_dv, df_dt, dg_dx, dg_dv, dg_dt`
+    /// (the block numbers of [`crate::integrate::StateSpace::for_each_derivative_slot`]).
+    pub fn derivative_blocks(&self) -> [&[f64]; 6] {
+        [
+            &self.df_dx,
+            &self.df_dv,
+            &self.df_dt,
+            &self.dg_dx,
+            &self.dg_dv,
+            &self.dg_dt,
+        ]
+    }
+
+    /// The six derivative arrays, mutable, in the order of [`Self::derivative_blocks`].
+    pub fn derivative_blocks_mut(&mut self) -> [&mut [f64]; 6] {
+        [
+            &mut self.df_dx,
+            &mut self.df_dv,
+            &mut self.df_dt,
+            &mut self.dg_dx,
+            &mut self.dg_dv,
+            &mut self.dg_dt,
+        ]
+    }
+
     /// Sets every entry to zero.
     pub fn clear(&mut self) {
         for buf in [

@@ -343,28 +343,39 @@ impl<'a> StateSpace<'a> {
 
     /// Calls `put(row, column, value)` for every entry of [`Self::derivative_matrix`].
     fn for_each_derivative(&self, derivs: &NonlinearEval, mut put: impl FnMut(usize, usize, f64)) {
+        let blocks = derivs.derivative_blocks();
+        self.for_each_derivative_slot(|b, k, i, j| put(i, j, blocks[b][k]));
+    }
+
+    /// Calls `put(block, index, row, column)` for every entry of
+    /// [`Self::derivative_matrix`]: entry `index` of derivative array `block`
+    /// ([`NonlinearEval::derivative_blocks`] order) sits at `(row, column)` of `D`. The
+    /// order is that of [`Self::derivative_nonzeros`]: by row within each derivative block,
+    /// `∂/∂x` and `∂/∂v` of one variable side by side; without the velocity gather the
+    /// `∂/∂v` entries are left out.
+    pub fn for_each_derivative_slot(&self, mut put: impl FnMut(usize, usize, usize, usize)) {
         let (p, q) = (self.dofs.mech.len(), self.dofs.therm.len());
         let t0 = self.mech_gathered();
         for i in 0..p {
             for j in 0..p {
-                put(i, j, derivs.df_dx[i * p + j]);
+                put(0, i * p + j, i, j);
                 if self.velocity {
-                    put(i, p + j, derivs.df_dv[i * p + j]);
+                    put(1, i * p + j, i, p + j);
                 }
             }
             for j in 0..q {
-                put(i, t0 + j, derivs.df_dt[i * q + j]);
+                put(2, i * q + j, i, t0 + j);
             }
         }
         for i in 0..q {
             for j in 0..p {
-                put(p + i, j, derivs.dg_dx[i * p + j]);
+                put(3, i * p + j, p + i, j);
                 if self.velocity {
-                    put(p + i, p + j, derivs.dg_dv[i * p + j]);
+                    put(4, i * p + j, p + i, p + j);
                 }
             }
             for j in 0..q {
-                put(p + i, t0 + j, derivs.dg_dt[i * q + j]);
+                put(5, i * q + j, p + i, t0 + j);
             }
         }
     }

@@ -108,13 +108,15 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use num_complex::Complex64;
 
+mod means;
 mod panel;
 
+use means::SparseMeans;
 use panel::Flat;
 
 use super::expm::expm;
 use super::modal::{BlockDiagonal, MAX_CONDITION, RealModal};
-use super::sip::{axpy_derivs, by_column_blocks, gauss_legendre, interval_means, state_space_for};
+use super::sip::{by_column_blocks, gauss_legendre, state_space_for};
 use super::{FloquetResult, StabilityError, StabilityMethod, all_finite, eigenvalues_checked};
 use crate::integrate::StateSpace;
 use crate::system::{NonlinearEval, PeriodicOrbit, System};
@@ -282,7 +284,7 @@ impl ExpSip {
         // displacements and temperatures only) the velocity rows are not gathered: the
         // same products with 36 instead of 46 gathered rows there.
         let without_velocity;
-        let space = if space.gathers_velocity() && !reads_velocity(&means) {
+        let space = if space.gathers_velocity() && !means.reads_velocity() {
             without_velocity = space.with_velocity_gather(false);
             &without_velocity
         } else {
@@ -305,17 +307,7 @@ impl ExpSip {
             Some(rough) => rough,
             None => {
                 // Coarse means: each the average of two fine ones (a composite Gauss rule).
-                use rayon::prelude::*;
-                let coarse: Vec<NonlinearEval> = means
-                    .par_chunks_exact(2)
-                    .map(|pair| {
-                        let mut m = pair[0].clone();
-                        m.clear();
-                        axpy_derivs(&mut m, 0.5, &pair[0]);
-                        axpy_derivs(&mut m, 0.5, &pair[1]);
-                        m
-                    })
-                    .collect();
+                let coarse = means.pair_averages();
                 self.product(space, &split, coarse, 2.0 * delta, omega)?
             }
         };
@@ -333,7 +325,7 @@ impl ExpSip {
         orbit: &dyn PeriodicOrbit,
         period: f64,
         n_k: usize,
-    ) -> Result<(Vec<NonlinearEval>, NonlinearEval, Mat<f64>, f64), StabilityError> {
+    ) -> Result<(SparseMeans, NonlinearEval, Mat<f64>, f64), StabilityError> {
         let (nodes, weights) =
             gauss_legendre(self.gauss_points).ok_or(StabilityError::Setting {
                 field: "exp_sip.gauss_points",
@@ -342,13 +334,10 @@ impl ExpSip {
             })?;
         let mut ws = space.workspace();
         let delta = period / n_k as f64;
-        let means = interval_means(space, orbit, delta, n_k, nodes, weights, &mut ws);
+        let means = SparseMeans::sample(space, orbit, delta, n_k, nodes, weights, &mut ws);
         // Orbit mean D̄ (the same for both products when extrapolating).
         let mut mean = ws.eval.clone();
-        mean.clear();
-        for m in &means {
-            axpy_derivs(&mut mean, 1.0 / n_k as f64, m);
-        }
+        means.weighted_sum(1.0 / n_k as f64, &mut mean);
         if self.mean_split == MeanSplit::Fields {
             // the mean coupling between the fields goes with the fluctuation
             for c in [&mut mean.df_dt, &mut mean.dg_dx, &mut mean.dg_dv] {
@@ -398,17 +387,11 @@ impl ExpSip {
         &self,
         space: &StateSpace<'_>,
         split: &Split<'_>,
-        mut means: Vec<NonlinearEval>,
+        mut means: SparseMeans,
         delta: f64,
         omega: f64,
     ) -> Result<Mat<f64>, StabilityError> {
-        {
-            use rayon::prelude::*;
-            means
-                .par_iter_mut()
-                .with_min_len(64)
-                .for_each(|m| axpy_derivs(m, -1.0, split.mean));
-        }
+        means.subtract(split.mean);
         let prod = match split.modal {
             Some(fields) => {
                 let kicks = Kicks::new(space, fields, delta, self.interval_map, self.thermal_block);
@@ -503,16 +486,17 @@ impl ExpSip {
     fn fluctuation_factors(
         &self,
         space: &StateSpace<'_>,
-        fluctuations: &[NonlinearEval],
+        fluctuations: &SparseMeans,
         delta: f64,
         k_mat: &Mat<f64>,
     ) -> Vec<Flat> {
         use rayon::prelude::*;
         let (g, r) = space.low_rank_dims();
         let k_t = k_mat.transpose().to_owned();
-        let factor = |(bufs, nonzeros): &mut FactorBuffers, fl: &NonlinearEval| {
+        let layout = fluctuations.layout(space);
+        let factor = |(bufs, nonzeros): &mut FactorBuffers, k: usize| {
             let [y, y_t, h, tmp] = bufs;
-            space.derivative_nonzeros(fl, nonzeros);
+            fluctuations.nonzeros(k, &layout, nonzeros);
             // Y = D K over D's nonzeros, as Yᵀ = Kᵀ Dᵀ (contiguous columns of Kᵀ)
             y_t.fill(0.0);
             for &(i, j, v) in nonzeros.iter() {
@@ -572,8 +556,8 @@ impl ExpSip {
                 Vec::new(),
             )
         };
-        fluctuations
-            .par_iter()
+        (0..fluctuations.len())
+            .into_par_iter()
             .with_min_len(32)
             .map_init(buffers, factor)
             .collect()
@@ -769,12 +753,6 @@ impl ExpSip {
 type FactorBuffers = ([Mat<f64>; 4], Vec<(usize, usize, f64)>);
 
 /// Whether any interval mean has a velocity derivative `∂f/∂v` or `∂g/∂v` other than zero.
-fn reads_velocity(means: &[NonlinearEval]) -> bool {
-    means
-        .iter()
-        .any(|m| m.df_dv.iter().chain(&m.dg_dv).any(|&v| v != 0.0))
-}
-
 /// Column `j` of an owned (column-major, contiguous) matrix as a slice.
 fn column(m: &Mat<f64>, j: usize) -> &[f64] {
     let n = m.nrows();
@@ -1283,7 +1261,8 @@ mod tests {
                 series_order: order,
                 ..ExpSip::default()
             };
-            let factors = sip.fluctuation_factors(&space, std::slice::from_ref(&fl), delta, &k_mat);
+            let sparse = SparseMeans::from_dense(&space, std::slice::from_ref(&fl));
+            let factors = sip.fluctuation_factors(&space, &sparse, delta, &k_mat);
             // reference: Σ_{i=1}^{N} Δⁱ/i! (D K)^{i−1} D term by term, dense
             let mut d = Mat::<f64>::zeros(r, g);
             space.derivative_matrix(&fl, d.as_mut());

@@ -201,6 +201,25 @@ pub(crate) fn interval_means(
     weights: &[f64],
     ws: &mut Workspace,
 ) -> Vec<NonlinearEval> {
+    interval_means_with(space, orbit, delta, intervals, nodes, weights, ws, |m| {
+        m.clone()
+    })
+}
+
+/// [`interval_means`] handing each interval's mean to `keep` as it is computed (in a
+/// buffer reused from interval to interval) and collecting what `keep` returns, in
+/// interval order.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn interval_means_with<T: Send>(
+    space: &StateSpace<'_>,
+    orbit: &dyn PeriodicOrbit,
+    delta: f64,
+    intervals: usize,
+    nodes: &[f64],
+    weights: &[f64],
+    ws: &mut Workspace,
+    keep: impl Fn(&NonlinearEval) -> T + Sync,
+) -> Vec<T> {
     use rayon::prelude::*;
     let (n, m) = (space.n_mech(), space.n_therm());
     let width = 2 * n + m;
@@ -212,25 +231,32 @@ pub(crate) fn interval_means(
         let (v, temp) = rest.split_at_mut(n);
         orbit.state_at(time(i / per, i % per), x, v, temp);
     }
-    let mean_of = |k: usize, ws: &mut Workspace| {
-        let mut mean = ws.eval.clone();
+    let mean_of = |k: usize, ws: &mut Workspace, mean: &mut NonlinearEval| {
         mean.clear();
         for (j, &wi) in weights.iter().enumerate() {
             let y = &states[(k * per + j) * width..(k * per + j + 1) * width];
             let (x, rest) = y.split_at(n);
             let (v, temp) = rest.split_at(n);
             space.eval_nonlinear_at(time(k, j), x, v, temp, ws);
-            axpy_derivs(&mut mean, 0.5 * wi, &ws.eval);
+            axpy_derivs(mean, 0.5 * wi, &ws.eval);
         }
-        mean
+        keep(mean)
     };
     if intervals >= 64 && rayon::current_num_threads() > 1 {
         (0..intervals)
             .into_par_iter()
-            .map_init(|| space.workspace(), |w, k| mean_of(k, w))
+            .map_init(
+                || {
+                    let w = space.workspace();
+                    let mean = w.eval.clone();
+                    (w, mean)
+                },
+                |(w, mean), k| mean_of(k, w, mean),
+            )
             .collect()
     } else {
-        (0..intervals).map(|k| mean_of(k, ws)).collect()
+        let mut mean = ws.eval.clone();
+        (0..intervals).map(|k| mean_of(k, ws, &mut mean)).collect()
     }
 }
 
