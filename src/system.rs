@@ -175,17 +175,10 @@ impl NonlinearEval {
 
     /// Sets every entry to zero.
     pub fn clear(&mut self) {
-        for buf in [
-            &mut self.f,
-            &mut self.g,
-            &mut self.df_dx,
-            &mut self.df_dv,
-            &mut self.df_dt,
-            &mut self.dg_dx,
-            &mut self.dg_dv,
-            &mut self.dg_dt,
-        ] {
-            buf.iter_mut().for_each(|v| *v = 0.0);
+        self.f.fill(0.0);
+        self.g.fill(0.0);
+        for block in self.derivative_blocks_mut() {
+            block.fill(0.0);
         }
     }
 }

@@ -752,7 +752,6 @@ impl ExpSip {
 /// its product, and the interval's derivative nonzeros `(row, column, value)`.
 type FactorBuffers = ([Mat<f64>; 4], Vec<(usize, usize, f64)>);
 
-/// Whether any interval mean has a velocity derivative `∂f/∂v` or `∂g/∂v` other than zero.
 /// Column `j` of an owned (column-major, contiguous) matrix as a slice.
 fn column(m: &Mat<f64>, j: usize) -> &[f64] {
     let n = m.nrows();

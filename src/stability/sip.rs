@@ -159,15 +159,12 @@ pub(crate) fn gauss_legendre(n: usize) -> Option<(&'static [f64], &'static [f64]
 
 /// Accumulates `out += w · src` over every derivative buffer.
 pub(crate) fn axpy_derivs(out: &mut NonlinearEval, w: f64, src: &NonlinearEval) {
-    for (o, s) in [
-        (&mut out.df_dx, &src.df_dx),
-        (&mut out.df_dv, &src.df_dv),
-        (&mut out.df_dt, &src.df_dt),
-        (&mut out.dg_dx, &src.dg_dx),
-        (&mut out.dg_dv, &src.dg_dv),
-        (&mut out.dg_dt, &src.dg_dt),
-    ] {
-        o.iter_mut().zip(s.iter()).for_each(|(a, b)| *a += w * b);
+    for (o, s) in out
+        .derivative_blocks_mut()
+        .into_iter()
+        .zip(src.derivative_blocks())
+    {
+        o.iter_mut().zip(s).for_each(|(a, b)| *a += w * b);
     }
 }
 

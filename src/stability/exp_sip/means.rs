@@ -53,18 +53,25 @@ impl SparseMeans {
         let lists = interval_means_with(space, orbit, delta, intervals, nodes, weights, ws, |m| {
             nonzero_list(m, &offsets)
         });
+        Self::from_lists(space, &offsets, &lists)
+    }
+
+    /// The means from each interval's nonzeros `(flat position, value)`.
+    fn from_lists(
+        space: &StateSpace<'_>,
+        offsets: &[usize; 7],
+        lists: &[Vec<(usize, f64)>],
+    ) -> Self {
         let mut used = vec![false; offsets[6]];
-        for list in &lists {
-            for &(at, _) in list {
-                used[at] = true;
-            }
+        for &(at, _) in lists.iter().flatten() {
+            used[at] = true;
         }
-        let (slots, position) = slots_of(space, &offsets, &used);
+        let (slots, position) = slots_of(space, offsets, &used);
         let width = slots.len();
-        let mut values = vec![0.0; intervals * width];
+        let mut values = vec![0.0; lists.len() * width];
         values
             .par_chunks_mut(width.max(1))
-            .zip(&lists)
+            .zip(lists)
             .with_min_len(64)
             .for_each(|(row, list)| {
                 for &(at, v) in list {
@@ -74,7 +81,7 @@ impl SparseMeans {
         Self {
             slots,
             values,
-            intervals,
+            intervals: lists.len(),
         }
     }
 
@@ -89,25 +96,8 @@ impl SparseMeans {
             };
         };
         let offsets = block_offsets(first);
-        let mut used = vec![false; offsets[6]];
-        for m in means {
-            for (at, _) in nonzero_list(m, &offsets) {
-                used[at] = true;
-            }
-        }
-        let (slots, _) = slots_of(space, &offsets, &used);
-        let values = means
-            .iter()
-            .flat_map(|m| {
-                let blocks = m.derivative_blocks();
-                slots.iter().map(move |&(b, k)| blocks[b][k])
-            })
-            .collect();
-        Self {
-            slots,
-            values,
-            intervals: means.len(),
-        }
+        let lists: Vec<_> = means.iter().map(|m| nonzero_list(m, &offsets)).collect();
+        Self::from_lists(space, &offsets, &lists)
     }
 
     /// Number of intervals.
