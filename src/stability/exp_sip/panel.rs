@@ -74,13 +74,65 @@ fn fma(a: f64, b: f64, c: f64) -> f64 {
 }
 
 /// `out ← a x` (`add`: `out ← out + a x`) for panel rows `x` (`a.cols` of them) and `out`
-/// (`a.rows`): output rows four at a time, the rest two and one at a time.
+/// (`a.rows`).
+///
+/// On a CPU with AVX-512 (checked once per process at run time) the rows go through
+/// [`mul_avx512`], elsewhere through [`mul_portable`]: both do, for every output entry,
+/// the same chain of fused multiply–adds in the same order, so their results are equal to
+/// the last bit (unit test `the_avx512_kernel_equals_the_portable_one`).
 fn mul(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if has_avx512() {
+        // SAFETY: `mul_avx512` needs AVX-512F, and `has_avx512` found it on this CPU.
+        #[allow(unsafe_code)]
+        unsafe {
+            mul_avx512(a, x, out, add)
+        };
+        return;
+    }
+    mul_portable(a, x, out, add);
+}
+
+/// Whether this CPU has AVX-512F (and the FMA the portable kernels use for the same
+/// arithmetic); detected once, `TMROTOR_NO_AVX512` set to anything but `0` turns the
+/// 512-bit kernels off (for comparisons).
+#[cfg(target_arch = "x86_64")]
+fn has_avx512() -> bool {
+    use std::sync::OnceLock;
+    static HAS: OnceLock<bool> = OnceLock::new();
+    *HAS.get_or_init(|| {
+        let off = std::env::var_os("TMROTOR_NO_AVX512").is_some_and(|v| v != "0");
+        !off && cfg!(target_feature = "fma") && std::arch::is_x86_feature_detected!("avx512f")
+    })
+}
+
+/// [`mul`] in the build's own instruction set: output rows four at a time (eight
+/// accumulators of four doubles on AVX2), the rest two and one at a time.
+fn mul_portable(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
+    mul_in_blocks::<4>(a, x, out, add);
+}
+
+/// [`mul`] compiled for AVX-512: output rows eight at a time, so that each of the eight
+/// accumulators is one 512-bit register (a panel row is eight doubles) and each loaded
+/// panel row serves eight output rows; the rest four, two and one at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,fma")]
+fn mul_avx512(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
+    mul_in_blocks::<8>(a, x, out, add);
+}
+
+/// Output rows in blocks of `B` (8 or 4), then the rest by halves down to one.
+#[inline(always)]
+fn mul_in_blocks<const B: usize>(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
     let m = a.rows;
     debug_assert_eq!(x.len(), a.cols);
     debug_assert_eq!(out.len(), m);
     let mut i = 0;
-    while i + 4 <= m {
+    while i + B <= m {
+        rows_of::<B>(a, x, out, i, add);
+        i += B;
+    }
+    if B > 4 && i + 4 <= m {
         rows_of::<4>(a, x, out, i, add);
         i += 4;
     }
@@ -360,19 +412,60 @@ impl SlowRows {
 mod tests {
     use super::*;
 
+    /// A `m × k` matrix, `k` panel rows and `m` output rows of made-up values.
+    fn operands(m: usize, k: usize) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
+        let a = Mat::from_fn(m, k, |i, j| (i as f64 + 1.0) * 0.3 - j as f64 * 0.7);
+        let x = Mat::from_fn(k, W, |i, j| ((i * W + j) as f64).sin());
+        let c = Mat::from_fn(m, W, |i, j| ((i + 2 * j) as f64).cos());
+        (a, x, c)
+    }
+
+    fn rows(b: &Mat<f64>) -> Vec<Row> {
+        (0..b.nrows())
+            .map(|i| std::array::from_fn(|l| b[(i, l)]))
+            .collect()
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx512_kernel_equals_the_portable_one() {
+        if !has_avx512() {
+            eprintln!("this CPU has no AVX-512: nothing to compare");
+            return;
+        }
+        // every row count from 0 to 19 (the blocks of eight, four, two and the last row)
+        for m in 0..20 {
+            let (a, x, c) = operands(m, 13);
+            let flat = Flat::from_mat(a.as_ref());
+            for add in [false, true] {
+                let mut portable = rows(&c);
+                mul_portable(&flat, &rows(&x), &mut portable, add);
+                let mut wide = rows(&c);
+                // SAFETY: `has_avx512` found AVX-512F on this CPU.
+                #[allow(unsafe_code)]
+                unsafe {
+                    mul_avx512(&flat, &rows(&x), &mut wide, add)
+                };
+                for (i, (p, w)) in portable.iter().zip(&wide).enumerate() {
+                    for l in 0..W {
+                        assert_eq!(
+                            p[l].to_bits(),
+                            w[l].to_bits(),
+                            "m = {m}, add = {add}: ({i}, {l}) {} against {}",
+                            w[l],
+                            p[l]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
     #[test]
     fn the_panel_kernel_equals_the_dense_product() {
-        // every row count from 0 to 9 (the four-row blocks and the rest), both modes
-        for m in 0..10 {
-            let k = 7;
-            let a = Mat::from_fn(m, k, |i, j| (i as f64 + 1.0) * 0.3 - j as f64 * 0.7);
-            let x = Mat::from_fn(k, W, |i, j| ((i * W + j) as f64).sin());
-            let c = Mat::from_fn(m, W, |i, j| ((i + 2 * j) as f64).cos());
-            let rows = |b: &Mat<f64>| -> Vec<Row> {
-                (0..b.nrows())
-                    .map(|i| std::array::from_fn(|l| b[(i, l)]))
-                    .collect()
-            };
+        // every row count from 0 to 19 (the row blocks and the rest), both modes
+        for m in 0..20 {
+            let (a, x, c) = operands(m, 7);
             let flat = Flat::from_mat(a.as_ref());
             for add in [false, true] {
                 let mut out = rows(&c);
