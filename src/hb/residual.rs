@@ -71,6 +71,11 @@ enum Derivative {
 }
 
 impl Derivative {
+    /// The block's number in [`NonlinearEval::derivative_blocks`].
+    fn block(self) -> usize {
+        self as usize
+    }
+
     #[inline(always)]
     fn of(self, e: &NonlinearEval) -> &[f64] {
         match self {
@@ -505,6 +510,20 @@ impl<'a> HarmonicBalance<'a> {
         let pt = p + q;
         let ld = pt * nc;
         let aft = &self.aft;
+        // the entries that are nonzero in some sample, found in one pass over the samples'
+        // contiguous arrays (most of the dual rotor's 1 700 are zero in all of them), so
+        // the loop below gathers only those entries' time series
+        let mut nonzero: [Vec<bool>; 6] = match evals.first() {
+            Some(e) => e.derivative_blocks().map(|b| vec![false; b.len()]),
+            None => return,
+        };
+        for e in evals {
+            for (mask, block) in nonzero.iter_mut().zip(e.derivative_blocks()) {
+                for (m, v) in mask.iter_mut().zip(block) {
+                    *m |= *v != 0.0;
+                }
+            }
+        }
         // each row block (nonlinear DoF k) is independent
         jac.par_chunks_mut(nc * ld)
             .enumerate()
@@ -532,13 +551,11 @@ impl<'a> HarmonicBalance<'a> {
                     }
                     for (which, signal, idx) in terms {
                         let Some(which) = which else { continue };
-                        let mut any = false;
+                        if !nonzero[which.block()][idx] {
+                            continue;
+                        }
                         for (s, e) in series.iter_mut().zip(evals) {
                             *s = which.of(e)[idx];
-                            any |= *s != 0.0;
-                        }
-                        if !any {
-                            continue;
                         }
                         aft.spectrum(&series, &mut buf);
                         aft.add_product_block(&buf, signal, omega, 1.0, &mut rows[l * nc..], ld);
