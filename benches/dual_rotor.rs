@@ -26,6 +26,8 @@ use tmrotor::system::System;
 const OMEGA: f64 = 400.0;
 
 fn bench(c: &mut Criterion) {
+    // as the binaries run them
+    tmrotor::sequential_dense_kernels();
     let settings = StudySettings::default();
     let problem = SweepProblem::new(&settings).expect("problem");
     let sys = &problem.system;

@@ -6,5 +6,6 @@
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> std::process::ExitCode {
+    tmrotor::sequential_dense_kernels();
     tmrotor::record::replay::main()
 }
