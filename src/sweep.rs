@@ -298,7 +298,8 @@ pub struct SweepReport {
 impl SweepReport {
     /// Where the sweep's time went, one line (`corrector … s (… steps, … ms each),
     /// stability …, bifurcation location …, recording … s`), each part summed over its
-    /// calls (see [`Timings`]).
+    /// calls (see [`Timings`]); the stability part names the instruction set of the
+    /// Floquet kernel ([`crate::stability::panel_kernel_isa`]), which sets its speed.
     pub fn time_summary(&self) -> String {
         let t = &self.timings;
         let per = |secs: f64, n: usize| {
@@ -316,10 +317,11 @@ impl SweepReport {
         );
         if t.evaluations > 0 {
             line += &format!(
-                ", stability {:.1} s ({} evaluations{}, beside the corrector)",
+                ", stability {:.1} s ({} evaluations{}, beside the corrector, {} kernel)",
                 t.stability_seconds,
                 t.evaluations,
-                per(t.stability_seconds, t.evaluations)
+                per(t.stability_seconds, t.evaluations),
+                crate::stability::panel_kernel_isa()
             );
         }
         if t.searches > 0 {
@@ -1179,5 +1181,56 @@ impl crate::record::derive::StabilityRederive for CoupledRederive {
             .multipliers(&self.problem.system, &self.solution(point))
             .map(|f| f.multipliers)
             .map_err(derive_err)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(timings: Timings) -> SweepReport {
+        SweepReport {
+            points: 3,
+            bifurcations: Vec::new(),
+            status: RunStatus::Completed,
+            finish: None,
+            total_seconds: 1.0,
+            stability_note: None,
+            rejected_steps: 0,
+            period_doubled: Vec::new(),
+            lead_in_from: None,
+            timings,
+            record_seconds: 0.25,
+        }
+    }
+
+    #[test]
+    fn the_time_summary_names_the_floquet_kernel_when_stability_ran() {
+        let with = report(Timings {
+            steps: 4,
+            step_seconds: 0.08,
+            evaluations: 3,
+            stability_seconds: 0.09,
+            searches: 0,
+            search_seconds: 0.0,
+        });
+        let kernel = crate::stability::panel_kernel_isa();
+        assert_eq!(
+            with.time_summary(),
+            format!(
+                "corrector 0.1 s (4 steps, 20 ms each), stability 0.1 s (3 evaluations, 30 ms \
+                 each, beside the corrector, {kernel} kernel), recording 0.2 s"
+            )
+        );
+        // without stability there is no kernel to name
+        let without = report(Timings {
+            steps: 4,
+            step_seconds: 0.08,
+            ..Timings::default()
+        });
+        assert_eq!(
+            without.time_summary(),
+            "corrector 0.1 s (4 steps, 20 ms each), recording 0.2 s"
+        );
     }
 }

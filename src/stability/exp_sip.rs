@@ -181,6 +181,13 @@ pub enum IntervalMap {
     Exponential,
 }
 
+/// The instruction set of the Floquet panel products on this CPU (`"AVX-512"`, `"AVX2"`,
+/// …): the 512-bit kernel is chosen at run time and gives the same products to the last
+/// bit, so it matters for the time a sweep takes, not for its results.
+pub fn panel_kernel_isa() -> &'static str {
+    panel::kernel_isa()
+}
+
 impl IntervalMap {
     /// The name used in settings files and on the command line.
     pub fn label(self) -> &'static str {

@@ -38,7 +38,7 @@ pub mod sip;
 pub mod thermal;
 pub mod variational;
 
-pub use exp_sip::{ExpSip, IntervalMap, MeanSplit};
+pub use exp_sip::{ExpSip, IntervalMap, MeanSplit, panel_kernel_isa};
 pub use expm::expm;
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};

@@ -106,6 +106,26 @@ fn has_avx512() -> bool {
     })
 }
 
+/// The instruction set the panel products run with on this CPU, for time reports:
+/// `"AVX-512"` where the 512-bit kernel is used, else the build's own vector width on
+/// x86-64 (`"AVX2"` or `"SSE2"`), or `"portable"` elsewhere.
+pub(super) fn kernel_isa() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if has_avx512() {
+            "AVX-512"
+        } else if cfg!(target_feature = "avx2") {
+            "AVX2"
+        } else {
+            "SSE2"
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        "portable"
+    }
+}
+
 /// [`mul`] in the build's own instruction set: output rows four at a time (eight
 /// accumulators of four doubles on AVX2), the rest two and one at a time.
 fn mul_portable(a: &Flat, x: &[Row], out: &mut [Row], add: bool) {
