@@ -183,6 +183,88 @@ fn rows_of<const R: usize>(a: &Flat, x: &[Row], out: &mut [Row], i: usize, add: 
     out[i..i + R].copy_from_slice(&acc);
 }
 
+/// [`mul`] on `N` panels with the same `a`: `ios[p] = (x, out)` of panel `p`. On a CPU with
+/// AVX-512 two panels go through [`mul_pair_avx512`] together, so that each broadcast
+/// entry of `a` feeds two 512-bit multiply–adds (with one panel each feeds one; the AVX2
+/// kernel feeds two already, a row being two of its registers); elsewhere, and for a
+/// panel left over, [`mul`] per panel. The same fused multiply–adds in the same order for
+/// every entry either way.
+fn mul_n<const N: usize>(a: &Flat, ios: [(&[Row], &mut [Row]); N], add: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if N == 2 && has_avx512() {
+        let mut it = ios.into_iter();
+        if let (Some((x1, o1)), Some((x2, o2))) = (it.next(), it.next()) {
+            // SAFETY: `mul_pair_avx512` needs AVX-512F and FMA; `has_avx512` found both.
+            #[allow(unsafe_code)]
+            unsafe {
+                mul_pair_avx512(a, [x1, x2], [o1, o2], add)
+            };
+        }
+        return;
+    }
+    for (x, out) in ios {
+        mul(a, x, out, add);
+    }
+}
+
+/// [`mul`] on two panels at once, compiled for AVX-512: output rows four at a time, each
+/// with one accumulator register per panel (eight in all), each broadcast entry of `a`
+/// used for both panels; the rest two and one at a time.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,fma")]
+fn mul_pair_avx512(a: &Flat, x: [&[Row]; 2], out: [&mut [Row]; 2], add: bool) {
+    let m = a.rows;
+    debug_assert!(x.iter().all(|x| x.len() == a.cols));
+    debug_assert!(out.iter().all(|o| o.len() == m));
+    let [o1, o2] = out;
+    let mut i = 0;
+    while i + 4 <= m {
+        pair_rows_of::<4>(a, x, [&mut *o1, &mut *o2], i, add);
+        i += 4;
+    }
+    if i + 2 <= m {
+        pair_rows_of::<2>(a, x, [&mut *o1, &mut *o2], i, add);
+        i += 2;
+    }
+    if i < m {
+        pair_rows_of::<1>(a, x, [o1, o2], i, add);
+    }
+}
+
+/// Output rows `i..i + R` of [`mul_pair_avx512`] for both panels.
+#[inline(always)]
+fn pair_rows_of<const R: usize>(
+    a: &Flat,
+    x: [&[Row]; 2],
+    out: [&mut [Row]; 2],
+    i: usize,
+    add: bool,
+) {
+    let mut acc = [[[0.0; W]; 2]; R];
+    if add {
+        for (r, acc_r) in acc.iter_mut().enumerate() {
+            acc_r[0] = out[0][i + r];
+            acc_r[1] = out[1][i + r];
+        }
+    }
+    for ((col, x1), x2) in a.data.chunks_exact(a.rows).zip(x[0]).zip(x[1]) {
+        let c = &col[i..i + R];
+        for (acc_r, &c_r) in acc.iter_mut().zip(c) {
+            for (s, &v) in acc_r[0].iter_mut().zip(x1) {
+                *s = fma(c_r, v, *s);
+            }
+            for (s, &v) in acc_r[1].iter_mut().zip(x2) {
+                *s = fma(c_r, v, *s);
+            }
+        }
+    }
+    let [o1, o2] = out;
+    for (r, acc_r) in acc.iter().enumerate() {
+        o1[i + r] = acc_r[0];
+        o2[i + r] = acc_r[1];
+    }
+}
+
 /// `y ← y + x`.
 fn add_rows(y: &mut [Row], x: &[Row]) {
     for (yr, xr) in y.iter_mut().zip(x) {
@@ -229,12 +311,12 @@ struct SlowRows {
 }
 
 /// One panel: its columns of the product, its gathered rows, `G_k`'s output and the
-/// thermal field's block state.
+/// thermal field's block state (empty without a slow field).
 struct Panel {
     prod: Vec<Row>,
     gathered: Vec<Row>,
     mixed: Vec<Row>,
-    slow: Option<SlowRows>,
+    slow: SlowRows,
 }
 
 /// Everything the intervals apply, shared by the panels.
@@ -310,20 +392,12 @@ impl<'p> Plan<'p> {
                 for (l, c) in (p0..c1.min(p0 + W)).enumerate() {
                     prod[c][l] = 1.0;
                 }
-                let slow = self.slow.as_ref().map(|s| {
+                let mut slow = SlowRows::empty(0);
+                if let Some(s) = self.slow.as_ref() {
                     let f = &self.fields[s.field];
-                    let q = f.gather.1 - f.gather.0;
-                    let mut st = SlowRows {
-                        y: vec![[0.0; W]; q],
-                        a1: vec![[0.0; W]; q],
-                        a2: vec![[0.0; W]; q],
-                        stack: vec![[0.0; W]; 2 * q],
-                        v: vec![[0.0; W]; q],
-                        n: 0,
-                    };
-                    st.restart(s, f, &prod[f.rows.0..f.rows.1]);
-                    st
-                });
+                    slow = SlowRows::empty(f.gather.1 - f.gather.0);
+                    slow.restart(s, f, &prod[f.rows.0..f.rows.1]);
+                }
                 Panel {
                     prod,
                     gathered: vec![[0.0; W]; g],
@@ -334,52 +408,92 @@ impl<'p> Plan<'p> {
             .collect();
         let last = self.factors.len().saturating_sub(1);
         for (k, gk) in self.factors.iter().enumerate() {
-            for panel in &mut panels {
-                self.interval(panel, k == last, gk);
+            // two panels at a time (see `mul_n`), a last odd one alone
+            let mut pairs = panels.chunks_exact_mut(2);
+            for pair in &mut pairs {
+                if let [p1, p2] = pair {
+                    self.interval([p1, p2], k == last, gk);
+                }
+            }
+            for panel in pairs.into_remainder() {
+                self.interval([panel], k == last, gk);
             }
         }
         Mat::from_fn(d, c1 - c0, |i, j| panels[j / W].prod[i][j % W])
     }
 
-    /// One interval of one panel: `prod ← e^{ΔΛ} prod + L̃ G_k S̃ prod`, the thermal field
-    /// by its block update.
-    fn interval(&self, panel: &mut Panel, last: bool, gk: &Flat) {
+    /// One interval of `N` panels: `prod ← e^{ΔΛ} prod + L̃ G_k S̃ prod`, the thermal
+    /// field by its block update; each panel as on its own, the products of the panels
+    /// with the same matrix taken together ([`mul_n`]).
+    fn interval<const N: usize>(&self, panels: [&mut Panel; N], last: bool, gk: &Flat) {
         let slow_index = self.slow.as_ref().map(|s| s.field);
-        let Panel {
-            prod,
-            gathered,
-            mixed,
-            slow,
-        } = panel;
+        let mut parts = panels.map(|p| {
+            let Panel {
+                prod,
+                gathered,
+                mixed,
+                slow,
+            } = p;
+            (
+                prod.as_mut_slice(),
+                gathered.as_mut_slice(),
+                mixed.as_mut_slice(),
+                slow,
+            )
+        });
         for (i, f) in self.fields.iter().enumerate() {
             if f.gather.1 <= f.gather.0 {
                 continue;
             }
-            let out = &mut gathered[f.gather.0..f.gather.1];
-            match slow {
-                Some(st) if Some(i) == slow_index => out.copy_from_slice(&st.y),
-                _ => mul(&f.s, &prod[f.rows.0..f.rows.1], out, false),
+            let (g0, g1) = f.gather;
+            if Some(i) == slow_index {
+                for (_, gathered, _, st) in &mut parts {
+                    gathered[g0..g1].copy_from_slice(&st.y);
+                }
+            } else {
+                let (r0, r1) = f.rows;
+                let ios = parts
+                    .each_mut()
+                    .map(|(prod, gathered, _, _)| (&prod[r0..r1], &mut gathered[g0..g1]));
+                mul_n(&f.s, ios, false);
             }
         }
-        mul(gk, gathered, mixed, false);
+        let ios = parts
+            .each_mut()
+            .map(|(_, gathered, mixed, _)| (&**gathered, &mut **mixed));
+        mul_n(gk, ios, false);
         for (i, f) in self.fields.iter().enumerate() {
             if Some(i) == slow_index {
                 continue;
             }
-            let rows = &mut prod[f.rows.0..f.rows.1];
-            f.full.apply_rows(rows);
+            let (r0, r1) = f.rows;
+            for (prod, _, _, _) in &mut parts {
+                f.full.apply_rows(&mut prod[r0..r1]);
+            }
             if f.spread.1 > f.spread.0 {
-                mul(&f.l, &mixed[f.spread.0..f.spread.1], rows, true);
+                let (s0, s1) = f.spread;
+                let ios = parts
+                    .each_mut()
+                    .map(|(prod, _, mixed, _)| (&mixed[s0..s1], &mut prod[r0..r1]));
+                mul_n(&f.l, ios, true);
             }
         }
-        if let (Some(st), Some(s)) = (slow.as_mut(), self.slow.as_ref()) {
+        if let Some(s) = self.slow.as_ref() {
             let f = &self.fields[s.field];
-            st.advance(s, &mixed[f.spread.0..f.spread.1]);
-            if st.n == s.block || last {
-                let rows = &mut prod[f.rows.0..f.rows.1];
-                st.finish(s, f, rows);
-                if !last {
-                    st.restart(s, f, rows);
+            let (s0, s1) = f.spread;
+            for (_, _, mixed, st) in &mut parts {
+                st.start_advance(&mixed[s0..s1]);
+            }
+            let ios = parts.each_mut().map(|(_, _, _, st)| st.kick_operands());
+            mul_n(&s.k01, ios, true);
+            for (prod, _, _, st) in &mut parts {
+                st.end_advance();
+                if st.n == s.block || last {
+                    let rows = &mut prod[f.rows.0..f.rows.1];
+                    st.finish(s, f, rows);
+                    if !last {
+                        st.restart(s, f, rows);
+                    }
                 }
             }
         }
@@ -397,9 +511,24 @@ impl SlowRows {
         self.n = 0;
     }
 
+    /// Zeroed rows for a field of `q` gathered temperatures (`q = 0`: no slow field).
+    fn empty(q: usize) -> Self {
+        Self {
+            y: vec![[0.0; W]; q],
+            a1: vec![[0.0; W]; q],
+            a2: vec![[0.0; W]; q],
+            stack: vec![[0.0; W]; 2 * q],
+            v: vec![[0.0; W]; q],
+            n: 0,
+        }
+    }
+
     /// One interval with kick `u`:
-    /// `y ← y + S̃N t₀ + n S̃N² t₀ + K₀ u + K₁ U`, then `V ← V + U`, `U ← U + u`.
-    fn advance(&mut self, s: &Slow, u: &[Row]) {
+    /// `y ← y + S̃N t₀ + n S̃N² t₀ + K₀ u + K₁ U`, then `V ← V + U`, `U ← U + u`; in
+    /// three parts so that the product with `[K₀ K₁]` can take several panels at once:
+    /// this one, `y ← y + [K₀ K₁] [u; U]` on [`Self::kick_operands`], and
+    /// [`Self::end_advance`].
+    fn start_advance(&mut self, u: &[Row]) {
         let q = self.y.len();
         self.stack[..q].copy_from_slice(u);
         let n = self.n as f64;
@@ -408,7 +537,16 @@ impl SlowRows {
                 y[l] += a1[l] + n * a2[l];
             }
         }
-        mul(&s.k01, &self.stack, &mut self.y, true);
+    }
+
+    /// `([u; U], y)`: the operands of the interval's product with `[K₀ K₁]`.
+    fn kick_operands(&mut self) -> (&[Row], &mut [Row]) {
+        (&self.stack, &mut self.y)
+    }
+
+    /// The end of an interval (see [`Self::start_advance`]): `V ← V + U`, `U ← U + u`.
+    fn end_advance(&mut self) {
+        let q = self.y.len();
         let (kick, sum) = self.stack.split_at_mut(q);
         add_rows(&mut self.v, sum);
         add_rows(sum, kick);
@@ -475,6 +613,45 @@ mod tests {
                             w[l],
                             p[l]
                         );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    #[cfg(target_arch = "x86_64")]
+    fn the_avx512_pair_kernel_equals_the_portable_one() {
+        if !has_avx512() {
+            eprintln!("this CPU has no AVX-512: nothing to compare");
+            return;
+        }
+        // every row count from 0 to 19 (the blocks of four, two and the last row)
+        for m in 0..20 {
+            let (a, x, c) = operands(m, 11);
+            let (_, y, e) = operands(m, 11);
+            // a second panel of other values
+            let y = Mat::from_fn(y.nrows(), W, |i, j| y[(i, j)] * 1.7 - 0.2);
+            let e = Mat::from_fn(e.nrows(), W, |i, j| e[(i, j)] + 0.3);
+            let flat = Flat::from_mat(a.as_ref());
+            for add in [false, true] {
+                let (mut p1, mut p2) = (rows(&c), rows(&e));
+                mul_portable(&flat, &rows(&x), &mut p1, add);
+                mul_portable(&flat, &rows(&y), &mut p2, add);
+                let (mut w1, mut w2) = (rows(&c), rows(&e));
+                let (rx, ry) = (rows(&x), rows(&y));
+                mul_n(&flat, [(&rx[..], &mut w1[..]), (&ry[..], &mut w2[..])], add);
+                for (want, got) in [(&p1, &w1), (&p2, &w2)] {
+                    for (i, (p, w)) in want.iter().zip(got.iter()).enumerate() {
+                        for l in 0..W {
+                            assert_eq!(
+                                p[l].to_bits(),
+                                w[l].to_bits(),
+                                "m = {m}, add = {add}: ({i}, {l}) {} against {}",
+                                w[l],
+                                p[l]
+                            );
+                        }
                     }
                 }
             }
