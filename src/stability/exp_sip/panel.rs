@@ -584,6 +584,22 @@ mod tests {
             .collect()
     }
 
+    /// `got` equals `want` to the last bit, entry by entry.
+    fn assert_same_bits(want: &[Row], got: &[Row], case: &str) {
+        assert_eq!(want.len(), got.len(), "{case}");
+        for (i, (p, w)) in want.iter().zip(got).enumerate() {
+            for l in 0..W {
+                assert_eq!(
+                    p[l].to_bits(),
+                    w[l].to_bits(),
+                    "{case}: ({i}, {l}) {} against {}",
+                    w[l],
+                    p[l]
+                );
+            }
+        }
+    }
+
     #[test]
     #[cfg(target_arch = "x86_64")]
     fn the_avx512_kernel_equals_the_portable_one() {
@@ -604,17 +620,7 @@ mod tests {
                 unsafe {
                     mul_avx512(&flat, &rows(&x), &mut wide, add)
                 };
-                for (i, (p, w)) in portable.iter().zip(&wide).enumerate() {
-                    for l in 0..W {
-                        assert_eq!(
-                            p[l].to_bits(),
-                            w[l].to_bits(),
-                            "m = {m}, add = {add}: ({i}, {l}) {} against {}",
-                            w[l],
-                            p[l]
-                        );
-                    }
-                }
+                assert_same_bits(&portable, &wide, &format!("m = {m}, add = {add}"));
             }
         }
     }
@@ -642,17 +648,7 @@ mod tests {
                 let (rx, ry) = (rows(&x), rows(&y));
                 mul_n(&flat, [(&rx[..], &mut w1[..]), (&ry[..], &mut w2[..])], add);
                 for (want, got) in [(&p1, &w1), (&p2, &w2)] {
-                    for (i, (p, w)) in want.iter().zip(got.iter()).enumerate() {
-                        for l in 0..W {
-                            assert_eq!(
-                                p[l].to_bits(),
-                                w[l].to_bits(),
-                                "m = {m}, add = {add}: ({i}, {l}) {} against {}",
-                                w[l],
-                                p[l]
-                            );
-                        }
-                    }
+                    assert_same_bits(want, got, &format!("m = {m}, add = {add}"));
                 }
             }
         }
