@@ -116,7 +116,7 @@ use panel::Flat;
 
 use super::expm::expm;
 use super::modal::{BlockDiagonal, MAX_CONDITION, RealModal};
-use super::sip::{by_column_blocks, gauss_legendre, state_space_for};
+use super::sip::{MeanGrid, by_column_blocks, gauss_legendre, state_space_for};
 use super::{FloquetResult, StabilityError, StabilityMethod, all_finite, eigenvalues_checked};
 use crate::integrate::StateSpace;
 use crate::system::{NonlinearEval, PeriodicOrbit, System};
@@ -341,7 +341,13 @@ impl ExpSip {
             })?;
         let mut ws = space.workspace();
         let delta = period / n_k as f64;
-        let means = SparseMeans::sample(space, orbit, delta, n_k, nodes, weights, &mut ws);
+        let grid = MeanGrid {
+            delta,
+            intervals: n_k,
+            nodes,
+            weights,
+        };
+        let means = SparseMeans::sample(space, orbit, grid, &mut ws);
         // Orbit mean D̄ (the same for both products when extrapolating).
         let mut mean = ws.eval.clone();
         means.weighted_sum(1.0 / n_k as f64, &mut mean);

@@ -184,39 +184,45 @@ fn inf_norm_product(s: MatRef<'_, f64>, d: &[f64], c: usize) -> f64 {
     inf_norm((s * dm).as_ref())
 }
 
-/// Eq. 32: interval means of the time-varying part (the pointwise derivatives) over
-/// `intervals` intervals of length `delta`, by Gauss–Legendre with `nodes`/`weights` on
-/// [−1, 1]. The orbit is sampled sequentially (it need not be shareable between threads;
-/// that is the cheap part), the nonlinear derivatives at the samples are evaluated on the
-/// rayon threads.
+/// Where the interval means of Eq. 32 are taken: `intervals` intervals of length `delta`,
+/// each by Gauss–Legendre with `nodes`/`weights` on [−1, 1].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MeanGrid<'g> {
+    pub delta: f64,
+    pub intervals: usize,
+    pub nodes: &'g [f64],
+    pub weights: &'g [f64],
+}
+
+/// Eq. 32: interval means of the time-varying part (the pointwise derivatives) on `grid`.
+/// The orbit is sampled sequentially (it need not be shareable between threads; that is
+/// the cheap part), the nonlinear derivatives at the samples are evaluated on the rayon
+/// threads.
 pub(crate) fn interval_means(
     space: &StateSpace<'_>,
     orbit: &dyn PeriodicOrbit,
-    delta: f64,
-    intervals: usize,
-    nodes: &[f64],
-    weights: &[f64],
+    grid: MeanGrid<'_>,
     ws: &mut Workspace,
 ) -> Vec<NonlinearEval> {
-    interval_means_with(space, orbit, delta, intervals, nodes, weights, ws, |m| {
-        m.clone()
-    })
+    interval_means_with(space, orbit, grid, ws, |m| m.clone())
 }
 
 /// [`interval_means`] handing each interval's mean to `keep` as it is computed (in a
 /// buffer reused from interval to interval) and collecting what `keep` returns, in
 /// interval order.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn interval_means_with<T: Send>(
     space: &StateSpace<'_>,
     orbit: &dyn PeriodicOrbit,
-    delta: f64,
-    intervals: usize,
-    nodes: &[f64],
-    weights: &[f64],
+    grid: MeanGrid<'_>,
     ws: &mut Workspace,
     keep: impl Fn(&NonlinearEval) -> T + Sync,
 ) -> Vec<T> {
+    let MeanGrid {
+        delta,
+        intervals,
+        nodes,
+        weights,
+    } = grid;
     use rayon::prelude::*;
     let (n, m) = (space.n_mech(), space.n_therm());
     let width = 2 * n + m;
@@ -387,7 +393,13 @@ impl Sip {
         }
         let delta = period / intervals as f64;
 
-        let means = interval_means(&space, orbit, delta, intervals, nodes, weights, &mut ws);
+        let grid = MeanGrid {
+            delta,
+            intervals,
+            nodes,
+            weights,
+        };
+        let means = interval_means(&space, orbit, grid, &mut ws);
 
         let mut log_abs_det = None;
         let prod = if want_det {

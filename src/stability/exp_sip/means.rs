@@ -18,7 +18,7 @@
 use rayon::prelude::*;
 
 use crate::integrate::{StateSpace, Workspace};
-use crate::stability::sip::interval_means_with;
+use crate::stability::sip::{MeanGrid, interval_means_with};
 use crate::system::{NonlinearEval, PeriodicOrbit};
 
 /// Block numbers of the velocity derivatives `df_dv`, `dg_dv`
@@ -36,23 +36,17 @@ pub(crate) struct SparseMeans {
 }
 
 impl SparseMeans {
-    /// Samples the interval means on `intervals` intervals of length `delta` (Gauss
-    /// points `nodes`, `weights`), as [`crate::stability::sip::interval_means`] does.
-    #[allow(clippy::too_many_arguments)]
+    /// Samples the interval means on `grid`, as
+    /// [`crate::stability::sip::interval_means`] does.
     pub(crate) fn sample(
         space: &StateSpace<'_>,
         orbit: &dyn PeriodicOrbit,
-        delta: f64,
-        intervals: usize,
-        nodes: &[f64],
-        weights: &[f64],
+        grid: MeanGrid<'_>,
         ws: &mut Workspace,
     ) -> Self {
         let offsets = block_offsets(&ws.eval);
         // each interval's nonzeros as (flat position, value), in block order
-        let lists = interval_means_with(space, orbit, delta, intervals, nodes, weights, ws, |m| {
-            nonzero_list(m, &offsets)
-        });
+        let lists = interval_means_with(space, orbit, grid, ws, |m| nonzero_list(m, &offsets));
         Self::from_lists(space, &offsets, &lists)
     }
 
@@ -281,8 +275,14 @@ mod tests {
         let n_k = 64;
         let delta = period / n_k as f64;
         let mut ws = space.workspace();
-        let dense = interval_means(&space, &orbit, delta, n_k, nodes, weights, &mut ws);
-        let sparse = SparseMeans::sample(&space, &orbit, delta, n_k, nodes, weights, &mut ws);
+        let grid = MeanGrid {
+            delta,
+            intervals: n_k,
+            nodes,
+            weights,
+        };
+        let dense = interval_means(&space, &orbit, grid, &mut ws);
+        let sparse = SparseMeans::sample(&space, &orbit, grid, &mut ws);
         assert_eq!(sparse.len(), n_k);
         assert!(sparse.reads_velocity());
         let full: usize = dense[0].derivative_blocks().iter().map(|b| b.len()).sum();
