@@ -152,17 +152,19 @@ impl LabelBox {
     }
 }
 
-/// Which labels to draw, in order: each one unless it overlaps a label kept before it
-/// (where bifurcations crowd, their circles are all drawn but only the first of
-/// overlapping labels).
-fn labels_to_draw(boxes: &[LabelBox]) -> Vec<bool> {
+/// Where each label goes, in order: the index of the first of its candidate boxes that
+/// overlaps neither a label placed before it nor an obstacle (the markers' circles), or
+/// `None` (left out: where bifurcations crowd, every circle is drawn but not every label).
+fn place_labels(candidates: &[Vec<LabelBox>], obstacles: &[LabelBox]) -> Vec<Option<usize>> {
     let mut kept: Vec<LabelBox> = Vec::new();
-    boxes
+    candidates
         .iter()
-        .map(|b| {
-            let free = kept.iter().all(|k| !k.overlaps(b));
-            if free {
-                kept.push(*b);
+        .map(|boxes| {
+            let free = boxes
+                .iter()
+                .position(|b| kept.iter().chain(obstacles).all(|k| !k.overlaps(b)));
+            if let Some(i) = free {
+                kept.push(boxes[i]);
             }
             free
         })
@@ -356,36 +358,53 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
             .map(|m| Circle::new((m.x, m.y), 6, m.colour.stroke_width(2))),
     )?;
     if text {
-        // a label that would cover one already placed is left out (its circle stays)
+        // each label above right of its circle, else below right, above left, below
+        // left; one that would cover every way a label placed before it or another
+        // circle is left out (its circle stays)
         let font = (FONT, chart.font_px).into_font();
         let measure = TextStyle::from(font.clone());
-        let offset = (8, -(chart.font_px as i32) - 2);
-        let boxes: Vec<LabelBox> = chart
-            .markers
-            .iter()
-            .map(|m| {
-                let (px, py) = ctx.backend_coord(&(m.x, m.y));
-                let (w, h) = area
-                    .estimate_text_size(&m.label, &measure)
-                    .unwrap_or((0, chart.font_px));
-                LabelBox {
-                    x0: px + offset.0,
-                    y0: py + offset.1,
-                    x1: px + offset.0 + w as i32,
-                    y1: py + offset.1 + h as i32,
-                }
-            })
-            .collect();
-        let keep = labels_to_draw(&boxes);
+        let (gap, up) = (8, -(chart.font_px as i32) - 2);
+        let mut offsets = Vec::with_capacity(chart.markers.len());
+        let mut candidates = Vec::with_capacity(chart.markers.len());
+        let mut circles = Vec::with_capacity(chart.markers.len());
+        for m in &chart.markers {
+            let (px, py) = ctx.backend_coord(&(m.x, m.y));
+            let (w, h) = area
+                .estimate_text_size(&m.label, &measure)
+                .unwrap_or((0, chart.font_px));
+            let (w, h) = (w as i32, h as i32);
+            let corners = [(gap, up), (gap, 4), (-gap - w, up), (-gap - w, 4)];
+            candidates.push(
+                corners
+                    .iter()
+                    .map(|&(dx, dy)| LabelBox {
+                        x0: px + dx,
+                        y0: py + dy,
+                        x1: px + dx + w,
+                        y1: py + dy + h,
+                    })
+                    .collect::<Vec<_>>(),
+            );
+            offsets.push(corners);
+            circles.push(LabelBox {
+                x0: px - 7,
+                y0: py - 7,
+                x1: px + 7,
+                y1: py + 7,
+            });
+        }
+        let placed = place_labels(&candidates, &circles);
         ctx.draw_series(
             chart
                 .markers
                 .iter()
-                .zip(keep)
-                .filter(|(_, k)| *k)
-                .map(|(m, _)| {
-                    EmptyElement::at((m.x, m.y))
-                        + Text::new(m.label.clone(), offset, font.color(&m.colour))
+                .zip(placed.iter().zip(&offsets))
+                .filter_map(|(m, (at, corners))| {
+                    let offset = corners[(*at)?];
+                    Some(
+                        EmptyElement::at((m.x, m.y))
+                            + Text::new(m.label.clone(), offset, font.color(&m.colour)),
+                    )
                 }),
         )?;
         if categories {
@@ -591,19 +610,37 @@ pub fn render_png(
 
 #[cfg(test)]
 mod tests {
-    use super::{LabelBox, labels_to_draw};
+    use super::{LabelBox, place_labels};
 
     #[test]
-    fn overlapping_labels_after_the_first_are_left_out() {
+    fn labels_take_the_first_free_place_or_are_left_out() {
         let b = |x0, y0| LabelBox {
             x0,
             y0,
             x1: x0 + 40,
             y1: y0 + 12,
         };
-        // the second overlaps the first; the third touches the first's edge only; the
-        // fourth overlaps the third; the fifth overlaps only the second, which was left out
-        let boxes = [b(0, 0), b(30, 5), b(40, 0), b(70, 11), b(30, 16)];
-        assert_eq!(labels_to_draw(&boxes), vec![true, false, true, false, true]);
+        let candidates = [
+            vec![b(0, 0)],
+            // the first place overlaps the first label: the second
+            vec![b(10, 5), b(10, 30)],
+            // both places overlap a label placed before: left out
+            vec![b(5, 0), b(5, 28)],
+            // touches the first label's edge only
+            vec![b(40, 0)],
+        ];
+        assert_eq!(
+            place_labels(&candidates, &[]),
+            vec![Some(0), Some(1), None, Some(0)]
+        );
+        let two = |x0, y0| vec![b(x0, y0), b(x0, y0 + 20)];
+        // an obstacle (another marker's circle) counts as well
+        let circle = LabelBox {
+            x0: 5,
+            y0: 2,
+            x1: 10,
+            y1: 8,
+        };
+        assert_eq!(place_labels(&[two(0, 0)], &[circle]), vec![Some(1)]);
     }
 }
