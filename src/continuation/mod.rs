@@ -132,6 +132,15 @@ const CROSSING_MODULUS_TOL: f64 = 0.02;
 /// to 15 trials) found no trial nearer the circle.
 const JUMP_BRACKET_FRACTION: f64 = 1.0 / 64.0;
 
+/// Trials without coming nearer the circle after which a search whose bracket straddles
+/// the circle, and has narrowed as in [`JUMP_BRACKET_FRACTION`], ends as a jump. Why: on
+/// the default sweep the Neimark–Sacker count changes at 589.52 rad/s, next to a fold,
+/// where a pair at modulus 1.11 turns into two real multipliers, one at 0.58; the search
+/// alternated between the two sides at 0.10–0.16 and −0.42 from the circle for eleven
+/// trials (0.38 s) and reported nothing. Two trials: the crossings' secant and regula
+/// falsi trials come nearer every time (unit tests below).
+const JUMP_STALLED_TRIALS: usize = 2;
+
 /// Smallest distance of a secant trial from the bracket's ends, as a fraction of its
 /// width ([`Bracket::secant_trial`]): the latest trial is usually an end, and once it is
 /// nearly there the zero lies next to it (on the default sweep's period doubling at
@@ -965,12 +974,29 @@ impl CrossingSearch {
 
     /// Whether the search has closed in on a jump of the count rather than a crossing (see
     /// [`JUMP_BRACKET_FRACTION`]): the bracket has narrowed on the change while the
-    /// multiplier stays on one side of the circle, far from it, at both ends.
+    /// multiplier stays far from the circle at both ends, either on one side of it, or on
+    /// both sides with the last [`JUMP_STALLED_TRIALS`] trials no nearer the circle than
+    /// the best before them (a count that jumps across the circle: a pair outside turns
+    /// into two real multipliers, one inside; a continuous crossing, however steep, brings
+    /// every secant or regula falsi trial nearer).
     fn closed_on_a_jump(&self) -> bool {
         let g = self.end_g;
         self.bracket.width() < self.span * JUMP_BRACKET_FRACTION
-            && g[0].signum() == g[1].signum()
             && g[0].abs().min(g[1].abs()) > CROSSING_MODULUS_TOL
+            && (g[0].signum() == g[1].signum() || self.stalled())
+    }
+
+    /// Whether the last [`JUMP_STALLED_TRIALS`] trials came no nearer zero than the
+    /// nearest before them.
+    fn stalled(&self) -> bool {
+        let n = self.trials.len();
+        if n <= JUMP_STALLED_TRIALS {
+            return false;
+        }
+        let nearest =
+            |t: &[(f64, f64)]| t.iter().map(|(_, g)| g.abs()).fold(f64::INFINITY, f64::min);
+        let (before, last) = self.trials.split_at(n - JUMP_STALLED_TRIALS);
+        nearest(last) >= nearest(before)
     }
 }
 
@@ -2122,7 +2148,15 @@ mod tests {
             0.0,
         );
         assert!(to_tolerance.len() <= 8);
-        for slope in [0.5, 5.0, 50.0] {
+        // a count that jumps across the circle (0.11 outside on one side, 0.42 inside on
+        // the other, as at 589.52 rad/s on the default sweep) ends as early, far from it
+        for jump in [0.0682, 0.01, 0.14] {
+            let g = |s: f64| if s < jump { 0.11 } else { -0.42 };
+            let trials = bracket_search(0.15, g, |s| s < jump, true, 1e-4);
+            assert!(trials.len() <= 10, "{} trials: {trials:?}", trials.len());
+            assert!(trials.iter().all(|t| t.1.abs() > 0.1), "{trials:?}");
+        }
+        for slope in [0.5, 5.0, 50.0, 500.0] {
             let g = |s: f64| slope * (s - 0.07);
             let t = bracket_search(0.15, g, |s| g(s) < 0.0, true, 1e-4);
             assert!(
