@@ -635,6 +635,15 @@ fn campaign_command_writes_figures_unless_told_not_to() {
         "{stdout}"
     );
     assert!(out.join("figures/clearance_variation.png").exists());
+    // the closing line: the runs, the wall time and (on Linux) the CPU time
+    let last = stdout.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("campaign: 2/2 runs completed (2 before), ") && last.contains(" in "),
+        "{stdout}"
+    );
+    if cfg!(target_os = "linux") {
+        assert!(last.contains("% of one core"), "{last}");
+    }
 
     // `campaign plot` with its options; a missing directory is an error naming the file.
     let figs = dir.path().join("plots");

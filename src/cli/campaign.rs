@@ -134,6 +134,7 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
     if args.dry_run {
         return dry_run(file, shard, out);
     }
+    let (start, cpu_start) = (Instant::now(), super::process_cpu_seconds());
     let display = Display::new(args.quiet);
     let progress = |e: campaign::Event<'_>| display.show(e);
     let interrupt = install_interrupt_flag().ok();
@@ -149,6 +150,15 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
     if !args.no_figures {
         figures(&manifest, file, shard.is_some(), out)?;
     }
+    let cpu = super::process_cpu_seconds()
+        .zip(cpu_start)
+        .map(|(now, then)| now - then);
+    writeln!(
+        out,
+        "campaign: {} {}",
+        display.summary(),
+        super::time_and_cpu(start.elapsed().as_secs_f64(), cpu)
+    )?;
     let stopped = interrupt.is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed));
     let unfinished: Vec<&str> = manifest
         .runs
@@ -480,6 +490,11 @@ impl Display {
                 .set_position((t.fraction() * 1000.0).round() as u64);
             b.overall.set_message(t.summary());
         }
+    }
+
+    /// The campaign so far, as on its bar: runs completed, points, bifurcations.
+    fn summary(&self) -> String {
+        self.state.lock().map(|t| t.summary()).unwrap_or_default()
     }
 
     /// Takes the bars off the terminal (the table of runs follows).
