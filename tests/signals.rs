@@ -1,7 +1,7 @@
 //! A sweep stopped by Ctrl-C (SIGINT) or by a termination signal (SIGTERM: what a cluster
 //! scheduler sends at a job's time limit) ends cleanly: a complete recording of the points
 //! computed so far with status `interrupted`, and exit status 130 so that scripts and
-//! schedulers see the work is not complete.
+//! schedulers see the work is not complete. A sweep that finishes says what it took.
 #![cfg(unix)]
 
 use std::process::{Command, Stdio};
@@ -68,4 +68,44 @@ fn sigterm_stops_a_sweep_with_a_complete_recording() {
 #[test]
 fn sigint_stops_a_sweep_with_a_complete_recording() {
     stopped_by("-INT");
+}
+
+/// The sweep's summary as a process: the points and time, the time line, and (on Linux)
+/// the CPU time with its share of one core.
+#[test]
+fn a_finished_sweep_reports_its_time_and_cpu() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("short.mcap");
+    let run = Command::new(BIN)
+        .args([
+            "sweep",
+            "--omega",
+            "300:310",
+            "--order",
+            "1",
+            "--no-thermal",
+            "-q",
+        ])
+        .arg("--output")
+        .arg(&out)
+        .output()
+        .expect("the sweep runs");
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    assert!(
+        run.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert!(
+        lines[0].contains(" points in ") && lines[0].contains("(Completed)"),
+        "{stdout}"
+    );
+    assert!(lines[1].starts_with("  time: corrector "), "{stdout}");
+    if cfg!(target_os = "linux") {
+        assert!(
+            lines[2].starts_with("  CPU ") && lines[2].contains("% of one core"),
+            "{stdout}"
+        );
+    }
 }

@@ -70,7 +70,7 @@ fn cpu_seconds_of_stat(stat: &str) -> Option<f64> {
     Some((utime + stime) as f64 / USER_HZ)
 }
 
-/// `"… in 1 min 24 s; CPU 164 s, 194 % of one core (2 cores)"`: the wall time and, where
+/// `"in 1 min 14 s; CPU 142 s, 191 % of one core (2 cores)"`: the wall time and, where
 /// known, the CPU time of a long command, for its closing line.
 pub fn time_and_cpu(wall_s: f64, cpu_s: Option<f64>) -> String {
     let wall = if wall_s >= 60.0 {
@@ -78,20 +78,27 @@ pub fn time_and_cpu(wall_s: f64, cpu_s: Option<f64>) -> String {
     } else {
         format!("{wall_s:.1} s")
     };
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    match cpu_s {
-        Some(cpu) if wall_s > 0.0 => format!(
-            "in {wall}; CPU {} s, {:.0} % of one core ({cores} core{})",
-            if cpu < 100.0 {
-                format!("{cpu:.1}")
-            } else {
-                format!("{cpu:.0}")
-            },
-            100.0 * cpu / wall_s,
-            if cores == 1 { "" } else { "s" }
-        ),
-        _ => format!("in {wall}"),
+    match cpu_share(wall_s, cpu_s) {
+        Some(cpu) => format!("in {wall}; {cpu}"),
+        None => format!("in {wall}"),
     }
+}
+
+/// `"CPU 142 s, 191 % of one core (2 cores)"` for `cpu_s` seconds of CPU over `wall_s` of
+/// wall time; `None` without a CPU time (or wall time).
+pub fn cpu_share(wall_s: f64, cpu_s: Option<f64>) -> Option<String> {
+    let cpu = cpu_s.filter(|_| wall_s > 0.0)?;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    Some(format!(
+        "CPU {} s, {:.0} % of one core ({cores} core{})",
+        if cpu < 100.0 {
+            format!("{cpu:.1}")
+        } else {
+            format!("{cpu:.0}")
+        },
+        100.0 * cpu / wall_s,
+        if cores == 1 { "" } else { "s" }
+    ))
 }
 
 /// A sweep or campaign stopped by Ctrl-C or a termination signal (SIGTERM, SIGHUP: a

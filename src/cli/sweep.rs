@@ -177,6 +177,7 @@ pub fn parse_range(option: &str, r: &str) -> anyhow::Result<(f64, f64)> {
 
 /// Runs the sweep and prints a summary.
 pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
+    let cpu_start = super::process_cpu_seconds();
     let settings = args.settings()?;
     let problem = SweepProblem::new(&settings)?;
     let mut sink = McapSink::create(&args.output, McapOptions::default())?;
@@ -233,6 +234,12 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         args.output.display()
     )?;
     writeln!(out, "  time: {}", report.time_summary())?;
+    let cpu = super::process_cpu_seconds()
+        .zip(cpu_start)
+        .map(|(now, then)| now - then);
+    if let Some(share) = super::cpu_share(report.total_seconds, cpu) {
+        writeln!(out, "  {share}")?;
+    }
     if let Some(from) = report.lead_in_from {
         writeln!(
             out,
