@@ -17,7 +17,7 @@ fn main() -> std::process::ExitCode {
                 std::process::ExitCode::from(tmrotor::cli::INTERRUPTED_EXIT)
             }
             None => {
-                eprintln!("error: {err:#}");
+                eprintln!("error: {}", tmrotor::cli::error_text(&err));
                 std::process::ExitCode::from(1)
             }
         },

@@ -48,6 +48,22 @@ pub enum Command {
     Truncation(truncation::TruncationArgs),
 }
 
+/// An error with its causes, as `{:#}` prints it, but without a cause whose text the
+/// message already holds: several of the crate's errors name their I/O error in their own
+/// message and also keep it as the source, which printed it twice ("cannot read f.mcap: No
+/// such file or directory (os error 2): No such file or directory (os error 2)").
+pub fn error_text(err: &anyhow::Error) -> String {
+    let mut text = err.to_string();
+    for cause in err.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text.push_str(": ");
+            text.push_str(&cause);
+        }
+    }
+    text
+}
+
 /// CPU time (user and system) this process has used so far, seconds, where the system
 /// tells it (Linux: `/proc/self/stat`); `None` elsewhere.
 pub fn process_cpu_seconds() -> Option<f64> {
@@ -140,7 +156,34 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::{cpu_seconds_of_stat, process_cpu_seconds, time_and_cpu};
+    use super::{cpu_seconds_of_stat, error_text, process_cpu_seconds, time_and_cpu};
+
+    #[derive(Debug, thiserror::Error)]
+    #[error("cannot read {path}: {source}")]
+    struct Named {
+        path: String,
+        source: std::io::Error,
+    }
+
+    #[test]
+    fn an_error_names_each_cause_once() {
+        let io = || std::io::Error::new(std::io::ErrorKind::NotFound, "no such file");
+        let named = anyhow::Error::new(Named {
+            path: "f.mcap".into(),
+            source: io(),
+        });
+        assert_eq!(
+            format!("{named:#}"),
+            "cannot read f.mcap: no such file: no such file"
+        );
+        assert_eq!(error_text(&named), "cannot read f.mcap: no such file");
+        // a context whose message does not hold the cause keeps it
+        let ctx = anyhow::Error::new(io()).context("sweep failed; the points so far are in x");
+        assert_eq!(
+            error_text(&ctx),
+            "sweep failed; the points so far are in x: no such file"
+        );
+    }
 
     #[test]
     fn cpu_time_is_read_after_the_command_name() {

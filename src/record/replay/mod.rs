@@ -155,11 +155,11 @@ pub fn main() -> ExitCode {
     match run(cli, &mut out, &mut err) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<NotAvailable>().is_some() => {
-            eprintln!("replay: {e:#}");
+            eprintln!("replay: {}", crate::cli::error_text(&e));
             ExitCode::from(2)
         }
         Err(e) => {
-            eprintln!("replay: error: {e:#}");
+            eprintln!("replay: error: {}", crate::cli::error_text(&e));
             ExitCode::from(1)
         }
     }
