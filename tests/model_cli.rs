@@ -165,6 +165,65 @@ fn model_check_as_a_process() {
     );
 }
 
+/// `model check` also runs the thermal layer's checks: a wrong value in the `[thermal]`
+/// table is named by its field path (the table is re-read from the parsed file, so a line
+/// number would be the wrong one), and a good table is summarised.
+#[test]
+fn model_check_checks_the_thermal_table() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let check = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).expect("write");
+        Process::new(BIN)
+            .args(["model", "check"])
+            .arg(&path)
+            .output()
+            .expect("runs")
+    };
+    let good = check("good.toml", BUILTIN_TOML.to_string());
+    assert!(good.status.success());
+    let stdout = String::from_utf8_lossy(&good.stdout);
+    assert!(
+        stdout.contains("thermal:  66 nodes, 4 bearings; flow 2 L/min"),
+        "{stdout}"
+    );
+    let first_shaft = "length_m = 12e-3\nnodes = [1]";
+    assert!(BUILTIN_TOML.contains("length_m = 12e-3\nnodes = [1]"));
+    for (name, from, to, path, reason) in [
+        (
+            "type.toml",
+            "n_nodes = 66",
+            "n_nodes = \"66\"",
+            "thermal.n_nodes",
+            "invalid type",
+        ),
+        (
+            "nested.toml",
+            first_shaft,
+            "length_m = \"12 mm\"\nnodes = [1]",
+            "thermal.shafts[0].length_m",
+            "invalid type",
+        ),
+        (
+            "range.toml",
+            "flow_l_min = 2.0",
+            "flow_l_min = -2.0",
+            "thermal.flow_l_min",
+            "-2",
+        ),
+    ] {
+        assert!(BUILTIN_TOML.contains(from), "{from}");
+        let out = check(name, BUILTIN_TOML.replacen(from, to, 1));
+        assert_eq!(out.status.code(), Some(1), "{name}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(name) && err.contains(path) && err.contains(reason),
+            "{name}: {err}"
+        );
+        assert!(!err.contains("line "), "{name}: {err}");
+    }
+}
+
 #[test]
 fn modes_and_campbell_as_a_process() {
     let out = Process::new(BIN)

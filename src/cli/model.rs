@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use clap::Subcommand;
 
 use crate::model::{Assembly, BUILTIN_TOML, Model};
+use crate::thermal::{ThermalNetwork, ThermalSpec};
 
 /// Model-file commands.
 #[derive(Debug, Subcommand)]
@@ -35,6 +36,16 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
         ModelCommand::Check { file } => {
             let model = Model::from_file(file)?;
             let asm = Assembly::new(&model)?;
+            // the thermal layer's own checks: the table's fields and ranges, then the
+            // network it describes
+            let thermal = match model.thermal() {
+                Some(table) => {
+                    let spec = ThermalSpec::from_table(table, &model.source)?;
+                    ThermalNetwork::new(&spec)?;
+                    Some(spec)
+                }
+                None => None,
+            };
             let spec = &model.spec;
             let rotors: Vec<String> = spec
                 .rotors
@@ -81,10 +92,15 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
                     b.stiffness_n_m[1][1]
                 )?;
             }
-            if model.thermal().is_some() {
+            if let Some(t) = thermal {
                 writeln!(
                     out,
-                    "  thermal:  [thermal] table present (checked by the thermal layer)"
+                    "  thermal:  {} nodes, {} bearings; flow {} L/min, cooling {} °C, ambient {} °C",
+                    t.n_nodes,
+                    t.bearings.len(),
+                    t.flow_l_min,
+                    t.cooling_temp_c,
+                    t.ambient_temp_c
                 )?;
             }
         }

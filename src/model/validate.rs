@@ -188,7 +188,7 @@ pub fn parse_ratio(spec: &SpeedRatioSpec) -> Result<Ratio, InvalidKind> {
 
 /// Line (1-based) and field path (`disks[1].mass_kg`) of a byte offset in TOML text,
 /// found from the table headers above it and the key on its line.
-fn path_at(text: &str, offset: usize) -> (usize, String) {
+pub(crate) fn path_at(text: &str, offset: usize) -> (usize, String) {
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     let mut current = String::new();
     let mut pos = 0;

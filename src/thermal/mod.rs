@@ -69,8 +69,9 @@ pub use spec::ThermalSpec;
 #[derive(Debug, thiserror::Error)]
 pub enum ThermalError {
     /// The `[thermal]` table could not be deserialized (unknown or missing field, wrong
-    /// type).
-    #[error("{file}: [thermal]: {message}")]
+    /// type); `message` says where (`thermal.shafts[3].length_m: …`, or `[thermal]: …`
+    /// with the line where the text is the file's) and why.
+    #[error("{file}: {message}")]
     Parse { file: String, message: String },
     /// A value is out of range or inconsistent.
     #[error("{file}: {path}: {reason}")]

@@ -210,19 +210,42 @@ fn finite(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
 
 impl ThermalSpec {
     /// Parses the contents of a `[thermal]` table; `file` names the source in errors.
+    ///
+    /// The table comes out of the model file already parsed, so a value it cannot take is
+    /// named by its field path (`thermal.shafts[3].length_m`), not by a line: a line of
+    /// the table written out again here would not be the file's.
     pub fn from_table(table: &toml::Table, file: &str) -> Result<Self, ThermalError> {
         let text = toml::to_string(table).map_err(|e| ThermalError::Parse {
             file: file.to_string(),
-            message: e.to_string(),
+            message: format!("[thermal]: {e}"),
         })?;
-        Self::from_toml_str(&text, file)
+        Self::parse(&text, file, false)
     }
 
     /// Parses the text of a `[thermal]` table body and validates it.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Self, ThermalError> {
-        let spec: ThermalSpec = toml::from_str(text).map_err(|e| ThermalError::Parse {
-            file: file.to_string(),
-            message: e.to_string().trim_end().to_string(),
+        Self::parse(text, file, true)
+    }
+
+    /// [`Self::from_toml_str`]; `lines`: the text's lines are the file's, and a syntax
+    /// error keeps its position.
+    fn parse(text: &str, file: &str, lines: bool) -> Result<Self, ThermalError> {
+        let spec: ThermalSpec = toml::from_str(text).map_err(|e| {
+            let message = e.message().trim_end();
+            let field = e
+                .span()
+                .filter(|_| !message.starts_with("missing field"))
+                .map(|span| crate::model::validate::path_at(text, span.start).1)
+                .filter(|p| !p.is_empty());
+            let message = match field {
+                Some(path) if !lines => format!("thermal.{path}: {message}"),
+                _ if !lines => format!("[thermal]: {message}"),
+                _ => format!("[thermal]: {}", e.to_string().trim_end()),
+            };
+            ThermalError::Parse {
+                file: file.to_string(),
+                message,
+            }
         })?;
         spec.validate(file)?;
         Ok(spec)
