@@ -141,6 +141,15 @@ fn stability_reports_largest_deviation_or_says_it_is_unavailable() {
     let rec = read_recording(&path).expect("read");
     let c = stability::compare(&rec, &Perturbed(1e-7)).expect("compare");
     assert_eq!(c.compared, rec.points.len());
+    // the progress is told after every point, with the number to do
+    let mut told = Vec::new();
+    let again = stability::compare_with(&rec, &Perturbed(1e-7), |done, total| {
+        told.push((done, total))
+    })
+    .expect("compare");
+    assert_eq!(again, c);
+    let n = rec.points.len();
+    assert_eq!(told, (1..=n).map(|k| (k, n)).collect::<Vec<_>>());
     let (dev, _) = c.max_deviation.expect("deviation");
     assert!((dev - 1e-7).abs() < 1e-12, "{dev}");
     assert!(c.flag_changes.is_empty());

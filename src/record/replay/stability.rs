@@ -24,6 +24,20 @@ pub fn compare(
     rec: &Recording,
     method: &dyn StabilityRederive,
 ) -> anyhow::Result<StabilityComparison> {
+    compare_with(rec, method, |_, _| {})
+}
+
+/// [`compare`], telling `progress(done, total)` after each point.
+pub fn compare_with(
+    rec: &Recording,
+    method: &dyn StabilityRederive,
+    mut progress: impl FnMut(usize, usize),
+) -> anyhow::Result<StabilityComparison> {
+    let total = rec
+        .points
+        .iter()
+        .filter(|p| !p.multipliers.is_empty())
+        .count();
     let mut result = StabilityComparison {
         compared: 0,
         max_deviation: None,
@@ -40,6 +54,7 @@ pub fn compare(
             )
         })?;
         result.compared += 1;
+        progress(result.compared, total);
         if result.max_deviation.is_none_or(|(d, _)| dev > d) {
             result.max_deviation = Some((dev, p.index));
         }
@@ -92,7 +107,7 @@ pub fn run(
             }
         }
     };
-    let c = compare(rec, method)?;
+    let c = with_progress(|progress| compare_with(rec, method, progress))?;
     if let Some(n) = sip_intervals {
         writeln!(out, "recomputed with sip_intervals = {n}")?;
     }
@@ -110,4 +125,35 @@ pub fn run(
         writeln!(out, "stable flag differs at points: {:?}", c.flag_changes)?;
     }
     Ok(())
+}
+
+/// Runs `work` with a progress report of its points: a bar on a terminal, else (a log
+/// file) a line every [`crate::cli::LOG_EVERY`]; an audit on a finer product takes about
+/// a second a point.
+fn with_progress<T>(work: impl FnOnce(&mut dyn FnMut(usize, usize)) -> T) -> T {
+    use std::io::IsTerminal;
+    let bar = indicatif::ProgressBar::new(0);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{elapsed_precise} [{bar:30}] {pos}/{len} points recomputed",
+        )
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> "),
+    );
+    let log = !std::io::stderr().is_terminal();
+    let start = std::time::Instant::now();
+    let mut last = start;
+    let out = work(&mut |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+        if log && last.elapsed() >= crate::cli::LOG_EVERY {
+            last = std::time::Instant::now();
+            eprintln!(
+                "replay stability: {done}/{total} points recomputed after {:.0} s",
+                start.elapsed().as_secs_f64()
+            );
+        }
+    });
+    bar.finish_and_clear();
+    out
 }
