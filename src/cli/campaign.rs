@@ -150,9 +150,7 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
     if !args.no_figures {
         figures(&manifest, file, shard.is_some(), out)?;
     }
-    let cpu = super::process_cpu_seconds()
-        .zip(cpu_start)
-        .map(|(now, then)| now - then);
+    let cpu = super::cpu_seconds_since(cpu_start);
     writeln!(
         out,
         "campaign: {} {}",

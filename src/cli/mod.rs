@@ -71,6 +71,14 @@ pub fn process_cpu_seconds() -> Option<f64> {
     cpu_seconds_of_stat(&stat)
 }
 
+/// CPU time used since `start` (an earlier [`process_cpu_seconds`]), seconds; `None` where
+/// either reading is missing.
+pub fn cpu_seconds_since(start: Option<f64>) -> Option<f64> {
+    process_cpu_seconds()
+        .zip(start)
+        .map(|(now, then)| now - then)
+}
+
 /// Clock ticks per second of the times in `/proc/PID/stat` (`USER_HZ`): fixed at 100 by
 /// the Linux ABI on x86-64 and aarch64, whatever the kernel's own tick rate.
 const USER_HZ: f64 = 100.0;

@@ -234,9 +234,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         args.output.display()
     )?;
     writeln!(out, "  time: {}", report.time_summary())?;
-    let cpu = super::process_cpu_seconds()
-        .zip(cpu_start)
-        .map(|(now, then)| now - then);
+    let cpu = super::cpu_seconds_since(cpu_start);
     if let Some(share) = super::cpu_share(report.total_seconds, cpu) {
         writeln!(out, "  {share}")?;
     }

@@ -231,16 +231,20 @@ impl ThermalSpec {
     /// error keeps its position.
     fn parse(text: &str, file: &str, lines: bool) -> Result<Self, ThermalError> {
         let spec: ThermalSpec = toml::from_str(text).map_err(|e| {
-            let message = e.message().trim_end();
-            let field = e
-                .span()
-                .filter(|_| !message.starts_with("missing field"))
-                .map(|span| crate::model::validate::path_at(text, span.start).1)
-                .filter(|p| !p.is_empty());
-            let message = match field {
-                Some(path) if !lines => format!("thermal.{path}: {message}"),
-                _ if !lines => format!("[thermal]: {message}"),
-                _ => format!("[thermal]: {}", e.to_string().trim_end()),
+            let message = if lines {
+                format!("[thermal]: {}", e.to_string().trim_end())
+            } else {
+                let reason = e.message().trim_end();
+                // a missing field's span is its table's, not a key's
+                let field = e
+                    .span()
+                    .filter(|_| !reason.starts_with("missing field"))
+                    .map(|span| crate::model::validate::path_at(text, span.start).1)
+                    .filter(|p| !p.is_empty());
+                match field {
+                    Some(path) => format!("thermal.{path}: {reason}"),
+                    None => format!("[thermal]: {reason}"),
+                }
             };
             ThermalError::Parse {
                 file: file.to_string(),
