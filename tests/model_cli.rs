@@ -187,7 +187,7 @@ fn model_check_checks_the_thermal_table() {
         stdout.contains("thermal:  66 nodes, 4 bearings; flow 2 L/min"),
         "{stdout}"
     );
-    // the thermal table's first shaft (the mechanical shafts have no `nodes` list)
+    // the thermal table's first shaft (a one-node list; the mechanical shafts name two)
     let first_shaft = "length_m = 12e-3\nnodes = [1]";
     for (name, from, to, path, reason) in [
         (
