@@ -64,3 +64,24 @@ pub mod truncation;
 pub fn sequential_dense_kernels() {
     faer::set_global_parallelism(faer::Par::Seq);
 }
+
+/// `mi_option_purge_delay` in mimalloc's `mi_option_e` (`include/mimalloc.h`, v2 and v3);
+/// the sys crate does not name it.
+const MI_OPTION_PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
+
+/// Tells the allocator (mimalloc, the binaries' global allocator) to keep freed memory
+/// instead of returning it to the system after a delay; the binaries call it first thing,
+/// before any thread starts (the option is not thread safe).
+///
+/// Why: a point's matrices are freed and allocated again at every point, and memory given
+/// back between points comes back as fresh pages to be faulted in and zeroed. Measured on
+/// the default sweep (2 cores): 59 000 and 48 000 minor page faults and 0.97 / 0.74 s of
+/// system time by default, 730 faults and 0.45–0.52 s with purging off; the peak resident
+/// memory stayed at 130–160 MB either way.
+pub fn keep_freed_memory() {
+    // SAFETY: a plain store into mimalloc's option table, made before other threads exist.
+    #[allow(unsafe_code)]
+    unsafe {
+        libmimalloc_sys::mi_option_set(MI_OPTION_PURGE_DELAY, -1)
+    }
+}

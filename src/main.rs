@@ -7,6 +7,7 @@ use clap::Parser;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> std::process::ExitCode {
+    tmrotor::keep_freed_memory();
     tmrotor::sequential_dense_kernels();
     let cli = tmrotor::cli::Cli::parse();
     match tmrotor::cli::run(cli) {

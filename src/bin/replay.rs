@@ -6,6 +6,7 @@
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn main() -> std::process::ExitCode {
+    tmrotor::keep_freed_memory();
     tmrotor::sequential_dense_kernels();
     tmrotor::record::replay::main()
 }
