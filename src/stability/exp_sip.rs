@@ -165,7 +165,7 @@ pub struct ExpSip {
     /// kernels on column blocks: the same arithmetic in another order (the monodromy
     /// matrices agree to rounding, test
     /// `panels_equal_the_column_blocks_on_the_dual_rotor`). Default `true`: see the
-    /// README's speed section.
+    /// `docs/speed-history.md`, "Two versions back".
     pub panels: bool,
 }
 
