@@ -362,10 +362,7 @@ impl Display {
         let terminal = std::io::stderr().is_terminal();
         let bars = (!quiet && terminal).then(|| {
             let multi = MultiProgress::new();
-            let style =
-                ProgressStyle::with_template("{prefix:>10} {elapsed_precise} [{bar:25}] {msg}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar())
-                    .progress_chars("=> ");
+            let style = super::bar_style("{prefix:>10} {elapsed_precise} [{bar:25}] {msg}");
             let overall = multi.add(ProgressBar::new(1000));
             overall.set_style(style.clone());
             overall.set_prefix("campaign");

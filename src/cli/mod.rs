@@ -16,6 +16,14 @@ use clap::{Parser, Subcommand};
 /// short (a default sweep writes one line, a paper campaign about seven).
 pub const LOG_EVERY: std::time::Duration = std::time::Duration::from_secs(15);
 
+/// The progress bars' style: `template` (indicatif's), drawn with `=>`; the default bar if
+/// the template does not parse.
+pub fn bar_style(template: &str) -> indicatif::ProgressStyle {
+    indicatif::ProgressStyle::with_template(template)
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> ")
+}
+
 /// Nonlinear thermo-mechanical rotor dynamics: harmonic balance, continuation, Floquet
 /// stability, MCAP recordings.
 #[derive(Debug, Parser)]

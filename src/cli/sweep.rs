@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 
 use crate::record::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::{McapOptions, McapSink, install_interrupt_flag};
@@ -186,11 +186,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new(1000);
-        b.set_style(
-            ProgressStyle::with_template("{elapsed_precise} [{bar:30}] ω {msg}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
+        b.set_style(super::bar_style("{elapsed_precise} [{bar:30}] ω {msg}"));
         b
     };
     // not on a terminal (a log file, a cluster job's output): plain lines instead of a bar

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 
 use super::sweep::{StudyArgs, parse_range};
 use crate::sweep::StudySettings;
@@ -131,11 +131,7 @@ pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Resu
         ProgressBar::hidden()
     } else {
         let b = ProgressBar::new(1000);
-        b.set_style(
-            ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {msg}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
-        );
+        b.set_style(super::bar_style("{elapsed_precise} [{bar:30}] {msg}"));
         b
     };
     let say = |line: String| {

@@ -164,7 +164,7 @@ pub struct ExpSip {
     /// columns stored by rows, with the crate's own kernels, instead of the general matrix
     /// kernels on column blocks: the same arithmetic in another order (the monodromy
     /// matrices agree to rounding, test
-    /// `panels_equal_the_column_blocks_on_the_dual_rotor`). Default `true`: see the
+    /// `panels_equal_the_column_blocks_on_the_dual_rotor`). Default `true`: see
     /// `docs/speed-history.md`, "Two versions back".
     pub panels: bool,
 }

@@ -133,13 +133,9 @@ pub fn run(
 fn with_progress<T>(work: impl FnOnce(&mut dyn FnMut(usize, usize)) -> T) -> T {
     use std::io::IsTerminal;
     let bar = indicatif::ProgressBar::new(0);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} points recomputed",
-        )
-        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
+    bar.set_style(crate::cli::bar_style(
+        "{elapsed_precise} [{bar:30}] {pos}/{len} points recomputed",
+    ));
     let log = !std::io::stderr().is_terminal();
     let start = std::time::Instant::now();
     let mut last = start;
