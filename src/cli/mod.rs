@@ -106,7 +106,9 @@ fn cpu_seconds_of_stat(stat: &str) -> Option<f64> {
 /// known, the CPU time of a long command, for its closing line.
 pub fn time_and_cpu(wall_s: f64, cpu_s: Option<f64>) -> String {
     let wall = if wall_s >= 60.0 {
-        format!("{} min {:.0} s", (wall_s / 60.0).floor(), wall_s % 60.0)
+        // whole seconds first, so that 119.7 s reads 2 min 0 s, not 1 min 60 s
+        let s = wall_s.round() as u64;
+        format!("{} min {} s", s / 60, s % 60)
     } else {
         format!("{wall_s:.1} s")
     };
@@ -233,6 +235,7 @@ mod tests {
             "{line}"
         );
         assert_eq!(time_and_cpu(12.34, None), "in 12.3 s");
+        assert_eq!(time_and_cpu(119.7, None), "in 2 min 0 s");
         assert!(time_and_cpu(2.0, Some(3.52)).starts_with("in 2.0 s; CPU 3.5 s, 176 %"));
     }
 }
