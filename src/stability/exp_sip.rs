@@ -108,9 +108,11 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 use num_complex::Complex64;
 
+mod kick_basis;
 mod means;
 mod panel;
 
+use kick_basis::KickBasis;
 use means::SparseMeans;
 use panel::Flat;
 
@@ -167,6 +169,15 @@ pub struct ExpSip {
     /// `panels_equal_the_column_blocks_on_the_dual_rotor`). Default `true`: see
     /// `docs/speed-history.md`, "Two versions back".
     pub panels: bool,
+    /// The kicks act on the directions the fluctuation uses (exponential map, modal
+    /// coordinates; see `kick_basis`): per field, the directions of its gathered rows and
+    /// spread columns whose singular value over the product's intervals is above this
+    /// fraction of its block's largest are kept, the others dropped. `0`: all rows and
+    /// columns. Default `1e-4`: on the dual rotor the kept directions lie at 2e-3 and
+    /// above, the dropped ones at 3e-5 and below or are exact zeros, a kick shrinks from
+    /// 36 × 36 to 20 × 20, and the multipliers of the default sweep move by at most 5e-8
+    /// (the stable flags and bifurcations unchanged).
+    pub kick_rank_tol: f64,
 }
 
 /// How one interval's map combines the exact mean part and the fluctuation (module docs).
@@ -241,6 +252,7 @@ impl Default for ExpSip {
             interval_map: IntervalMap::Exponential,
             thermal_block: 16,
             panels: true,
+            kick_rank_tol: 1e-4,
         }
     }
 }
@@ -297,15 +309,22 @@ impl ExpSip {
         } else {
             space
         };
-        let modal = if self.modal {
+        let mut modal = if self.modal {
             ModalField::all(space, &b_bar, &self.exact_blocks(space))
         } else {
             None
+        };
+        let basis = match modal.as_mut() {
+            Some(fields) if self.interval_map == IntervalMap::Exponential => {
+                self.kick_basis(space, &means, &mean, fields)
+            }
+            _ => None,
         };
         let split = Split {
             b_bar: &b_bar,
             mean: &mean,
             modal: modal.as_deref(),
+            basis: basis.as_ref(),
         };
         if !self.extrapolate {
             return Ok((self.product(space, &split, means, delta, omega)?, None));
@@ -361,6 +380,32 @@ impl ExpSip {
         Ok((means, mean, b_bar, delta))
     }
 
+    /// The directions the fluctuations of `means` about `mean` use in each of `fields`
+    /// ([`KickBasis`]), with the fields' gathers and spreads taken into them; `None` (and
+    /// the fields unchanged) when none can be dropped or [`ExpSip::kick_rank_tol`] is 0.
+    fn kick_basis(
+        &self,
+        space: &StateSpace<'_>,
+        means: &SparseMeans,
+        mean: &NonlinearEval,
+        fields: &mut [ModalField],
+    ) -> Option<KickBasis> {
+        if self.kick_rank_tol <= 0.0 {
+            return None;
+        }
+        let layout = means.layout(space);
+        let ranges: Vec<_> = fields.iter().map(|f| (f.gather, f.spread)).collect();
+        let r = space.low_rank_dims().1;
+        let basis = KickBasis::new(means, mean, &layout, &ranges, r, self.kick_rank_tol)?;
+        for (i, f) in fields.iter_mut().enumerate() {
+            let (s_hat, l_hat) = basis.compress_field(i, &f.s_hat, &f.l_hat);
+            f.s_hat = s_hat;
+            f.l_hat = l_hat;
+            (f.gather, f.spread) = basis.ranges(i);
+        }
+        Some(basis)
+    }
+
     /// Row ranges of the diagonal blocks of `B̄` taken exactly (see [`MeanSplit`]).
     fn exact_blocks(&self, space: &StateSpace<'_>) -> Vec<(usize, usize)> {
         let d = space.dim();
@@ -408,12 +453,12 @@ impl ExpSip {
         let prod = match split.modal {
             Some(fields) => {
                 let kicks = Kicks::new(space, fields, delta, self.interval_map, self.thermal_block);
-                let factors = self.fluctuation_factors(space, &means, delta, &kicks.k);
+                let factors = self.fluctuation_factors(space, &means, delta, &kicks.k, split.basis);
                 self.modal_product(space, &factors, fields, &kicks)
             }
             None => {
                 let k = space.gather_of_spread();
-                let factors = self.fluctuation_factors(space, &means, delta, &k);
+                let factors = self.fluctuation_factors(space, &means, delta, &k, None);
                 self.dense_product(space, split.b_bar, &factors, delta, omega)?
             }
         };
@@ -496,29 +541,46 @@ impl ExpSip {
     /// few temperatures, each heat source on its bearing's load: about 200 of the dual
     /// rotor's 36 × 46 entries), so the two products with it, `D_k K` and `H D_k`, run over
     /// its nonzeros; only the Horner products are dense.
+    ///
+    /// With `basis` the factors are those of `Uᵀ D_k V` in the kicks' own coordinates
+    /// ([`KickBasis`]), `k_mat` already in them; the factor's size is `k_mat`'s transpose.
     fn fluctuation_factors(
         &self,
         space: &StateSpace<'_>,
         fluctuations: &SparseMeans,
         delta: f64,
         k_mat: &Mat<f64>,
+        basis: Option<&KickBasis>,
     ) -> Vec<Flat> {
         use rayon::prelude::*;
-        let (g, r) = space.low_rank_dims();
+        let (g, r) = (k_mat.nrows(), k_mat.ncols());
         let k_t = k_mat.transpose().to_owned();
         let layout = fluctuations.layout(space);
-        let factor = |(bufs, nonzeros): &mut FactorBuffers, k: usize| {
+        let factor = |(bufs, nonzeros, compressed): &mut FactorBuffers, k: usize| {
             let [y, y_t, h, tmp] = bufs;
-            fluctuations.nonzeros(k, &layout, nonzeros);
-            // Y = D K over D's nonzeros, as Yᵀ = Kᵀ Dᵀ (contiguous columns of Kᵀ)
-            y_t.fill(0.0);
-            for &(i, j, v) in nonzeros.iter() {
-                let kj = column(&k_t, j);
-                for (yv, kv) in column_mut(y_t, i).iter_mut().zip(kj) {
-                    *yv += v * kv;
+            if let (Some(b), Some((t, dk))) = (basis, compressed.as_mut()) {
+                // the kicks' own coordinates: D_k dense and small, Y = D K
+                b.compress(fluctuations.row(k), t, dk.as_mut());
+                matmul(
+                    y.as_mut(),
+                    Accum::Replace,
+                    dk.as_ref(),
+                    k_mat.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+            } else {
+                fluctuations.nonzeros(k, &layout, nonzeros);
+                // Y = D K over D's nonzeros, as Yᵀ = Kᵀ Dᵀ (contiguous columns of Kᵀ)
+                y_t.fill(0.0);
+                for &(i, j, v) in nonzeros.iter() {
+                    let kj = column(&k_t, j);
+                    for (yv, kv) in column_mut(y_t, i).iter_mut().zip(kj) {
+                        *yv += v * kv;
+                    }
                 }
+                y.copy_from(y_t.transpose());
             }
-            y.copy_from(y_t.transpose());
             // innermost Horner factor I + (Δ/N)·Y without a product by the identity
             let order = self.series_order;
             let first = if order >= 2 {
@@ -547,8 +609,19 @@ impl ExpSip {
                 }
                 std::mem::swap(h, tmp);
             }
-            // G = Δ H D over D's nonzeros: column j of G gathers H's columns i
             let mut gk = Flat::zeros(r, g);
+            if let Some((_, dk)) = compressed.as_ref() {
+                matmul(
+                    gk.as_mut(),
+                    Accum::Replace,
+                    h.as_ref(),
+                    dk.as_ref(),
+                    delta,
+                    Par::Seq,
+                );
+                return gk;
+            }
+            // G = Δ H D over D's nonzeros: column j of G gathers H's columns i
             for &(i, j, v) in nonzeros.iter() {
                 let w = delta * v;
                 let hi = column(h, i);
@@ -567,6 +640,7 @@ impl ExpSip {
                     Mat::<f64>::zeros(r, r),
                 ],
                 Vec::new(),
+                basis.map(|b| (b.scratch(), Mat::<f64>::zeros(r, g))),
             )
         };
         (0..fluctuations.len())
@@ -645,7 +719,7 @@ impl ExpSip {
     ) -> Mat<f64> {
         let d = space.dim();
         let c = c1 - c0;
-        let (g, r) = space.low_rank_dims();
+        let (g, r) = (kicks.k.nrows(), kicks.k.ncols());
         let strang = kicks.map == IntervalMap::Strang;
         let mut prod = Mat::<f64>::zeros(d, c);
         for (f, [start, _]) in fields.iter().zip(&kicks.exps) {
@@ -762,8 +836,13 @@ impl ExpSip {
 }
 
 /// Per-thread scratch of [`ExpSip::fluctuation_factors`]: `Y`, `Yᵀ`, the Horner factor and
-/// its product, and the interval's derivative nonzeros `(row, column, value)`.
-type FactorBuffers = ([Mat<f64>; 4], Vec<(usize, usize, f64)>);
+/// its product, the interval's derivative nonzeros `(row, column, value)`, and with a
+/// [`KickBasis`] its scratch and the interval's `D_k` in the kicks' coordinates.
+type FactorBuffers = (
+    [Mat<f64>; 4],
+    Vec<(usize, usize, f64)>,
+    Option<(Vec<f64>, Mat<f64>)>,
+);
 
 /// Column `j` of an owned (column-major, contiguous) matrix as a slice.
 fn column(m: &Mat<f64>, j: usize) -> &[f64] {
@@ -804,6 +883,8 @@ struct Split<'s> {
     b_bar: &'s Mat<f64>,
     mean: &'s NonlinearEval,
     modal: Option<&'s [ModalField]>,
+    /// The kicks' own coordinates, when the modal fields are in them.
+    basis: Option<&'s KickBasis>,
 }
 
 impl ModalField {
@@ -1049,7 +1130,11 @@ impl Kicks {
         map: IntervalMap,
         thermal_block: usize,
     ) -> Self {
-        let (g, r) = space.low_rank_dims();
+        // the fields' gathered rows and spread columns (in the kicks' own coordinates when
+        // they were taken into them)
+        let (g, r) = fields
+            .iter()
+            .fold((0, 0), |(g, r), f| (g.max(f.gather.1), r.max(f.spread.1)));
         let mut kicks = Self {
             map,
             delta,
@@ -1274,7 +1359,7 @@ mod tests {
                 ..ExpSip::default()
             };
             let sparse = SparseMeans::from_dense(&space, std::slice::from_ref(&fl));
-            let factors = sip.fluctuation_factors(&space, &sparse, delta, &k_mat);
+            let factors = sip.fluctuation_factors(&space, &sparse, delta, &k_mat, None);
             // reference: Σ_{i=1}^{N} Δⁱ/i! (D K)^{i−1} D term by term, dense
             let mut d = Mat::<f64>::zeros(r, g);
             space.derivative_matrix(&fl, d.as_mut());

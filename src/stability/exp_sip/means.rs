@@ -99,7 +99,19 @@ impl SparseMeans {
         self.intervals
     }
 
-    fn rows(&self) -> impl Iterator<Item = &[f64]> {
+    /// Interval `k`'s values, one per slot (in the order of [`Self::layout`]).
+    pub(crate) fn row(&self, k: usize) -> &[f64] {
+        let width = self.slots.len();
+        &self.values[k * width..(k + 1) * width]
+    }
+
+    /// `e`'s value at every slot.
+    pub(crate) fn at_slots(&self, e: &NonlinearEval) -> Vec<f64> {
+        let blocks = e.derivative_blocks();
+        self.slots.iter().map(|&(b, k)| blocks[b][k]).collect()
+    }
+
+    pub(crate) fn rows(&self) -> impl Iterator<Item = &[f64]> {
         let width = self.slots.len();
         (0..self.intervals).map(move |k| &self.values[k * width..(k + 1) * width])
     }
@@ -147,8 +159,7 @@ impl SparseMeans {
     /// Every mean `m_k ← m_k − mean` (the fluctuations about `mean`). `mean` must
     /// be zero outside the slots, as an orbit mean of these means (or part of it) is.
     pub(crate) fn subtract(&mut self, mean: &NonlinearEval) {
-        let blocks = mean.derivative_blocks();
-        let of_mean: Vec<f64> = self.slots.iter().map(|&(b, k)| blocks[b][k]).collect();
+        let of_mean = self.at_slots(mean);
         let width = self.slots.len();
         self.values
             .par_chunks_mut(width.max(1))

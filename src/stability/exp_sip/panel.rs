@@ -14,7 +14,7 @@
 //! through all the intervals as a group of panels, so each interval's factor is read once
 //! per group.
 
-use faer::{Mat, MatRef};
+use faer::{Mat, MatMut, MatRef};
 
 use super::{ExpSip, IntervalMap, Kicks, ModalField};
 use crate::stability::modal::BlockDiagonal;
@@ -51,6 +51,10 @@ impl Flat {
             data.extend(m.col(j).iter().copied());
         }
         Self { rows, cols, data }
+    }
+
+    pub(super) fn as_mut(&mut self) -> MatMut<'_, f64> {
+        MatMut::from_column_major_slice_mut(&mut self.data, self.rows, self.cols)
     }
 
     pub(super) fn as_ref(&self) -> MatRef<'_, f64> {
@@ -336,7 +340,7 @@ impl ExpSip {
         fields: &[ModalField],
         kicks: &Kicks,
     ) -> Option<Mat<f64>> {
-        let (g, r) = space.low_rank_dims();
+        let (g, r) = (kicks.k.nrows(), kicks.k.ncols());
         if kicks.map != IntervalMap::Exponential || r == 0 || g == 0 {
             return None;
         }
