@@ -330,15 +330,13 @@ mod tests {
                     (0.5 * k as f64).sin(),
                 );
                 let mut m = NonlinearEval::new(p, q);
-                for i in 0..p {
-                    for j in 0..p {
-                        m.df_dx[i * p + j] = 1e8 * c * a[i] * b[j];
-                    }
+                // row-major outer products
+                for (at, v) in m.df_dx.iter_mut().enumerate() {
+                    *v = 1e8 * c * a[at / p] * b[at % p];
                 }
-                for i in 0..q {
-                    for j in 0..q {
-                        m.dg_dt[i * q + j] = d * e[i] * f[j] + s * h[i] * w[j];
-                    }
+                for (at, v) in m.dg_dt.iter_mut().enumerate() {
+                    let (i, j) = (at / q, at % q);
+                    *v = d * e[i] * f[j] + s * h[i] * w[j];
                 }
                 m
             })
