@@ -110,27 +110,36 @@ impl KickBasis {
         let len = |(a, b): (usize, usize)| b - a;
         // Gram blocks: outputs of field a against the columns of field b (the slots that
         // share a column, in pairs), inputs of field a against the rows of field b
-        let mut out: Vec<Mat<f64>> = (0..nf * nf)
-            .map(|ab| Mat::zeros(len(ranges[ab / nf].1), len(ranges[ab / nf].1)))
-            .collect();
-        let mut inp: Vec<Mat<f64>> = (0..nf * nf)
-            .map(|ab| Mat::zeros(len(ranges[ab / nf].0), len(ranges[ab / nf].0)))
-            .collect();
-        let mut pairs_out = Vec::new();
-        let mut pairs_in = Vec::new();
+        // Gram blocks, their lower triangles, in one buffer: outputs of field a against the
+        // columns of field b (from the slots that share a column, in pairs), then inputs of
+        // field a against the rows of field b
+        let mut blocks = Vec::with_capacity(2 * nf * nf);
+        let mut at = 0;
+        for n_of in [|f: &FieldRanges| f.1, |f: &FieldRanges| f.0] {
+            for ab in 0..nf * nf {
+                let n = len(n_of(&ranges[ab / nf]));
+                blocks.push((at, n));
+                at += n * n;
+            }
+        }
+        let mut acc = vec![0.0; at];
+        // (place in acc, first slot, second slot), each unordered pair once
+        let mut pairs: Vec<(usize, usize, usize)> = Vec::new();
+        let lower =
+            |(start, n): (usize, usize), a: usize, b: usize| start + a.max(b) * n + a.min(b);
         for (s1, p1) in places.iter().enumerate() {
             let Some([fo1, i1, fi1, j1]) = *p1 else {
                 continue;
             };
-            for (s2, p2) in places.iter().enumerate() {
+            for (s2, p2) in places.iter().enumerate().skip(s1) {
                 let Some([fo2, i2, fi2, j2]) = *p2 else {
                     continue;
                 };
                 if layout[s1].map(|a| a.1) == layout[s2].map(|a| a.1) && fo1 == fo2 {
-                    pairs_out.push((fo1 * nf + fi1, i1, i2, s1, s2));
+                    pairs.push((lower(blocks[fo1 * nf + fi1], i1, i2), s1, s2));
                 }
                 if layout[s1].map(|a| a.0) == layout[s2].map(|a| a.0) && fi1 == fi2 {
-                    pairs_in.push((fi1 * nf + fo1, j1, j2, s1, s2));
+                    pairs.push((lower(blocks[nf * nf + fi1 * nf + fo1], j1, j2), s1, s2));
                 }
             }
         }
@@ -140,13 +149,20 @@ impl KickBasis {
             for ((x, v), m) in x.iter_mut().zip(row).zip(&of_mean) {
                 *x = v - m;
             }
-            for &(b, i1, i2, s1, s2) in &pairs_out {
-                out[b][(i1, i2)] += x[s1] * x[s2];
-            }
-            for &(b, j1, j2, s1, s2) in &pairs_in {
-                inp[b][(j1, j2)] += x[s1] * x[s2];
+            for &(at, s1, s2) in &pairs {
+                acc[at] += x[s1] * x[s2];
             }
         }
+        // the blocks as matrices (lower triangles; the eigenvalue problems read those)
+        let gram = |(start, n): (usize, usize)| {
+            Mat::from_fn(
+                n,
+                n,
+                |i, j| if i >= j { acc[start + i * n + j] } else { 0.0 },
+            )
+        };
+        let out: Vec<Mat<f64>> = blocks[..nf * nf].iter().map(|&b| gram(b)).collect();
+        let inp: Vec<Mat<f64>> = blocks[nf * nf..].iter().map(|&b| gram(b)).collect();
         let mut fields = Vec::with_capacity(nf);
         let mut any_dropped = false;
         let (mut gather_at, mut spread_at) = (0, 0);
