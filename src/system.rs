@@ -255,6 +255,22 @@ pub trait PeriodicOrbit {
     /// (length `n_therm`).
     fn state_at(&self, t: f64, x: &mut [f64], v: &mut [f64], temp: &mut [f64]);
 
+    /// Part of the state at `t`: `x` and `v` of the mechanical DoFs `mech`, `temp` of the
+    /// thermal DoFs `therm` (each output as long as its list), when the orbit evaluates
+    /// them without the rest (`true`); `false`, and nothing written, otherwise (the
+    /// default).
+    fn dofs_at(
+        &self,
+        t: f64,
+        (mech, therm): (&[usize], &[usize]),
+        x: &mut [f64],
+        v: &mut [f64],
+        temp: &mut [f64],
+    ) -> bool {
+        let _ = (t, mech, therm, x, v, temp);
+        false
+    }
+
     /// The same orbit in the mechanical coordinates `q = P x`, with `P` the row-major
     /// `r × n_mech` matrix `rows` (the thermal part unchanged), when the orbit can form
     /// it once instead of per sample (a harmonic solution maps its coefficients); `None`

@@ -145,6 +145,37 @@ impl PeriodicOrbit for HbSolution {
         }
     }
 
+    fn dofs_at(
+        &self,
+        t: f64,
+        (mech, therm): (&[usize], &[usize]),
+        x: &mut [f64],
+        v: &mut [f64],
+        temp: &mut [f64],
+    ) -> bool {
+        let nc = self.basis.n_coeffs();
+        let (n, m) = (self.mech.len() / nc.max(1), self.therm.len() / nc.max(1));
+        if mech.iter().any(|&i| i >= n) || therm.iter().any(|&i| i >= m) {
+            return false;
+        }
+        let mut trig = Vec::with_capacity(self.basis.n_harmonics());
+        self.basis.trig_table(self.omega, t, &mut trig);
+        for ((&i, xi), vi) in mech.iter().zip(x.iter_mut()).zip(v.iter_mut()) {
+            let (p, d, _) = self
+                .basis
+                .eval_with(&self.mech[i * nc..(i + 1) * nc], &trig);
+            *xi = p;
+            *vi = d;
+        }
+        for (&i, ti) in therm.iter().zip(temp.iter_mut()) {
+            *ti = self
+                .basis
+                .eval_with(&self.therm[i * nc..(i + 1) * nc], &trig)
+                .0;
+        }
+        true
+    }
+
     /// The coefficients of `q = P x`, formed once: `r × n_mech × (1 + 2H)` products
     /// instead of `r × n_mech` per sample.
     fn mapped(&self, rows: &[f64], r: usize) -> Option<Box<dyn PeriodicOrbit + '_>> {

@@ -271,6 +271,20 @@ impl<'a> StateSpace<'a> {
             .eval_nonlinear(self.omega, t, &ws.xp, &ws.vp, &ws.tq, &mut ws.eval);
     }
 
+    /// [`Self::eval_nonlinear_at`] from the nonlinear DoFs' values alone (`x_P`, `v_P`,
+    /// `T_Q`, in the order of [`Self::dofs`]).
+    pub fn eval_nonlinear_gathered(
+        &self,
+        t: f64,
+        xp: &[f64],
+        vp: &[f64],
+        tq: &[f64],
+        ws: &mut Workspace,
+    ) {
+        self.system
+            .eval_nonlinear(self.omega, t, xp, vp, tq, &mut ws.eval);
+    }
+
     /// Right-hand side `ẏ = φ(t, y)` of the first-order equations.
     pub fn rhs(&self, t: f64, y: &[f64], dy: &mut [f64], ws: &mut Workspace) {
         let (n, m) = (self.n, self.m);

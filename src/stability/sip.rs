@@ -224,23 +224,50 @@ pub(crate) fn interval_means_with<T: Send>(
         weights,
     } = grid;
     use rayon::prelude::*;
-    let (n, m) = (space.n_mech(), space.n_therm());
-    let width = 2 * n + m;
     let per = nodes.len();
     let time = |k: usize, j: usize| k as f64 * delta + 0.5 * delta * (1.0 + nodes[j]);
-    let mut states = vec![0.0; intervals * per * width];
+    // the samples: the nonlinear DoFs alone when the orbit gives them so (`x_P`, `v_P`,
+    // `T_Q`), the whole state otherwise
+    let dofs = space.dofs();
+    let (p, q) = (dofs.mech.len(), dofs.therm.len());
+    let mut part = vec![0.0; (2 * p + q) * intervals * per];
+    let gathered = {
+        let (x, rest) = part[..2 * p + q].split_at_mut(p);
+        let (v, temp) = rest.split_at_mut(p);
+        orbit.dofs_at(time(0, 0), (&dofs.mech, &dofs.therm), x, v, temp)
+    };
+    let (n, m) = (space.n_mech(), space.n_therm());
+    let (width, split) = if gathered {
+        (2 * p + q, p)
+    } else {
+        (2 * n + m, n)
+    };
+    let mut states = if gathered {
+        part
+    } else {
+        vec![0.0; width * intervals * per]
+    };
     for (i, y) in states.chunks_exact_mut(width).enumerate() {
-        let (x, rest) = y.split_at_mut(n);
-        let (v, temp) = rest.split_at_mut(n);
-        orbit.state_at(time(i / per, i % per), x, v, temp);
+        let (x, rest) = y.split_at_mut(split);
+        let (v, temp) = rest.split_at_mut(split);
+        let t = time(i / per, i % per);
+        if gathered {
+            orbit.dofs_at(t, (&dofs.mech, &dofs.therm), x, v, temp);
+        } else {
+            orbit.state_at(t, x, v, temp);
+        }
     }
     let mean_of = |k: usize, ws: &mut Workspace, mean: &mut NonlinearEval| {
         mean.clear();
         for (j, &wi) in weights.iter().enumerate() {
             let y = &states[(k * per + j) * width..(k * per + j + 1) * width];
-            let (x, rest) = y.split_at(n);
-            let (v, temp) = rest.split_at(n);
-            space.eval_nonlinear_at(time(k, j), x, v, temp, ws);
+            let (x, rest) = y.split_at(split);
+            let (v, temp) = rest.split_at(split);
+            if gathered {
+                space.eval_nonlinear_gathered(time(k, j), x, v, temp, ws);
+            } else {
+                space.eval_nonlinear_at(time(k, j), x, v, temp, ws);
+            }
             axpy_derivs(mean, 0.5 * wi, &ws.eval);
         }
         keep(mean)
