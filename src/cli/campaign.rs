@@ -135,6 +135,7 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         return dry_run(file, shard, out);
     }
     let (start, cpu_start) = (Instant::now(), super::process_cpu_seconds());
+    let steal_start = super::steal_seconds();
     let display = Display::new(args.quiet);
     let progress = |e: campaign::Event<'_>| display.show(e);
     let interrupt = install_interrupt_flag().ok();
@@ -151,11 +152,13 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         figures(&manifest, file, shard.is_some(), out)?;
     }
     let cpu = super::cpu_seconds_since(cpu_start);
+    let wall = start.elapsed().as_secs_f64();
     writeln!(
         out,
-        "campaign: {} {}",
+        "campaign: {} {}{}",
         display.summary(),
-        super::time_and_cpu(start.elapsed().as_secs_f64(), cpu)
+        super::time_and_cpu(wall, cpu),
+        super::steal_note(steal_start, wall)
     )?;
     let stopped = interrupt.is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed));
     let unfinished: Vec<&str> = manifest

@@ -87,6 +87,36 @@ pub fn cpu_seconds_since(start: Option<f64>) -> Option<f64> {
         .map(|(now, then)| now - then)
 }
 
+/// Time the host's hypervisor has kept this machine's cores from running, summed over the
+/// cores, seconds (Linux: the `steal` column of `/proc/stat`); `None` elsewhere. On a
+/// virtual machine whose host is busy this is what makes the same command take longer
+/// from one hour to the next.
+pub fn steal_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/stat").ok()?;
+    steal_seconds_of(&stat)
+}
+
+/// The `steal` column (the eighth number) of the `cpu` line of a `/proc/stat` text,
+/// seconds.
+fn steal_seconds_of(stat: &str) -> Option<f64> {
+    let line = stat.lines().find(|l| l.starts_with("cpu "))?;
+    let steal: u64 = line.split_whitespace().nth(8)?.parse().ok()?;
+    Some(steal as f64 / USER_HZ)
+}
+
+/// `"; the host held back 8.6 s of the cores (steal time)"` when the steal time since
+/// `start` (an earlier [`steal_seconds`]) is at least 2 % of the cores' time over
+/// `wall_s`; empty otherwise.
+pub fn steal_note(start: Option<f64>, wall_s: f64) -> String {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
+    match steal_seconds().zip(start).map(|(now, then)| now - then) {
+        Some(s) if s >= 0.02 * cores * wall_s && s > 0.0 => {
+            format!("; the host held back {s:.1} s of the cores (steal time)")
+        }
+        _ => String::new(),
+    }
+}
+
 /// Clock ticks per second of the times in `/proc/PID/stat` (`USER_HZ`): fixed at 100 by
 /// the Linux ABI on x86-64 and aarch64, whatever the kernel's own tick rate.
 const USER_HZ: f64 = 100.0;
@@ -174,7 +204,10 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use super::{cpu_seconds_of_stat, error_text, process_cpu_seconds, time_and_cpu};
+    use super::{
+        cpu_seconds_of_stat, error_text, process_cpu_seconds, steal_note, steal_seconds,
+        steal_seconds_of, time_and_cpu,
+    };
 
     #[derive(Debug, thiserror::Error)]
     #[error("cannot read {path}: {source}")]
@@ -225,6 +258,20 @@ mod tests {
                 "{before} → {after} s for 0.2 s of work"
             );
         }
+    }
+
+    #[test]
+    fn steal_time_is_the_eighth_number_of_the_cpu_line() {
+        let stat = "cpu  2396009 0 228629 1259156 9508 0 1281 26133 0 0\n\
+                    cpu0 1198004 0 114314 629578 4754 0 640 13066 0 0\n";
+        assert_eq!(steal_seconds_of(stat), Some(261.33));
+        assert_eq!(steal_seconds_of("cpu0 1 2 3 4 5 6 7 8\n"), None);
+        assert_eq!(steal_seconds_of("cpu  1 2 3"), None);
+        if cfg!(target_os = "linux") {
+            assert!(steal_seconds().is_some(), "Linux has /proc/stat");
+        }
+        // no start reading: no note
+        assert_eq!(steal_note(None, 10.0), "");
     }
 
     #[test]

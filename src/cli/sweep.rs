@@ -177,7 +177,7 @@ pub fn parse_range(option: &str, r: &str) -> anyhow::Result<(f64, f64)> {
 
 /// Runs the sweep and prints a summary.
 pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
-    let cpu_start = super::process_cpu_seconds();
+    let (cpu_start, steal_start) = (super::process_cpu_seconds(), super::steal_seconds());
     let settings = args.settings()?;
     let problem = SweepProblem::new(&settings)?;
     let mut sink = McapSink::create(&args.output, McapOptions::default())?;
@@ -232,7 +232,8 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     writeln!(out, "  time: {}", report.time_summary())?;
     let cpu = super::cpu_seconds_since(cpu_start);
     if let Some(share) = super::cpu_share(report.total_seconds, cpu) {
-        writeln!(out, "  {share}")?;
+        let steal = super::steal_note(steal_start, report.total_seconds);
+        writeln!(out, "  {share}{steal}")?;
     }
     if let Some(from) = report.lead_in_from {
         writeln!(
