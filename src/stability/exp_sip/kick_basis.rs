@@ -237,15 +237,16 @@ impl KickBasis {
         (v.transpose() * s_hat, l_hat * &u)
     }
 
-    /// Scratch for [`Self::compress`].
+    /// Scratch for [`Self::compress`]: `D V` by rows, and one row of the result.
     pub(super) fn scratch(&self) -> Vec<f64> {
-        vec![0.0; self.spread_dim * self.dims.0]
+        vec![0.0; (self.spread_dim + 1) * self.dims.0]
     }
 
     /// `Uᵀ D V` into `out` (compressed spread × gather) from one interval's slot values
-    /// `row`; `t` from [`Self::scratch`].
-    pub(super) fn compress(&self, row: &[f64], t: &mut [f64], mut out: MatMut<'_, f64>) {
+    /// `row`; `scratch` from [`Self::scratch`].
+    pub(super) fn compress(&self, row: &[f64], scratch: &mut [f64], mut out: MatMut<'_, f64>) {
         let width = self.dims.0;
+        let (t, acc) = scratch.split_at_mut(self.spread_dim * width);
         t.fill(0.0);
         // t = D V, by rows
         for (&x, place) in row.iter().zip(&self.slots) {
@@ -264,7 +265,7 @@ impl KickBasis {
         out.fill(0.0);
         for b in &self.fields {
             for a in 0..b.n_out {
-                let mut acc = vec![0.0; width];
+                acc.fill(0.0);
                 for i in 0..b.spread.1 - b.spread.0 {
                     let w = b.u[i * b.n_out + a];
                     let ti = &t[(b.spread.0 + i) * width..(b.spread.0 + i + 1) * width];
@@ -272,7 +273,7 @@ impl KickBasis {
                         *acc += w * t;
                     }
                 }
-                for (c, v) in acc.into_iter().enumerate() {
+                for (c, &v) in acc.iter().enumerate() {
                     out[(b.spread_at + a, c)] = v;
                 }
             }
