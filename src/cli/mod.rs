@@ -82,9 +82,12 @@ pub fn process_cpu_seconds() -> Option<f64> {
 /// CPU time used since `start` (an earlier [`process_cpu_seconds`]), seconds; `None` where
 /// either reading is missing.
 pub fn cpu_seconds_since(start: Option<f64>) -> Option<f64> {
-    process_cpu_seconds()
-        .zip(start)
-        .map(|(now, then)| now - then)
+    difference(process_cpu_seconds(), start)
+}
+
+/// `now − then` when both readings are there.
+fn difference(now: Option<f64>, then: Option<f64>) -> Option<f64> {
+    now.zip(then).map(|(now, then)| now - then)
 }
 
 /// Time the host's hypervisor has kept this machine's cores from running, summed over the
@@ -109,7 +112,7 @@ fn steal_seconds_of(stat: &str) -> Option<f64> {
 /// `wall_s`; empty otherwise.
 pub fn steal_note(start: Option<f64>, wall_s: f64) -> String {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get()) as f64;
-    match steal_seconds().zip(start).map(|(now, then)| now - then) {
+    match difference(steal_seconds(), start) {
         Some(s) if s >= 0.02 * cores * wall_s && s > 0.0 => {
             format!("; the host held back {s:.1} s of the cores (steal time)")
         }

@@ -25,6 +25,34 @@ pub struct HbSolution {
 }
 
 impl HbSolution {
+    /// `x`, `v` of the mechanical DoFs `mech` and `temp` of the thermal DoFs `therm` at
+    /// `t`, in the order given (each output as long as its list).
+    fn values_at(
+        &self,
+        t: f64,
+        (mech, therm): (impl Iterator<Item = usize>, impl Iterator<Item = usize>),
+        x: &mut [f64],
+        v: &mut [f64],
+        temp: &mut [f64],
+    ) {
+        let nc = self.basis.n_coeffs();
+        let mut trig = Vec::with_capacity(self.basis.n_harmonics());
+        self.basis.trig_table(self.omega, t, &mut trig);
+        for ((i, xi), vi) in mech.zip(x.iter_mut()).zip(v.iter_mut()) {
+            let (p, d, _) = self
+                .basis
+                .eval_with(&self.mech[i * nc..(i + 1) * nc], &trig);
+            *xi = p;
+            *vi = d;
+        }
+        for (i, ti) in therm.zip(temp.iter_mut()) {
+            *ti = self
+                .basis
+                .eval_with(&self.therm[i * nc..(i + 1) * nc], &trig)
+                .0;
+        }
+    }
+
     /// Builds a solution from the full unknown vector (mechanical DoFs first).
     pub fn from_unknowns(
         omega: f64,
@@ -127,22 +155,7 @@ impl PeriodicOrbit for HbSolution {
     }
 
     fn state_at(&self, t: f64, x: &mut [f64], v: &mut [f64], temp: &mut [f64]) {
-        let nc = self.basis.n_coeffs();
-        let mut trig = Vec::with_capacity(self.basis.n_harmonics());
-        self.basis.trig_table(self.omega, t, &mut trig);
-        for (i, (xi, vi)) in x.iter_mut().zip(v.iter_mut()).enumerate() {
-            let (p, d, _) = self
-                .basis
-                .eval_with(&self.mech[i * nc..(i + 1) * nc], &trig);
-            *xi = p;
-            *vi = d;
-        }
-        for (i, ti) in temp.iter_mut().enumerate() {
-            *ti = self
-                .basis
-                .eval_with(&self.therm[i * nc..(i + 1) * nc], &trig)
-                .0;
-        }
+        self.values_at(t, (0..x.len(), 0..temp.len()), x, v, temp);
     }
 
     fn dofs_at(
@@ -158,21 +171,7 @@ impl PeriodicOrbit for HbSolution {
         if mech.iter().any(|&i| i >= n) || therm.iter().any(|&i| i >= m) {
             return false;
         }
-        let mut trig = Vec::with_capacity(self.basis.n_harmonics());
-        self.basis.trig_table(self.omega, t, &mut trig);
-        for ((&i, xi), vi) in mech.iter().zip(x.iter_mut()).zip(v.iter_mut()) {
-            let (p, d, _) = self
-                .basis
-                .eval_with(&self.mech[i * nc..(i + 1) * nc], &trig);
-            *xi = p;
-            *vi = d;
-        }
-        for (&i, ti) in therm.iter().zip(temp.iter_mut()) {
-            *ti = self
-                .basis
-                .eval_with(&self.therm[i * nc..(i + 1) * nc], &trig)
-                .0;
-        }
+        self.values_at(t, (mech.iter().copied(), therm.iter().copied()), x, v, temp);
         true
     }
 

@@ -247,7 +247,9 @@ pub(crate) fn interval_means_with<T: Send>(
     } else {
         vec![0.0; width * intervals * per]
     };
-    for (i, y) in states.chunks_exact_mut(width).enumerate() {
+    // (the orbit's answer for the first sample is already in place)
+    let from = usize::from(gathered);
+    for (i, y) in states.chunks_exact_mut(width).enumerate().skip(from) {
         let (x, rest) = y.split_at_mut(split);
         let (v, temp) = rest.split_at_mut(split);
         let t = time(i / per, i % per);

@@ -60,7 +60,8 @@ struct Place {
 
 /// One field's bases and where its directions sit, before and after.
 struct FieldBasis {
-    /// Original spread columns.
+    /// Number of original gathered rows, and the original spread columns.
+    gather_len: usize,
     spread: (usize, usize),
     /// `V` (gathered rows × kept inputs) by rows and `U` (spread columns × kept outputs)
     /// by rows.
@@ -184,6 +185,7 @@ impl KickBasis {
                     .collect::<Vec<f64>>()
             };
             fields.push(FieldBasis {
+                gather_len: li,
                 spread,
                 v: by_rows(&ei, li, ri),
                 u: by_rows(&eo, lo, ro),
@@ -224,6 +226,17 @@ impl KickBasis {
         )
     }
 
+    /// Field `f`'s bases `V` and `U` as matrices.
+    fn bases(&self, f: usize) -> (Mat<f64>, Mat<f64>) {
+        let b = &self.fields[f];
+        let by_rows =
+            |m: &[f64], rows: usize, cols: usize| Mat::from_fn(rows, cols, |i, c| m[i * cols + c]);
+        (
+            by_rows(&b.v, b.gather_len, b.n_in),
+            by_rows(&b.u, b.spread.1 - b.spread.0, b.n_out),
+        )
+    }
+
     /// Field `f`'s gather `Vᵀ Ŝ` and spread `L̂ U` from its modal ones.
     pub(super) fn compress_field(
         &self,
@@ -231,9 +244,7 @@ impl KickBasis {
         s_hat: &Mat<f64>,
         l_hat: &Mat<f64>,
     ) -> (Mat<f64>, Mat<f64>) {
-        let b = &self.fields[f];
-        let v = Mat::from_fn(s_hat.nrows(), b.n_in, |i, c| b.v[i * b.n_in + c]);
-        let u = Mat::from_fn(l_hat.ncols(), b.n_out, |i, c| b.u[i * b.n_out + c]);
+        let (v, u) = self.bases(f);
         (v.transpose() * s_hat, l_hat * &u)
     }
 
@@ -261,8 +272,7 @@ impl KickBasis {
                 *t += x * v;
             }
         }
-        // out = Uᵀ t, field by field
-        out.fill(0.0);
+        // out = Uᵀ t, field by field (every row of `out` is one field's output direction)
         for b in &self.fields {
             for a in 0..b.n_out {
                 acc.fill(0.0);
@@ -312,15 +322,6 @@ mod tests {
     use crate::integrate::StateSpace;
     use crate::systems::chain::Chain;
 
-    /// Field `f`'s bases as dense matrices (`V`, `U`).
-    fn bases(basis: &KickBasis, f: usize, li: usize, lo: usize) -> (Mat<f64>, Mat<f64>) {
-        let b = &basis.fields[f];
-        (
-            Mat::from_fn(li, b.n_in, |i, c| b.v[i * b.n_in + c]),
-            Mat::from_fn(lo, b.n_out, |i, c| b.u[i * b.n_out + c]),
-        )
-    }
-
     /// Fluctuations built with known ranges (rank 1 in the mechanical block, rank 2 in the
     /// thermal one, nothing across): the bases have those ranks, and `U (Uᵀ D V) Vᵀ`
     /// gives every interval's `D` back to rounding.
@@ -366,8 +367,8 @@ mod tests {
             KickBasis::new(&means, &zero, &layout, &ranges, r, 1e-6).expect("directions to drop");
         assert_eq!(basis.ranges(0), ((0, 1), (0, 1)));
         assert_eq!(basis.ranges(1), ((1, 3), (1, 3)));
-        let (vm, um) = bases(&basis, 0, p, p);
-        let (vt, ut) = bases(&basis, 1, q, q);
+        let (vm, um) = basis.bases(0);
+        let (vt, ut) = basis.bases(1);
         let mut v = Mat::<f64>::zeros(g, 3);
         let mut u = Mat::<f64>::zeros(r, 3);
         v.as_mut().submatrix_mut(0, 0, p, 1).copy_from(&vm);

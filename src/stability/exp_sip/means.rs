@@ -112,8 +112,7 @@ impl SparseMeans {
     }
 
     pub(crate) fn rows(&self) -> impl Iterator<Item = &[f64]> {
-        let width = self.slots.len();
-        (0..self.intervals).map(move |k| &self.values[k * width..(k + 1) * width])
+        (0..self.intervals).map(|k| self.row(k))
     }
 
     /// `out` (cleared first) `= Σ_k w · mean_k`, summed in interval order.
