@@ -544,11 +544,25 @@ impl CoupledRotor {
         let q = self.nl.therm.len();
         // Per-bearing ∂F_b/∂(local mech DoF) and ∂F_b/∂(local thermal DoF), for the chain.
         let m_net = self.network.as_ref().map_or(0, |n| n.n_bearings());
+        // `g` and `∂g/∂T` come whole from the thermal network below (or are zero without
+        // one): only the terms summed into here start from zero
+        out.f.fill(0.0);
         if derivatives {
-            out.clear();
-        } else {
-            out.f.iter_mut().for_each(|v| *v = 0.0);
-            out.g.iter_mut().for_each(|v| *v = 0.0);
+            for block in [
+                &mut out.df_dx,
+                &mut out.df_dv,
+                &mut out.df_dt,
+                &mut out.dg_dx,
+                &mut out.dg_dv,
+            ] {
+                block.fill(0.0);
+            }
+        }
+        if self.network.is_none() {
+            out.g.fill(0.0);
+            if derivatives {
+                out.dg_dt.fill(0.0);
+            }
         }
         let mut scratch = self
             .scratch
@@ -639,12 +653,19 @@ impl CoupledRotor {
             } else {
                 net.eval_values(omega, temp, loads, teval)
             };
+            // the network's buffers are taken whole (swapped, the same lengths: the
+            // network zeroes its side before each evaluation)
             match evaluated {
-                Ok(()) => out.g.copy_from_slice(&teval.g),
-                Err(_) => out.g.iter_mut().for_each(|v| *v = f64::NAN),
+                Ok(()) => std::mem::swap(&mut out.g, &mut teval.g),
+                Err(_) => {
+                    out.g.fill(f64::NAN);
+                    if derivatives {
+                        out.dg_dt.fill(0.0);
+                    }
+                }
             }
             if derivatives && evaluated.is_ok() {
-                out.dg_dt.copy_from_slice(&teval.dg_dt);
+                std::mem::swap(&mut out.dg_dt, &mut teval.dg_dt);
                 // Chain through F_b: ∂g/∂x = Σ_k ∂g/∂F_bk ∂F_bk/∂x, same for T.
                 for r in 0..q {
                     for k in 0..m_net {
