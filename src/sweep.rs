@@ -663,44 +663,11 @@ impl SweepProblem {
                 .as_ref()
                 .is_some_and(|f| f.load(Ordering::Relaxed))
         };
-        // An accepted point is recorded while the next step is computed (on a thread of
-        // its own): `pending` holds it until then. Every way out of the loop records it
-        // first, so that no computed point is lost.
-        let mut pending: Option<(u64, Box<BranchPoint>)> = None;
-        let mut record = |point: Option<(u64, Box<BranchPoint>)>,
-                          sink: &mut dyn Sink|
-         -> Result<(), SweepError> {
-            let Some((index, point)) = point else {
-                return Ok(());
-            };
-            let recording = std::time::Instant::now();
-            let rec = self.point_record(index, &point)?;
-            shares.push((
-                rec.index,
-                rec.omega_rad_s,
-                point_half_order_share(&self.run, &rec),
-            ));
-            sink.write_point(&rec)?;
-            record_seconds += recording.elapsed().as_secs_f64();
-            Ok(())
-        };
         let result: Result<RunStatus, SweepError> = (|| loop {
             if interrupted() {
-                record(pending.take(), sink)?;
                 return Ok(RunStatus::Interrupted);
             }
-            let previous = pending.take();
-            let (stepped, recorded) = std::thread::scope(|scope| {
-                let step = scope.spawn(|| step_in(pools, &mut cont));
-                let recorded = record(previous, sink);
-                (step.join(), recorded)
-            });
-            recorded?;
-            let stepped = match stepped {
-                Ok(s) => s,
-                Err(panic) => std::panic::resume_unwind(panic),
-            };
-            let out = match stepped {
+            let out = match step_in(pools, &mut cont) {
                 Ok(o) => o,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
@@ -754,13 +721,21 @@ impl SweepProblem {
                             bifs.push((b.solution.omega, kind.label().to_string()));
                         }
                     }
-                    let omega = point.solution.omega;
-                    pending = Some((prog.points as u64, point));
+                    let recording = std::time::Instant::now();
+                    let rec = self.point_record(prog.points as u64, &point)?;
+                    shares.push((
+                        rec.index,
+                        rec.omega_rad_s,
+                        point_half_order_share(&self.run, &rec),
+                    ));
+                    sink.write_point(&rec)?;
+                    record_seconds += recording.elapsed().as_secs_f64();
                     prog.points += 1;
-                    prog.omega_rad_s = omega;
+                    prog.omega_rad_s = point.solution.omega;
                     prog.bifurcations = bifs.len();
-                    prog.fraction =
-                        ((omega - s.omega_start) / (s.omega_end - s.omega_start)).clamp(0.0, 1.0);
+                    prog.fraction = ((point.solution.omega - s.omega_start)
+                        / (s.omega_end - s.omega_start))
+                        .clamp(0.0, 1.0);
                     progress(&prog);
                 }
                 StepOutcome::Rejected(_) => {
