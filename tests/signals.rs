@@ -58,6 +58,17 @@ fn stopped_by(signal: &str) {
     assert!(rec.complete, "{signal}: {:?}", rec.notes);
     assert_eq!(rec.status, Some(RunStatus::Interrupted));
     assert!(!rec.points.is_empty(), "{signal}: no point kept");
+    // every point the sweep counted is in the recording, in order
+    let counted: usize = stderr
+        .split("the sweep stopped after ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("a point count in the message");
+    assert_eq!(rec.points.len(), counted, "{signal}: {stderr}");
+    let indices: Vec<u64> = rec.points.iter().map(|p| p.index).collect();
+    let expected: Vec<u64> = (0..counted as u64).collect();
+    assert_eq!(indices, expected, "{signal}: points in order, none missing");
 }
 
 #[test]
