@@ -655,6 +655,8 @@ impl CoupledRotor {
             };
             // the network's buffers are taken whole (swapped, the same lengths: the
             // network zeroes its side before each evaluation)
+            assert_eq!(out.g.len(), teval.g.len(), "swapped buffers");
+            assert!(!derivatives || out.dg_dt.len() == teval.dg_dt.len());
             match evaluated {
                 Ok(()) => std::mem::swap(&mut out.g, &mut teval.g),
                 Err(_) => {
