@@ -12,6 +12,7 @@
 //! 25 °C, ω from 300 to 700 rad/s, truncation order 3 (paper Eq. 34 with λ = 6/5 from the
 //! model's rotor speed ratios).
 
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -21,8 +22,8 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::continuation::{
-    BranchPoint, Continuation, ContinuationError, ContinuationOptions, FinishReason, StepOutcome,
-    Timings,
+    BranchPoint, Continuation, ContinuationError, ContinuationOptions, DriveEnd, FinishReason,
+    StepOutcome, Timings,
 };
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, HarmonicBalance, Ratio};
@@ -663,12 +664,91 @@ impl SweepProblem {
                 .as_ref()
                 .is_some_and(|f| f.load(Ordering::Relaxed))
         };
+        // the pool a drive runs in; a campaign's last run is moved to a wider one
+        let same_pool = |a: Option<&rayon::ThreadPool>, b: Option<&rayon::ThreadPool>| match (a, b)
+        {
+            (Some(a), Some(b)) => std::ptr::eq(a, b),
+            (None, None) => true,
+            _ => false,
+        };
         let result: Result<RunStatus, SweepError> = (|| loop {
             if interrupted() {
                 return Ok(RunStatus::Interrupted);
             }
-            let out = match step_in(pools, &mut cont) {
-                Ok(o) => o,
+            let pool = pools.for_next_step();
+            let mut failure: Option<SweepError> = None;
+            let mut observe = |out: StepOutcome| -> Result<(), SweepError> {
+                match out {
+                    StepOutcome::Accepted {
+                        point,
+                        bifurcations,
+                    } => {
+                        for b in &bifurcations {
+                            if let Some(kind) = b.bifurcation {
+                                let rec = BifurcationRecord {
+                                    // 0, 1, … (the schema's running number)
+                                    number: n_bif,
+                                    kind,
+                                    omega_rad_s: b.solution.omega,
+                                    arc_length: b.arclength,
+                                    after_point: prog.points.saturating_sub(1) as u64,
+                                    amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
+                                    multipliers: b
+                                        .stability
+                                        .as_ref()
+                                        .map(|f| f.multipliers.clone())
+                                        .unwrap_or_default(),
+                                };
+                                sink.write_bifurcation(&rec)?;
+                                n_bif += 1;
+                                bifs.push((b.solution.omega, kind.label().to_string()));
+                            }
+                        }
+                        let recording = std::time::Instant::now();
+                        let rec = self.point_record(prog.points as u64, &point)?;
+                        shares.push((
+                            rec.index,
+                            rec.omega_rad_s,
+                            point_half_order_share(&self.run, &rec),
+                        ));
+                        sink.write_point(&rec)?;
+                        record_seconds += recording.elapsed().as_secs_f64();
+                        prog.points += 1;
+                        prog.omega_rad_s = point.solution.omega;
+                        prog.bifurcations = bifs.len();
+                        prog.fraction = ((point.solution.omega - s.omega_start)
+                            / (s.omega_end - s.omega_start))
+                            .clamp(0.0, 1.0);
+                        progress(&prog);
+                    }
+                    StepOutcome::Rejected(_) => {
+                        prog.rejected_steps += 1;
+                        progress(&prog);
+                    }
+                    StepOutcome::Finished(f) => finish = Some(f),
+                }
+                Ok(())
+            };
+            let mut observer = |out: StepOutcome| {
+                if failure.is_none()
+                    && let Err(e) = observe(out)
+                {
+                    failure = Some(e);
+                }
+                if failure.is_some() || interrupted() || !same_pool(pools.for_next_step(), pool) {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            };
+            let end = cont.drive(pool, &mut observer);
+            if let Some(e) = failure {
+                return Err(e);
+            }
+            match end {
+                Ok(DriveEnd::Finished(_)) => return Ok(RunStatus::Completed),
+                // interrupted (checked above) or moved to another pool
+                Ok(DriveEnd::Paused) => continue,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
                     prog.lead_in = true;
@@ -691,61 +771,8 @@ impl SweepProblem {
                         stab,
                         s.max_points,
                     )?;
-                    continue;
                 }
                 Err(e) => return Err(e.into()),
-            };
-            match out {
-                StepOutcome::Accepted {
-                    point,
-                    bifurcations,
-                } => {
-                    for b in &bifurcations {
-                        if let Some(kind) = b.bifurcation {
-                            let rec = BifurcationRecord {
-                                // 0, 1, … (the schema's running number)
-                                number: n_bif,
-                                kind,
-                                omega_rad_s: b.solution.omega,
-                                arc_length: b.arclength,
-                                after_point: prog.points.saturating_sub(1) as u64,
-                                amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
-                                multipliers: b
-                                    .stability
-                                    .as_ref()
-                                    .map(|f| f.multipliers.clone())
-                                    .unwrap_or_default(),
-                            };
-                            sink.write_bifurcation(&rec)?;
-                            n_bif += 1;
-                            bifs.push((b.solution.omega, kind.label().to_string()));
-                        }
-                    }
-                    let recording = std::time::Instant::now();
-                    let rec = self.point_record(prog.points as u64, &point)?;
-                    shares.push((
-                        rec.index,
-                        rec.omega_rad_s,
-                        point_half_order_share(&self.run, &rec),
-                    ));
-                    sink.write_point(&rec)?;
-                    record_seconds += recording.elapsed().as_secs_f64();
-                    prog.points += 1;
-                    prog.omega_rad_s = point.solution.omega;
-                    prog.bifurcations = bifs.len();
-                    prog.fraction = ((point.solution.omega - s.omega_start)
-                        / (s.omega_end - s.omega_start))
-                        .clamp(0.0, 1.0);
-                    progress(&prog);
-                }
-                StepOutcome::Rejected(_) => {
-                    prog.rejected_steps += 1;
-                    progress(&prog);
-                }
-                StepOutcome::Finished(f) => {
-                    finish = Some(f);
-                    return Ok(RunStatus::Completed);
-                }
             }
         })();
         match result {

@@ -331,3 +331,108 @@ fn the_omega_resolution_ends_the_crossing_search_within_it() {
         "{resolved_trials} trials against {fine_trials}"
     );
 }
+
+/// A branch as `Continuation::drive` hands it out: every outcome in order, pausing after
+/// every `pause_every`-th (then driving on), in `pool` or the current one.
+fn driven(pool: Option<&rayon::ThreadPool>, pause_every: Option<usize>) -> Branch {
+    use std::ops::ControlFlow;
+    use tmrotor::continuation::{DriveEnd, StepOutcome};
+    let sys = Absorber::default();
+    let basis = Basis::integer(7).expect("basis");
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let opts = ContinuationOptions::new(0.8, 1.4);
+    let floquet = VariationalFloquet { steps: 400 };
+    let mut cont = Continuation::new(hb, opts, Some(&floquet)).expect("continuation");
+    let (mut points, mut bifurcations, mut rejected, mut seen) = (Vec::new(), Vec::new(), 0, 0);
+    let mut pauses = 0;
+    let finish = loop {
+        let mut observer = |out: StepOutcome| {
+            seen += 1;
+            match out {
+                StepOutcome::Accepted {
+                    point,
+                    bifurcations: b,
+                } => {
+                    points.push(*point);
+                    bifurcations.extend(b);
+                }
+                StepOutcome::Rejected(_) => rejected += 1,
+                StepOutcome::Finished(_) => {}
+            }
+            match pause_every {
+                Some(n) if seen % n == 0 => ControlFlow::Break(()),
+                _ => ControlFlow::Continue(()),
+            }
+        };
+        match cont.drive(pool, &mut observer).expect("drive") {
+            DriveEnd::Finished(f) => break f,
+            DriveEnd::Paused => pauses += 1,
+        }
+    };
+    if pause_every.is_some() {
+        assert!(pauses > 3, "paused {pauses} times");
+    }
+    Branch {
+        points,
+        bifurcations,
+        finish,
+        rejected_steps: rejected,
+    }
+}
+
+/// The pipelined driver hands out the branch `step` traces: the same points in the same
+/// order with the same multipliers, the same bifurcations and the same end, whether its
+/// corrector runs on a pool thread (a one-thread pool: its tasks run while it waits) or
+/// on the caller with the tasks on the pool, and when it is paused and driven on.
+#[test]
+fn the_pipelined_driver_hands_out_the_branch_that_stepping_traces() {
+    let reference = trace();
+    assert!(
+        reference
+            .bifurcations
+            .iter()
+            .any(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker)),
+        "the reference branch has Neimark–Sacker points to locate"
+    );
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("pool");
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    let runs = [
+        ("caller outside the pool", driven(Some(&two), None)),
+        ("on a one-thread pool", one.install(|| driven(None, None))),
+        ("paused and driven on", driven(Some(&two), Some(7))),
+        (
+            "paused, one-thread pool",
+            one.install(|| driven(None, Some(5))),
+        ),
+    ];
+    for (what, b) in &runs {
+        assert_eq!(b.points.len(), reference.points.len(), "{what}: points");
+        for (p, r) in b.points.iter().zip(&reference.points) {
+            assert_eq!(p.index, r.index, "{what}");
+            assert_eq!(p.solution, r.solution, "{what}: point {}", r.index);
+            assert_eq!(p.stability, r.stability, "{what}: point {}", r.index);
+            assert_eq!(p.arclength, r.arclength, "{what}: point {}", r.index);
+        }
+        let key = |v: &[tmrotor::continuation::BranchPoint]| {
+            v.iter()
+                .map(|b| {
+                    (
+                        b.index,
+                        b.bifurcation,
+                        b.solution.omega,
+                        b.stability.clone(),
+                    )
+                })
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(key(&b.bifurcations), key(&reference.bifurcations), "{what}");
+        assert_eq!(b.finish, reference.finish, "{what}");
+        assert_eq!(b.rejected_steps, reference.rejected_steps, "{what}");
+    }
+}

@@ -49,8 +49,10 @@
 //! (re-correcting from the earlier point at intermediate arclength) and emitted as
 //! labelled points; the saddle-nodes need no multipliers and are located without a
 //! stability method too. A point is handed out one step late: its stability evaluation,
-//! and then the location of a change between the point before it and it, run beside the
-//! next step's corrector (`rayon::join`), so that both cores have work:
+//! and then the location of a change of stability between the point before it and it,
+//! run beside the next step's corrector (`rayon::join`), so that both cores have work;
+//! the search for a fold between the two, which needs no multipliers, follows the
+//! corrector on its side (the corrector is usually done first):
 //!
 //! * **saddle-nodes at folds.** Where the ω-component of the tangent changes sign, the
 //!   branch turns in ω; a real multiplier passes through +1 exactly there. The fold is
@@ -91,6 +93,9 @@
 //! [`Continuation::run`] loops and calls an observer per outcome.
 
 pub mod csv;
+mod pipeline;
+
+pub use pipeline::DriveEnd;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -148,6 +153,33 @@ const JUMP_STALLED_TRIALS: usize = 2;
 /// nearly there the zero lies next to it (on the default sweep's period doubling at
 /// 617.19 rad/s, 1.2e-5 of a bracket 0.034 wide).
 const SECANT_MARGIN: f64 = 1e-6;
+
+/// The two ends' stabilities when the number of unstable multipliers differs between
+/// them: each kind whose count outside the circle changed is then searched, when the total
+/// changed too (a pair outside that turns into two real multipliers outside changes the
+/// kinds' counts, not the stability); a real multiplier through +1 is the fold's.
+fn stability_changes(ends: [Option<&FloquetResult>; 2]) -> Option<[&FloquetResult; 2]> {
+    match ends {
+        [Some(fa), Some(fb)] if fa.unstable_count() != fb.unstable_count() => Some([fa, fb]),
+        _ => None,
+    }
+}
+
+/// Whether the tangent's ω-component changes sign between `from` and `to` (a fold).
+fn folds_between(from: &Current, to: &Current, nu: usize) -> bool {
+    from.tangent[nu] * to.tangent[nu] < 0.0
+}
+
+/// The bifurcations located between two points, the fold's first, in arclength order
+/// (a stable sort: a fold and a crossing at the same arclength keep that order).
+fn merged_changes(
+    crossings: Vec<BranchPoint>,
+    fold: impl IntoIterator<Item = BranchPoint>,
+) -> Vec<BranchPoint> {
+    let mut found: Vec<BranchPoint> = fold.into_iter().chain(crossings).collect();
+    found.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
+    found
+}
 
 /// Moduli of the multipliers of `kind` ([`BifurcationKind::of_multiplier`]), largest first.
 fn moduli_of_kind(f: &FloquetResult, kind: BifurcationKind) -> Vec<f64> {
@@ -733,13 +765,8 @@ pub struct Continuation<'a> {
     stability: Option<&'a dyn StabilityMethod>,
     scales: Vec<f64>, // per unknown, then ω
     current: Option<Current>,
-    ds: f64,
-    n_points: usize,
+    walk: Walk,
     finished: Option<FinishReason>,
-    finish_after: Option<FinishReason>,
-    /// Accepted points in scaled units (unknowns, then ω) with their arclengths, for
-    /// [`closing_point`].
-    history: PathHistory,
     /// With a stability method: the accepted point at `current`, not handed out yet (see
     /// the module docs).
     held: Option<Held>,
@@ -748,6 +775,21 @@ pub struct Continuation<'a> {
     previous: Option<Current>,
     /// Where the time went (see [`Continuation::timings`]).
     clock: Clock,
+}
+
+/// The corrector's side of the state: what the step control and the end of the branch
+/// depend on, changed only by accepted and rejected steps (never by stability).
+#[derive(Default)]
+struct Walk {
+    /// The next step, scaled arclength.
+    ds: f64,
+    /// Points accepted so far (the next point's index).
+    n_points: usize,
+    /// Why the branch ends after the last accepted point.
+    finish_after: Option<FinishReason>,
+    /// Accepted points in scaled units (unknowns, then ω) with their arclengths, for
+    /// [`closing_point`].
+    history: PathHistory,
 }
 
 /// Time spent in the parts of a continuation, each summed over its calls (wall time of
@@ -1067,11 +1109,11 @@ impl<'a> Continuation<'a> {
             stability,
             scales: Vec::new(),
             current: None,
-            ds,
-            n_points: 0,
+            walk: Walk {
+                ds,
+                ..Walk::default()
+            },
             finished: None,
-            finish_after: None,
-            history: PathHistory::new(),
             held: None,
             previous: None,
             clock: Clock::default(),
@@ -1090,7 +1132,7 @@ impl<'a> Continuation<'a> {
 
     /// Current step in scaled arclength.
     pub fn step_size(&self) -> f64 {
-        self.ds
+        self.walk.ds
     }
 
     fn lo_hi(&self) -> (f64, f64) {
@@ -1101,13 +1143,14 @@ impl<'a> Continuation<'a> {
     /// The point without its stability.
     fn bare_point(
         &self,
+        index: usize,
         a: &[f64],
         omega: f64,
         stats: &newton::NewtonStats,
         arclength: f64,
     ) -> BranchPoint {
         BranchPoint {
-            index: self.n_points,
+            index,
             arclength,
             solution: HbSolution::from_unknowns(omega, self.hb.basis(), self.hb.n_mech(), a, stats),
             stability: None,
@@ -1366,10 +1409,10 @@ impl<'a> Continuation<'a> {
         }
         self.scales.push(sw);
         let tangent = self.tangent(&a, omega, None, None, None)?;
-        let point = self.bare_point(&a, omega, &stats, 0.0);
-        self.history = PathHistory::new();
-        self.history.push(self.scaled(&a, omega), 0.0);
-        self.n_points = 1;
+        let point = self.bare_point(0, &a, omega, &stats, 0.0);
+        self.walk.history = PathHistory::new();
+        self.walk.history.push(self.scaled(&a, omega), 0.0);
+        self.walk.n_points = 1;
         let cur = Current {
             a,
             omega,
@@ -1492,7 +1535,7 @@ impl<'a> Continuation<'a> {
         if let Some(f) = &self.finished {
             return Ok(StepOutcome::Finished(f.clone()));
         }
-        if self.finish_after.is_some() {
+        if self.walk.finish_after.is_some() {
             // the last accepted point first, then the reason
             if self.held.is_some() {
                 self.settle_held();
@@ -1500,7 +1543,7 @@ impl<'a> Continuation<'a> {
                     return Ok(out);
                 }
             }
-            if let Some(f) = self.finish_after.take() {
+            if let Some(f) = self.walk.finish_after.take() {
                 self.finished = Some(f.clone());
                 return Ok(StepOutcome::Finished(f));
             }
@@ -1589,34 +1632,47 @@ impl<'a> Continuation<'a> {
         to_stability: Option<&FloquetResult>,
         index: usize,
     ) -> Vec<BranchPoint> {
-        let nu = self.hb.n_unknowns();
-        let fold = from.tangent[nu] * to.tangent[nu] < 0.0;
-        // each kind whose count outside the circle changed, when the total changed too (a
-        // pair outside that turns into two real multipliers outside changes the kinds'
-        // counts, not the stability); a real multiplier through +1 is the fold's
-        let crossing = match (&from.stability, to_stability) {
-            (Some(fa), Some(fb)) if fa.unstable_count() != fb.unstable_count() => Some((fa, fb)),
-            _ => None,
-        };
-        if !fold && crossing.is_none() {
-            return Vec::new();
+        let folds = self.located_fold(from, to, index);
+        merged_changes(
+            self.located_crossings(from, to, [from.stability.as_ref(), to_stability], index),
+            folds,
+        )
+    }
+
+    /// The saddle-node between `from` and `to` when the tangent's ω-component changes
+    /// sign between them (a search of its own in [`Timings`]).
+    fn located_fold(&self, from: &Current, to: &Current, index: usize) -> Option<BranchPoint> {
+        if !folds_between(from, to, self.hb.n_unknowns()) {
+            return None;
         }
         Clock::time(&self.clock.searches, &self.clock.search_ns, || {
+            self.locate_fold(from, to, index)
+        })
+    }
+
+    /// The Neimark–Sacker and period-doubling points between `from` and `to`, whose
+    /// stabilities are `ends`, in no particular order (a search of its own in
+    /// [`Timings`] when the numbers of unstable multipliers differ).
+    fn located_crossings(
+        &self,
+        from: &Current,
+        to: &Current,
+        ends: [Option<&FloquetResult>; 2],
+        index: usize,
+    ) -> Vec<BranchPoint> {
+        let Some([fa, fb]) = stability_changes(ends) else {
+            return Vec::new();
+        };
+        Clock::time(&self.clock.searches, &self.clock.search_ns, || {
             let mut found = Vec::new();
-            if fold {
-                found.extend(self.locate_fold(from, to, index));
-            }
-            if let Some((fa, fb)) = crossing {
-                for kind in [
-                    BifurcationKind::NeimarkSacker,
-                    BifurcationKind::PeriodDoubling,
-                ] {
-                    if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
-                        found.extend(self.locate(from, to, [fa, fb], index, kind));
-                    }
+            for kind in [
+                BifurcationKind::NeimarkSacker,
+                BifurcationKind::PeriodDoubling,
+            ] {
+                if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
+                    found.extend(self.locate(from, to, [fa, fb], index, kind));
                 }
             }
-            found.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
             found
         })
     }
@@ -1654,7 +1710,7 @@ impl<'a> Continuation<'a> {
             bracket.narrow(mid, g_mid, (g_mid > 0.0) == (g_start > 0.0));
         }
         let (a, w, st, mid) = best?;
-        let mut p = self.bare_point(&a, w, &st, from.arclength + mid);
+        let mut p = self.bare_point(index, &a, w, &st, from.arclength + mid);
         p.bifurcation = Some(BifurcationKind::SaddleNode);
         p.index = index;
         Some(p)
@@ -1704,87 +1760,45 @@ impl<'a> Continuation<'a> {
         // the held point's stability alongside this step's corrector
         // ... and the location of a change between the previous point and the held one
         // (which needs the held point's stability) after it, still beside the corrector
+        let ds = self.walk.ds;
         let (assessed, candidate) = match self.held.as_ref().filter(|h| !h.assessed()) {
             Some(held) => {
-                let (assessed, candidate) = rayon::join(
+                // the fold's search needs no stability: it runs after the corrector,
+                // the side that is usually done first
+                let index = held.point.index;
+                let ((result, crossings), (candidate, folds)) = rayon::join(
                     || {
                         let result = self.assess(&held.point.solution);
                         let found = self.previous.as_ref().map(|prev| {
-                            self.located_changes_with(
-                                prev,
-                                cur,
-                                result.0.as_ref(),
-                                held.point.index,
-                            )
+                            let ends = [prev.stability.as_ref(), result.0.as_ref()];
+                            self.located_crossings(prev, cur, ends, index)
                         });
                         (result, found)
                     },
-                    || self.candidate(cur),
+                    || {
+                        let candidate = self.candidate(cur, ds);
+                        let folds = self
+                            .previous
+                            .as_ref()
+                            .map(|prev| self.located_fold(prev, cur, index));
+                        (candidate, folds)
+                    },
                 );
-                (Some(assessed), candidate)
+                let found = crossings.map(|c| merged_changes(c, folds.into_iter().flatten()));
+                (Some((result, found)), candidate)
             }
-            None => (None, self.candidate(cur)),
+            None => (None, self.candidate(cur, ds)),
         };
         if let Some((result, found)) = assessed {
             self.settle_with(cur, result, found);
         }
         let c = match candidate {
             Ok(c) => c,
-            Err(reason) => return Ok(self.reject(reason, cur.omega)),
+            Err(reason) => return Ok(Self::reject(&mut self.walk, &self.opts, reason, cur.omega)),
         };
-        if let Some(wb) = c.bound {
-            self.finish_after = Some(FinishReason::Bound { omega: wb });
-        }
-        let mut point = self.bare_point(&c.a, c.omega, &c.stats, c.arclength);
-        // step control
-        let effort = c.stats.newton_equivalent();
-        let factor = if effort == 0 {
-            2.0
-        } else {
-            (self.opts.target_iterations as f64 / effort as f64)
-                .sqrt()
-                .clamp(0.5, 2.0)
-        };
-        self.ds = (self.ds * factor).clamp(self.opts.ds_min, self.opts.ds_max);
-        self.n_points += 1;
-        let x = self.scaled(&c.a, c.omega);
-        if self.finish_after.is_none()
-            && let Some(earlier) = closing_point(&self.history, &x, c.arclength, &c.tangent)
-        {
-            self.finish_after = Some(FinishReason::Closed {
-                omega: c.omega,
-                earlier,
-            });
-        }
-        if self.finish_after.is_none()
-            && let Some(earlier) = reversing_point(&self.history, &x, c.arclength, &c.tangent)
-        {
-            self.finish_after = Some(FinishReason::Reversed {
-                omega: c.omega,
-                earlier,
-            });
-        }
-        self.history.push(x, c.arclength);
-        if self.n_points >= self.opts.max_points && self.finish_after.is_none() {
-            self.finish_after = Some(FinishReason::MaxPoints);
-        }
-        let span = c.arclength - cur.arclength;
-        let bend = (self.opts.curved_predictor && c.bound.is_none() && span > 0.0).then(|| {
-            c.tangent
-                .iter()
-                .zip(&cur.tangent)
-                .map(|(t, t0)| (t - t0) / span)
-                .collect()
-        });
-        let mut next = Current {
-            a: c.a,
-            omega: c.omega,
-            tangent: c.tangent,
-            arclength: c.arclength,
-            stability: None,
-            chord: c.chord,
-            bend,
-        };
+        let mut walk = std::mem::take(&mut self.walk);
+        let (mut point, mut next) = self.accept(&mut walk, cur, c);
+        self.walk = walk;
         if self.stability.is_some() {
             if let Some(out) = self.hand_out() {
                 // the held point (assessed above) goes out; the new one is held
@@ -1804,17 +1818,76 @@ impl<'a> Continuation<'a> {
         })
     }
 
-    /// The corrected point of a step of `self.ds` from `cur`, its tangent, and the
+    /// The bookkeeping of an accepted step from `cur` to the corrected `c`: step control,
+    /// the end of the branch (bound, closure, reversal, point budget), the predictor's
+    /// bend. The point (without stability) and the state to step on from.
+    fn accept(&self, walk: &mut Walk, cur: &Current, c: Candidate) -> (BranchPoint, Current) {
+        if let Some(wb) = c.bound {
+            walk.finish_after = Some(FinishReason::Bound { omega: wb });
+        }
+        let point = self.bare_point(walk.n_points, &c.a, c.omega, &c.stats, c.arclength);
+        // step control
+        let effort = c.stats.newton_equivalent();
+        let factor = if effort == 0 {
+            2.0
+        } else {
+            (self.opts.target_iterations as f64 / effort as f64)
+                .sqrt()
+                .clamp(0.5, 2.0)
+        };
+        walk.ds = (walk.ds * factor).clamp(self.opts.ds_min, self.opts.ds_max);
+        walk.n_points += 1;
+        let x = self.scaled(&c.a, c.omega);
+        if walk.finish_after.is_none()
+            && let Some(earlier) = closing_point(&walk.history, &x, c.arclength, &c.tangent)
+        {
+            walk.finish_after = Some(FinishReason::Closed {
+                omega: c.omega,
+                earlier,
+            });
+        }
+        if walk.finish_after.is_none()
+            && let Some(earlier) = reversing_point(&walk.history, &x, c.arclength, &c.tangent)
+        {
+            walk.finish_after = Some(FinishReason::Reversed {
+                omega: c.omega,
+                earlier,
+            });
+        }
+        walk.history.push(x, c.arclength);
+        if walk.n_points >= self.opts.max_points && walk.finish_after.is_none() {
+            walk.finish_after = Some(FinishReason::MaxPoints);
+        }
+        let span = c.arclength - cur.arclength;
+        let bend = (self.opts.curved_predictor && c.bound.is_none() && span > 0.0).then(|| {
+            c.tangent
+                .iter()
+                .zip(&cur.tangent)
+                .map(|(t, t0)| (t - t0) / span)
+                .collect()
+        });
+        let next = Current {
+            a: c.a,
+            omega: c.omega,
+            tangent: c.tangent,
+            arclength: c.arclength,
+            stability: None,
+            chord: c.chord,
+            bend,
+        };
+        (point, next)
+    }
+
+    /// The corrected point of a step of `ds` from `cur`, its tangent, and the
     /// re-solve on the ω bound when the step left the range; or why the step is rejected.
-    fn candidate(&self, cur: &Current) -> Result<Candidate, RejectReason> {
+    fn candidate(&self, cur: &Current, ds: f64) -> Result<Candidate, RejectReason> {
         Clock::time(&self.clock.steps, &self.clock.step_ns, || {
-            self.try_step(cur)
+            self.try_step(cur, ds)
         })
     }
 
     /// [`Self::candidate`], untimed.
-    fn try_step(&self, cur: &Current) -> Result<Candidate, RejectReason> {
-        let ds = self.ds;
+    fn try_step(&self, cur: &Current, ds: f64) -> Result<Candidate, RejectReason> {
         let nu = self.hb.n_unknowns();
         let corrector = |e: &dyn std::fmt::Display| RejectReason::Corrector {
             ds,
@@ -1884,10 +1957,15 @@ impl<'a> Continuation<'a> {
         })
     }
 
-    fn reject(&mut self, reason: RejectReason, omega: f64) -> StepOutcome {
-        self.ds *= 0.5;
-        if self.ds < self.opts.ds_min {
-            self.finish_after = Some(FinishReason::StepTooSmall { omega, ds: self.ds });
+    fn reject(
+        walk: &mut Walk,
+        opts: &ContinuationOptions,
+        reason: RejectReason,
+        omega: f64,
+    ) -> StepOutcome {
+        walk.ds *= 0.5;
+        if walk.ds < opts.ds_min {
+            walk.finish_after = Some(FinishReason::StepTooSmall { omega, ds: walk.ds });
         }
         StepOutcome::Rejected(reason)
     }
@@ -1932,7 +2010,7 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
-            let mut p = self.bare_point(&a, w, &st, cur.arclength + mid);
+            let mut p = self.bare_point(index, &a, w, &st, cur.arclength + mid);
             (p.stability, p.stability_error) = self.assess_for_search(&p.solution, [f_a, f_b]);
             let Some(fm) = p.stability.as_ref() else {
                 break;
