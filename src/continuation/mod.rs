@@ -90,10 +90,12 @@
 //! [`Continuation::solve_between`].
 //!
 //! The driver follows argmin's split: [`Continuation::step`] returns a [`StepOutcome`],
-//! [`Continuation::run`] loops and calls an observer per outcome.
+//! [`Continuation::run`] loops and calls an observer per outcome. [`Continuation::drive`]
+//! hands the same outcomes to an observer from a pipeline in which the corrector does not
+//! wait for the points' stability (see [`pipeline`]); the sweep uses it.
 
 pub mod csv;
-mod pipeline;
+pub mod pipeline;
 
 pub use pipeline::DriveEnd;
 
@@ -806,7 +808,8 @@ pub struct Timings {
     /// Stability evaluations of accepted points.
     pub evaluations: usize,
     pub stability_seconds: f64,
-    /// Pairs of neighbouring points searched for a bifurcation between them.
+    /// Searches between neighbouring points: one for a fold, one for a change of
+    /// stability (a pair of points can have both).
     pub searches: usize,
     pub search_seconds: f64,
 }
