@@ -436,3 +436,53 @@ fn the_pipelined_driver_hands_out_the_branch_that_stepping_traces() {
         assert_eq!(b.rejected_steps, reference.rejected_steps, "{what}");
     }
 }
+
+/// A stability method that panics past `omega` (a stand-in for a bug in one).
+struct PanicsPast<M>(M, f64);
+
+impl<M: StabilityMethod> StabilityMethod for PanicsPast<M> {
+    fn multipliers(
+        &self,
+        system: &dyn System,
+        orbit: &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError> {
+        assert!(orbit.omega() <= self.1, "a stability method's own bug");
+        self.0.multipliers(system, orbit)
+    }
+}
+
+/// A panic in one of the pipeline's tasks reaches the caller of `drive` (on a pool and
+/// from outside one) instead of leaving the corrector waiting for its result.
+#[test]
+fn a_panicking_stability_task_ends_the_drive_with_its_panic() {
+    let sys = Absorber::default();
+    let basis = Basis::integer(7).expect("basis");
+    let floquet = PanicsPast(VariationalFloquet { steps: 400 }, 1.0);
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("pool");
+    for pool in [Some(&two), None] {
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let opts = ContinuationOptions::new(0.8, 1.4);
+        let mut cont = Continuation::new(hb, opts, Some(&floquet)).expect("continuation");
+        let mut last_omega = 0.0;
+        let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let mut observer = |out| {
+                if let tmrotor::continuation::StepOutcome::Accepted { point, .. } = out {
+                    last_omega = point.solution.omega;
+                }
+                std::ops::ControlFlow::Continue(())
+            };
+            match pool {
+                Some(p) => cont.drive(Some(p), &mut observer),
+                None => two.install(|| cont.drive(None, &mut observer)),
+            }
+        }));
+        assert!(outcome.is_err(), "the drive ended without the panic");
+        assert!(
+            last_omega > 0.8 && last_omega <= 1.0,
+            "last point at {last_omega}"
+        );
+    }
+}

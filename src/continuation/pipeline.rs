@@ -62,6 +62,28 @@ enum Done {
     Stability(usize, Assessment),
     Fold(usize, Option<BranchPoint>),
     Crossings(usize, Vec<BranchPoint>),
+    /// A task panicked: the drive ends, and the scope passes the panic on.
+    Panicked,
+}
+
+/// A task's way back to the corrector loop: sends its result, or [`Done::Panicked`] if
+/// the task unwinds before it could (the loop would otherwise wait for it forever).
+struct Reply(Option<mpsc::Sender<Done>>);
+
+impl Reply {
+    fn send(mut self, done: Done) {
+        if let Some(tx) = self.0.take() {
+            let _ = tx.send(done);
+        }
+    }
+}
+
+impl Drop for Reply {
+    fn drop(&mut self) {
+        if let Some(tx) = self.0.take() {
+            let _ = tx.send(Done::Panicked);
+        }
+    }
 }
 
 /// An accepted point on its way out.
@@ -191,6 +213,8 @@ struct Pipe<'c, 'a, 's, 'scope> {
     front: usize,
     tx: mpsc::Sender<Done>,
     rx: mpsc::Receiver<Done>,
+    /// A task panicked (see [`Reply`]).
+    panicked: bool,
 }
 
 impl<'c, 'a: 'c, 's, 'scope> Pipe<'c, 'a, 's, 'scope>
@@ -255,6 +279,7 @@ where
             front: 0,
             tx,
             rx,
+            panicked: false,
         }
     }
 
@@ -270,6 +295,9 @@ where
         loop {
             while let Ok(done) = self.rx.try_recv() {
                 self.take_in(done);
+            }
+            if self.panicked {
+                return;
             }
             self.start_crossings();
             if self.hand_out(observer).is_break() {
@@ -322,18 +350,19 @@ where
             None => slot.stability = Some((state.stability.clone(), None)),
             Some(p) => {
                 let cont = self.cont;
-                let tx = self.tx.clone();
+                let tx = Reply(Some(self.tx.clone()));
                 let solution: HbSolution = p.solution.clone();
                 self.scope.spawn_fifo(move |_| {
-                    let _ = tx.send(Done::Stability(k, cont.assess(&solution)));
+                    tx.send(Done::Stability(k, cont.assess(&solution)));
                 });
                 if let Some(prev) = self.slots.back() {
                     slot.crossings = Search::Waiting;
                     if folds_between(&prev.state, &state, cont.hb.n_unknowns()) {
                         slot.fold = Search::Running;
-                        let (tx, from, index) = (self.tx.clone(), Arc::clone(&prev.state), p.index);
+                        let tx = Reply(Some(self.tx.clone()));
+                        let (from, index) = (Arc::clone(&prev.state), p.index);
                         self.scope.spawn_fifo(move |_| {
-                            let _ = tx.send(Done::Fold(k, cont.located_fold(&from, &state, index)));
+                            tx.send(Done::Fold(k, cont.located_fold(&from, &state, index)));
                         });
                     }
                 }
@@ -365,6 +394,7 @@ where
                     s.crossings = Search::Done(c);
                 }
             }
+            Done::Panicked => self.panicked = true,
         }
     }
 
@@ -383,13 +413,13 @@ where
                 self.slots[i].crossings = Search::Done(Vec::new());
                 continue;
             };
-            let (cont, tx, k) = (self.cont, self.tx.clone(), self.front + i);
+            let (cont, tx, k) = (self.cont, Reply(Some(self.tx.clone())), self.front + i);
             let (from, to) = (Arc::clone(&prev.state), Arc::clone(&slot.state));
             let (fa, fb) = (fa.clone(), fb.clone());
             let index = slot.point.as_ref().map_or(0, |p| p.index);
             self.scope.spawn_fifo(move |_| {
                 let found = cont.located_crossings(&from, &to, [Some(&fa), Some(&fb)], index);
-                let _ = tx.send(Done::Crossings(k, found));
+                tx.send(Done::Crossings(k, found));
             });
             self.slots[i].crossings = Search::Running;
         }
