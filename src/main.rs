@@ -10,17 +10,5 @@ fn main() -> std::process::ExitCode {
     tmrotor::keep_freed_memory();
     tmrotor::sequential_dense_kernels();
     let cli = tmrotor::cli::Cli::parse();
-    match tmrotor::cli::run(cli) {
-        Ok(()) => std::process::ExitCode::SUCCESS,
-        Err(err) => match err.downcast_ref::<tmrotor::cli::Interrupted>() {
-            Some(stop) => {
-                eprintln!("interrupted: {stop}");
-                std::process::ExitCode::from(tmrotor::cli::INTERRUPTED_EXIT)
-            }
-            None => {
-                eprintln!("error: {}", tmrotor::cli::error_text(&err));
-                std::process::ExitCode::from(1)
-            }
-        },
-    }
+    tmrotor::cli::exit_code("tmrotor", tmrotor::cli::run(cli))
 }

@@ -1,122 +1,36 @@
 //! One continuation sweep of a coupled rotor model, from study settings to a recording.
 //!
-//! This is the driver behind `tmrotor sweep`: it builds the [`CoupledRotor`] from a model
-//! file and the study parameters, traces the branch with [`Continuation`] (Floquet
+//! This is the driver behind `tmrotor sweep`: it takes the problem a study builds
+//! ([`SweepProblem`], see [`crate::study`]: the coupled rotor, the basis, the run
+//! description and the stability method), traces the branch with [`Continuation`] (Floquet
 //! stability per point unless switched off: by default the exponential-split SIP product
 //! [`ExpSip`] on a Craig–Bampton reduction of the rotor, see [`StabilityChoice`]), converts
 //! every accepted point
 //! and every located bifurcation into the recording's domain types and hands them to a
 //! [`Sink`] as they come, so that an interrupted or failed sweep keeps what it computed.
-//!
-//! Defaults (the paper's default study, section 5): q_l = 2 L/min, cooling and ambient
-//! 25 °C, ω from 300 to 700 rad/s, truncation order 3 (paper Eq. 34 with λ = 6/5 from the
-//! model's rotor speed ratios).
+//! Each accepted point's recorded quantities (orbits, temperatures, bearing loads,
+//! clearances, thermal forces) come from [`crate::derive::point_record`], the same
+//! derivation replay uses.
 
 use std::ops::ControlFlow;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use num_complex::Complex64;
-use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::continuation::{
     BranchPoint, Continuation, ContinuationError, ContinuationOptions, DriveEnd, FinishReason,
     StepOutcome, Timings,
 };
-use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
-use crate::hb::{Basis, HarmonicBalance, Ratio};
-use crate::model::{Dir, Model};
-use crate::record::derive::{Stretch, period_doubled_stretches, point_half_order_share};
-use crate::record::types::{
-    BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, PointRecord,
-    RunInfo, RunStatus, ThermalForces, ThermalNode,
-};
+use crate::derive::{Stretch, period_doubled_stretches, point_half_order_share};
+use crate::hb::HarmonicBalance;
+use crate::record::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
 use crate::record::{RecordError, Sink};
-use crate::stability::{
-    CraigBampton, ExpSip, IntervalMap, Reduced, ReductionSettings, Sip, StabilityError,
-    StabilityMethod,
+use crate::stability::{ExpSip, StabilityError, StabilityMethod};
+pub use crate::study::{
+    DEFAULT_INTERVALS, RECORD_SAMPLES, StabilityChoice, StudyError, StudySettings, SweepProblem,
+    stability_method,
 };
-
-/// Samples per period used for the recorded orbits, bearing loads and temperature ranges.
-pub const RECORD_SAMPLES: usize = 128;
-
-/// Everything a sweep needs besides the model file. Every default is the paper's default
-/// study (see the module docs).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct StudySettings {
-    /// Model file; `None` is the built-in dual rotor.
-    pub model: Option<PathBuf>,
-    /// Lubricant flow rate per bearing `q_l` (L/min).
-    pub flow_l_min: f64,
-    /// Lubricant cooling temperature `T_L∞` (°C).
-    pub cooling_temp_c: f64,
-    /// Ambient temperature `T_∞` (°C).
-    pub ambient_temp_c: f64,
-    /// Truncation order `k` of the basis (Eq. 34).
-    pub order: u32,
-    /// Sweep start and end (rad/s).
-    pub omega_start: f64,
-    pub omega_end: f64,
-    /// Largest continuation step (scaled arclength; see [`ContinuationOptions`]).
-    ///
-    /// Default 0.15. Why: on the default study, 0.05, 0.10 and 0.15 give the same
-    /// ω-turning points (to 0.1 rad/s, the 0.05 run adds one pair of tiny zigzags) and the
-    /// same node-8 peaks (to 0.2 rad/s and 0.01 µm), with 958, 460 and 314 points; the
-    /// step control shortens the step where the branch bends, so the cap mostly sets
-    /// the spacing on the flat parts.
-    pub ds_max: f64,
-    /// Maximum number of points.
-    pub max_points: usize,
-    /// Solve the thermal network together with the vibration (two-way coupling).
-    pub thermal: bool,
-    /// Compute Floquet multipliers at every point (and locate the Neimark–Sacker and
-    /// period-doubling points; saddle-nodes, the folds of the branch, are located either
-    /// way).
-    pub stability: bool,
-    /// Floquet method (see [`StabilityChoice`]).
-    pub stability_method: StabilityChoice,
-    /// Intervals per period of the SIP product (Eq. 33), default 512. `exp-sip`: the fine
-    /// product of the extrapolation (even), the start of the refinement near the unit
-    /// circle (doubled up to 4096); the explicit `sip` method raises it automatically for
-    /// stiff systems.
-    pub sip_intervals: usize,
-    /// Interval map of the `exp-sip` product: `exponential` (default) or `strang`, the
-    /// map of earlier versions (see [`IntervalMap`]). Recordings whose embedded settings
-    /// lack this field were made with `strang`, and are re-derived with it.
-    pub interval_map: IntervalMap,
-    /// Cut-off (rad/s) of the Craig–Bampton reduction the stability is computed on
-    /// (interior modes of the rotor with its bearing DoFs held, up to this frequency);
-    /// 0 computes on the full model.
-    pub reduction_cutoff_rad_s: f64,
-    /// AFT samples per period; `None` chooses from the basis.
-    pub aft_samples: Option<usize>,
-}
-
-impl Default for StudySettings {
-    fn default() -> Self {
-        Self {
-            model: None,
-            flow_l_min: 2.0,
-            cooling_temp_c: 25.0,
-            ambient_temp_c: 25.0,
-            order: 3,
-            omega_start: 300.0,
-            omega_end: 700.0,
-            ds_max: 0.15,
-            max_points: 2000,
-            thermal: true,
-            stability: true,
-            stability_method: StabilityChoice::ExpSip,
-            sip_intervals: DEFAULT_INTERVALS,
-            interval_map: IntervalMap::Exponential,
-            reduction_cutoff_rad_s: ReductionSettings::default().cutoff_rad_s,
-            aft_samples: None,
-        }
-    }
-}
 
 /// How one lead-in continuation (see `SweepProblem::run`) ended.
 enum LeadIn {
@@ -155,85 +69,11 @@ pub const BIFURCATION_TOL_MODULUS: f64 = 1e-4;
 /// the point by less than 1e-3 rad/s with each trial of 0.4 s.
 pub const BIFURCATION_TOL_OMEGA: f64 = 1e-3;
 
-/// Default SIP intervals per period of a sweep: [`ExpSip`]'s default, 512 extrapolated
-/// with 256 and refined up to 4096 intervals near the unit circle (the reason, with the
-/// measured errors, is on [`ExpSip::default`]).
-pub const DEFAULT_INTERVALS: usize = 512;
-
-/// Which Floquet method a sweep uses.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum StabilityChoice {
-    /// Exponential-split SIP ([`ExpSip`]): the orbit-mean state matrix taken exactly, the
-    /// fluctuation through the exponential interval map; works for stiff finite-element
-    /// models. Default.
-    ExpSip,
-    /// The paper's explicit SIP product ([`Sip`], Eq. 33), with the interval count raised
-    /// until `Δ·ρ(B) ≤ 1`; refuses models that would need more than 200 000 intervals.
-    Sip,
-}
-
-impl StabilityChoice {
-    /// Name used in settings files and on the command line.
-    pub fn label(self) -> &'static str {
-        match self {
-            Self::ExpSip => "exp-sip",
-            Self::Sip => "sip",
-        }
-    }
-}
-
-/// The stability method of `settings` for `system`: the chosen product, on a
-/// Craig–Bampton reduction built at `omega_ref` unless the cut-off is 0.
-pub fn stability_method(
-    settings: &StudySettings,
-    system: &CoupledRotor,
-    omega_ref: f64,
-) -> Result<Box<dyn StabilityMethod>, StabilityError> {
-    let exp = ExpSip {
-        intervals: settings.sip_intervals,
-        interval_map: settings.interval_map,
-        ..ExpSip::default()
-    };
-    let sip = Sip {
-        intervals: settings.sip_intervals,
-        ..Sip::default()
-    };
-    if settings.reduction_cutoff_rad_s == 0.0 {
-        return Ok(match settings.stability_method {
-            StabilityChoice::ExpSip => Box::new(exp),
-            StabilityChoice::Sip => Box::new(sip),
-        });
-    }
-    let reduction = CraigBampton::new(
-        system,
-        omega_ref,
-        ReductionSettings {
-            cutoff_rad_s: settings.reduction_cutoff_rad_s,
-            max_modes: usize::MAX,
-        },
-    )?;
-    Ok(match settings.stability_method {
-        StabilityChoice::ExpSip => Box::new(Reduced {
-            reduction,
-            method: exp,
-        }),
-        StabilityChoice::Sip => Box::new(Reduced {
-            reduction,
-            method: sip,
-        }),
-    })
-}
-
 /// Errors of a sweep.
 #[derive(Debug, Error)]
 pub enum SweepError {
     #[error(transparent)]
-    Model(#[from] crate::model::ModelError),
-    #[error(transparent)]
-    Coupled(#[from] CoupledError),
-    #[error(transparent)]
-    Basis(#[from] crate::hb::BasisError),
+    Study(#[from] StudyError),
     #[error(transparent)]
     Hb(#[from] crate::hb::HbError),
     #[error(transparent)]
@@ -248,12 +88,6 @@ pub enum SweepError {
          nearly linear, e.g. below the resonances"
     )]
     LeadIn { omega: f64, tried: String },
-    #[error("study setting {field} = {value}: {reason}")]
-    Setting {
-        field: &'static str,
-        value: String,
-        reason: &'static str,
-    },
 }
 
 /// Progress of a running sweep, reported after every step.
@@ -285,7 +119,7 @@ pub struct SweepReport {
     /// corrector, a sharp turn, a fold pair inside the step).
     pub rejected_steps: usize,
     /// Stretches of points whose response is period-doubled (an `ω/2` share of at least
-    /// [`crate::record::derive::PERIOD_DOUBLED_SHARE`]).
+    /// [`crate::derive::PERIOD_DOUBLED_SHARE`]).
     pub period_doubled: Vec<Stretch>,
     /// The speed a lead-in continuation started from, when the start could not be solved
     /// from the linear response (see `SweepProblem::run`).
@@ -453,57 +287,7 @@ fn step_in(
     }
 }
 
-/// A built sweep problem: model, coupled system, basis and the run description.
-pub struct SweepProblem {
-    pub settings: StudySettings,
-    pub model: Model,
-    pub system: CoupledRotor,
-    pub basis: Basis,
-    pub run: RunInfo,
-}
-
 impl SweepProblem {
-    /// Builds the problem from settings (reads the model file if one is given).
-    pub fn new(settings: &StudySettings) -> Result<Self, SweepError> {
-        let model = match &settings.model {
-            Some(path) => Model::from_file(path)?,
-            None => Model::builtin()?,
-        };
-        Self::with_model(settings, model)
-    }
-
-    /// Builds the problem for an already parsed model.
-    pub fn with_model(settings: &StudySettings, model: Model) -> Result<Self, SweepError> {
-        check_settings(settings)?;
-        let study = StudyOverrides {
-            flow_l_min: Some(settings.flow_l_min),
-            cooling_temp_c: Some(settings.cooling_temp_c),
-            ambient_temp_c: Some(settings.ambient_temp_c),
-        };
-        let system = CoupledRotor::new(
-            &model,
-            &study,
-            CouplingOptions {
-                thermal: settings.thermal,
-                frozen_clearance: false,
-            },
-        )?;
-        let lambda = speed_ratio(&model);
-        let basis = if lambda == (Ratio { num: 1, den: 1 }) {
-            Basis::integer(settings.order)?
-        } else {
-            Basis::paper(settings.order, lambda)?
-        };
-        let run = run_info(&model, &system, &basis, lambda, settings);
-        Ok(Self {
-            settings: settings.clone(),
-            model,
-            system,
-            basis,
-            run,
-        })
-    }
-
     /// The continuation this problem's sweep runs (settings' range, step limits, AFT
     /// samples and the model's static start guess), with `stability` per point or none.
     /// [`Self::run`] drives it into a sink; other drivers (the truncation study) step it
@@ -806,409 +590,22 @@ impl SweepProblem {
     /// Converts one branch point into the recorded form, with bearing loads, clearances
     /// and thermal forces evaluated through the model over one period.
     pub fn point_record(&self, index: u64, p: &BranchPoint) -> Result<PointRecord, SweepError> {
-        let sol = &p.solution;
-        let mut rec = crate::record::derive::point_from_coefficients(
-            &self.run,
-            index,
-            sol.omega,
-            sol.mech.clone(),
-            sol.therm.clone(),
-            RECORD_SAMPLES,
-        )
-        .map_err(|e| SweepError::Derive(e.to_string()))?;
+        let mut rec = crate::derive::point_record(self, index, &p.solution, RECORD_SAMPLES)
+            .map_err(|e| SweepError::Derive(e.to_string()))?;
         rec.arc_length = p.arclength;
         rec.stable = p.stable();
         rec.bifurcation = p.bifurcation;
-        rec.residual_mech = sol.residual.mech;
-        rec.residual_therm = sol.residual.therm;
-        rec.newton_iterations = sol.iterations as u32;
         rec.multipliers = p
             .stability
             .as_ref()
             .map(|f| f.multipliers.clone())
             .unwrap_or_default();
-        let derived = bearing_quantities(&self.system, sol, RECORD_SAMPLES);
-        rec.bearing_loads = derived.loads;
-        rec.clearances = derived.clearances;
-        rec.thermal_forces = derived.thermal_forces;
         Ok(rec)
     }
 }
 
-/// Bearing loads, clearances and thermal forces over one period of a solution.
-pub fn bearing_quantities(
-    system: &CoupledRotor,
-    sol: &crate::hb::HbSolution,
-    samples: usize,
-) -> crate::record::derive::RederivedBearings {
-    use crate::system::PeriodicOrbit;
-    let n = system.assembly().n_dof;
-    let nt = sol.n_therm();
-    let period = sol.period();
-    let nb = system.bearing_ids().len();
-    let mut loads = vec![
-        BearingLoad {
-            mean_n: 0.0,
-            radial_n: Vec::with_capacity(samples),
-        };
-        nb
-    ];
-    let mut clear = vec![ClearanceVariation::default(); nb];
-    let mut forces = vec![ThermalForces::default(); nb];
-    let (mut x, mut v, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; nt]);
-    let inv = 1.0 / samples as f64;
-    for j in 0..samples {
-        let time = period * j as f64 * inv;
-        sol.state_at(time, &mut x, &mut v, &mut t);
-        let states = system.bearing_states(sol.omega, time, &x, &t);
-        for (k, st) in states.iter().enumerate() {
-            loads[k].radial_n.push(st.fb_n);
-            loads[k].mean_n += st.fb_n * inv;
-            clear[k].delta_v_m += st.delta_v_m * inv;
-            clear[k].ub_m += st.u_b_m * inv;
-            clear[k].ui_m += st.u_i_m * inv;
-            clear[k].uo_m += st.u_o_m * inv;
-        }
-        for (k, out) in system
-            .thermal_outputs_from_states(sol.omega, &states, &t)
-            .iter()
-            .enumerate()
-            .take(nb)
-        {
-            forces[k].bearing_w += out.f_bear_b_w * inv;
-            forces[k].lubricant_w += out.f_lub_l_w * inv;
-            forces[k].generation_w += out.q_g_w * inv;
-            forces[k].dissipation_w += out.q_d_w * inv;
-        }
-    }
-    let initial = system.initial_clearances_m();
-    for (c, d0) in clear.iter_mut().zip(initial) {
-        c.effective_m = d0 + c.delta_v_m;
-    }
-    crate::record::derive::RederivedBearings {
-        loads,
-        clearances: clear,
-        thermal_forces: if system.network().is_some() {
-            forces
-        } else {
-            Vec::new()
-        },
-    }
-}
-
 fn amplitudes(run: &RunInfo, mech: &[f64]) -> Vec<f64> {
-    crate::record::derive::amplitude_rms(run, mech).unwrap_or_default()
-}
-
-fn check_settings(s: &StudySettings) -> Result<(), SweepError> {
-    let bad = |field: &'static str, value: String, reason: &'static str| {
-        Err(SweepError::Setting {
-            field,
-            value,
-            reason,
-        })
-    };
-    if !(s.omega_start.is_finite() && s.omega_start > 0.0) {
-        return bad(
-            "omega_start",
-            s.omega_start.to_string(),
-            "must be positive (rad/s)",
-        );
-    }
-    if !(s.omega_end.is_finite() && s.omega_end > 0.0 && s.omega_end != s.omega_start) {
-        return bad(
-            "omega_end",
-            s.omega_end.to_string(),
-            "must be positive and differ from omega_start",
-        );
-    }
-    if s.order == 0 || s.order > 12 {
-        return bad("order", s.order.to_string(), "must be between 1 and 12");
-    }
-    if !(s.ds_max.is_finite() && s.ds_max > 0.0) {
-        return bad("ds_max", s.ds_max.to_string(), "must be positive");
-    }
-    if s.max_points == 0 {
-        return bad("max_points", "0".into(), "must be at least 1");
-    }
-    if !(s.reduction_cutoff_rad_s.is_finite() && s.reduction_cutoff_rad_s >= 0.0) {
-        return bad(
-            "reduction_cutoff_rad_s",
-            s.reduction_cutoff_rad_s.to_string(),
-            "must be 0 (full model) or a positive frequency in rad/s",
-        );
-    }
-    if s.sip_intervals < 8 {
-        return bad(
-            "sip_intervals",
-            s.sip_intervals.to_string(),
-            "must be at least 8",
-        );
-    }
-    if s.stability_method == StabilityChoice::ExpSip && s.sip_intervals % 2 != 0 {
-        return bad(
-            "sip_intervals",
-            s.sip_intervals.to_string(),
-            "must be even for exp-sip (its product is extrapolated from N and N/2 intervals)",
-        );
-    }
-    Ok(())
-}
-
-/// λ: the speed ratio of the second rotor (1 for a single rotor). Ratios are rational by
-/// model validation.
-fn speed_ratio(model: &Model) -> Ratio {
-    model
-        .speed_ratios()
-        .iter()
-        .copied()
-        .find(|r| *r != Ratio { num: 1, den: 1 })
-        .unwrap_or(Ratio { num: 1, den: 1 })
-}
-
-/// Axial position of every node: cumulative element lengths along each rotor, later rotors
-/// shifted so that an inter-shaft bearing's two nodes line up.
-fn axial_positions(model: &Model) -> Vec<f64> {
-    let ids = model.node_ids();
-    let mut pos: Vec<Option<f64>> = vec![None; ids.len()];
-    let idx = |id: u32| model.node_index(id);
-    for rotor in &model.spec.rotors {
-        let Some(&first) = rotor.nodes.first() else {
-            continue;
-        };
-        // offset from an inter-shaft bearing to an already placed node
-        let mut offset = 0.0;
-        let mut local: std::collections::BTreeMap<u32, f64> = Default::default();
-        local.insert(first, 0.0);
-        // walk shafts repeatedly (elements may be listed in any order)
-        for _ in 0..rotor.nodes.len() {
-            for sh in &model.spec.shafts {
-                if sh.nodes.len() != 2 {
-                    continue;
-                }
-                let (a, b) = (sh.nodes[0], sh.nodes[1]);
-                if let (Some(&pa), None) = (local.get(&a), local.get(&b)) {
-                    local.insert(b, pa + sh.length_m);
-                } else if let (None, Some(&pb)) = (local.get(&a), local.get(&b)) {
-                    local.insert(a, pb - sh.length_m);
-                }
-            }
-        }
-        for b in &model.spec.bearings {
-            if let Some(o) = b.outer_node {
-                for (mine, other) in [(o, b.inner_node), (b.inner_node, o)] {
-                    if let (Some(&lm), Some(io)) = (local.get(&mine), idx(other)) {
-                        if let Some(po) = pos[io] {
-                            offset = po - lm;
-                        }
-                    }
-                }
-            }
-        }
-        for (id, p) in local {
-            if let Some(i) = idx(id) {
-                pos[i] = Some(p + offset);
-            }
-        }
-    }
-    pos.into_iter().map(|p| p.unwrap_or(0.0)).collect()
-}
-
-fn run_info(
-    model: &Model,
-    system: &CoupledRotor,
-    basis: &Basis,
-    lambda: Ratio,
-    settings: &StudySettings,
-) -> RunInfo {
-    let axial = axial_positions(model);
-    let nodes = model
-        .node_ids()
-        .iter()
-        .enumerate()
-        .map(|(i, &id)| DynamicNode {
-            id,
-            name: format!("node {id}"),
-            dof_x: model.dof(id, Dir::X).unwrap_or(0),
-            dof_y: model.dof(id, Dir::Y).unwrap_or(0),
-            axial_position_m: axial[i],
-            rotor: model.spec.rotors[model.rotor_of(i)].id.clone(),
-        })
-        .collect();
-    let thermal_nodes = system
-        .network()
-        .map(|net| {
-            net.names()
-                .iter()
-                .enumerate()
-                .map(|(p, name)| ThermalNode {
-                    id: (p + 1) as u32,
-                    name: name.clone(),
-                    dof: p,
-                })
-                .collect()
-        })
-        .unwrap_or_default();
-    let bearings = system
-        .bearing_ids()
-        .iter()
-        .zip(system.initial_clearances_m())
-        .map(|(name, d0)| BearingInfo {
-            name: name.to_string(),
-            initial_clearance_m: d0,
-        })
-        .collect();
-    let settings_toml = toml::to_string(settings).unwrap_or_default();
-    let mut kv = vec![
-        ("flow_l_min".to_string(), settings.flow_l_min.to_string()),
-        (
-            "cooling_temp_c".to_string(),
-            settings.cooling_temp_c.to_string(),
-        ),
-        (
-            "ambient_temp_c".to_string(),
-            settings.ambient_temp_c.to_string(),
-        ),
-        ("order".to_string(), settings.order.to_string()),
-        ("omega_start".to_string(), settings.omega_start.to_string()),
-        ("omega_end".to_string(), settings.omega_end.to_string()),
-        ("thermal".to_string(), settings.thermal.to_string()),
-        ("stability".to_string(), settings.stability.to_string()),
-        (
-            "stability_method".to_string(),
-            settings.stability_method.label().to_string(),
-        ),
-        (
-            "sip_intervals".to_string(),
-            settings.sip_intervals.to_string(),
-        ),
-        (
-            "interval_map".to_string(),
-            settings.interval_map.label().to_string(),
-        ),
-        (
-            "reduction_cutoff_rad_s".to_string(),
-            settings.reduction_cutoff_rad_s.to_string(),
-        ),
-    ];
-    kv.push((
-        "model".to_string(),
-        settings
-            .model
-            .as_ref()
-            .map_or("built-in".to_string(), |p| p.display().to_string()),
-    ));
-    let model_text = match &settings.model {
-        Some(path) => std::fs::read_to_string(path).unwrap_or_default(),
-        None => crate::model::BUILTIN_TOML.to_string(),
-    };
-    RunInfo {
-        tool_name: "tmrotor".to_string(),
-        tool_version: env!("CARGO_PKG_VERSION").to_string(),
-        model_name: model.spec.name.clone(),
-        model_text,
-        settings: kv,
-        settings_toml,
-        harmonics: basis.harmonics().to_vec(),
-        lambda,
-        n_mech: system.assembly().n_dof,
-        n_therm: crate::system::System::n_therm(system),
-        nodes,
-        thermal_nodes,
-        bearings,
-    }
-}
-
-/// Re-derivation of bearing quantities and stability for `replay`, from a recording's
-/// embedded model text and settings.
-pub struct CoupledRederive {
-    problem: SweepProblem,
-}
-
-impl CoupledRederive {
-    /// Rebuilds the sweep problem from a recording's run description.
-    pub fn from_run(run: &RunInfo) -> Result<Self, SweepError> {
-        Self::from_run_with_intervals(run, None)
-    }
-
-    /// [`CoupledRederive::from_run`] with the SIP intervals of the stability method
-    /// replaced (`sip_intervals`, checked like a study setting): to audit a recording's
-    /// stability with a finer product.
-    pub fn from_run_with_intervals(
-        run: &RunInfo,
-        sip_intervals: Option<usize>,
-    ) -> Result<Self, SweepError> {
-        let mut settings: StudySettings =
-            toml::from_str(&run.settings_toml).map_err(|e| SweepError::Setting {
-                field: "settings_toml",
-                value: "(embedded)".into(),
-                reason: if e.message().is_empty() {
-                    "unreadable"
-                } else {
-                    "embedded settings are not readable by this version"
-                },
-            })?;
-        // settings embedded before the interval map was a setting: Strang's map, the only
-        // one then
-        let has_map = run
-            .settings_toml
-            .parse::<toml::Table>()
-            .is_ok_and(|t| t.contains_key("interval_map"));
-        if !has_map {
-            settings.interval_map = IntervalMap::Strang;
-        }
-        let model = Model::from_str(&run.model_text, &run.model_name)?;
-        settings.model = None;
-        if let Some(n) = sip_intervals {
-            settings.sip_intervals = n;
-        }
-        Ok(Self {
-            problem: SweepProblem::with_model(&settings, model)?,
-        })
-    }
-
-    fn solution(&self, point: &PointRecord) -> crate::hb::HbSolution {
-        crate::hb::HbSolution {
-            omega: point.omega_rad_s,
-            basis: self.problem.basis.clone(),
-            mech: point.coeffs_mech.clone(),
-            therm: point.coeffs_therm.clone(),
-            residual: Default::default(),
-            relative_residual: Default::default(),
-            iterations: point.newton_iterations as usize,
-        }
-    }
-}
-
-impl crate::record::derive::ModelRederive for CoupledRederive {
-    fn bearings(
-        &self,
-        point: &PointRecord,
-        samples: usize,
-    ) -> Result<crate::record::derive::RederivedBearings, crate::record::derive::DeriveError> {
-        Ok(bearing_quantities(
-            &self.problem.system,
-            &self.solution(point),
-            samples,
-        ))
-    }
-}
-
-impl crate::record::derive::StabilityRederive for CoupledRederive {
-    fn multipliers(
-        &self,
-        point: &PointRecord,
-    ) -> Result<Vec<Complex64>, crate::record::derive::DeriveError> {
-        let s = &self.problem.settings;
-        let derive_err =
-            |e: StabilityError| crate::record::derive::DeriveError::Model(e.to_string());
-        let method =
-            stability_method(s, &self.problem.system, s.omega_start).map_err(derive_err)?;
-        method
-            .multipliers(&self.problem.system, &self.solution(point))
-            .map(|f| f.multipliers)
-            .map_err(derive_err)
-    }
+    crate::derive::amplitude_rms(run, mech).unwrap_or_default()
 }
 
 #[cfg(test)]

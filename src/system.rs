@@ -1,7 +1,7 @@
 //! The seam between physical models and the numerical engine.
 //!
 //! Every model the engine can solve (the dual rotor, the reference oscillators in
-//! [`crate::systems`]) implements [`System`]: a set of second-order mechanical equations
+//! `systems`) implements [`System`]: a set of second-order mechanical equations
 //! coupled to an optional set of first-order thermal equations (paper Eq. 21, written in
 //! physical time `t`; the engine applies the time scale `τ = ω t` itself):
 //!
@@ -149,7 +149,7 @@ impl NonlinearEval {
     }
 
     /// The six derivative arrays in the order `df_dx, df_dv, df_dt, dg_dx, dg_dv, dg_dt`
-    /// (the block numbers of [`crate::integrate::StateSpace::for_each_derivative_slot`]).
+    /// (the block numbers of `integrate::StateSpace::for_each_derivative_slot`).
     pub fn derivative_blocks(&self) -> [&[f64]; 6] {
         [
             &self.df_dx,

@@ -77,6 +77,8 @@ impl Default for TruncationOptions {
 pub enum TruncationError {
     #[error(transparent)]
     Sweep(#[from] SweepError),
+    #[error(transparent)]
+    Study(#[from] crate::study::StudyError),
     #[error("{what}: {reason}")]
     Setting { what: String, reason: String },
     #[error("order {order}: {cause}")]

@@ -1,11 +1,12 @@
 //! The coupled dual rotor through the engine and into a recording.
 
 use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
+use tmrotor::derive::CoupledRederive;
+use tmrotor::derive::ModelRederive;
 use tmrotor::hb::{Basis, HarmonicBalance, NewtonOptions, Ratio, newton};
 use tmrotor::model::Model;
 use tmrotor::record::MemorySink;
-use tmrotor::record::derive::ModelRederive;
-use tmrotor::sweep::{CoupledRederive, StudySettings, SweepProblem};
+use tmrotor::sweep::{StudySettings, SweepProblem};
 
 fn solve(sys: &CoupledRotor, basis: &Basis, omega: f64) -> Vec<f64> {
     let hb = HarmonicBalance::new(sys, basis, None).expect("hb");
@@ -144,7 +145,7 @@ fn short_sweep_records_points_and_replay_rederives_bearings() {
 /// the setting.
 #[test]
 fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
-    use tmrotor::record::derive::{StabilityRederive, multiplier_deviation};
+    use tmrotor::derive::{StabilityRederive, multiplier_deviation};
     let settings = StudySettings {
         omega_start: 400.0,
         omega_end: 402.0,

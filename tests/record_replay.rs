@@ -5,8 +5,8 @@ use std::process::Command;
 
 use clap::Parser;
 use num_complex::Complex64;
-use tmrotor::record::derive::{DeriveError, StabilityRederive};
-use tmrotor::record::replay::{self, Cli, stability};
+use tmrotor::cli::replay::{self, Cli, stability};
+use tmrotor::derive::{DeriveError, StabilityRederive};
 use tmrotor::record::synthetic::{self, SyntheticOptions};
 use tmrotor::record::{PointRecord, read_recording};
 

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use mcap::MessageStream;
 use prost_reflect::{DescriptorPool, DynamicMessage};
-use tmrotor::record::derive;
+use tmrotor::derive;
 use tmrotor::record::synthetic::{self, SyntheticOptions};
 use tmrotor::record::{
     McapOptions, McapSink, MemorySink, RecordError, RunStatus, Sink, read_recording, record_run,

@@ -1,4 +1,4 @@
-//! `replay`: inspect and re-derive tmrotor recordings; see `tmrotor::record::replay`.
+//! `replay`: inspect and re-derive tmrotor recordings; see `tmrotor::cli::replay`.
 
 /// The allocator of `tmrotor` (see there): `replay stability` and `replay orbit` run the
 /// same solvers.
@@ -8,5 +8,5 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 fn main() -> std::process::ExitCode {
     tmrotor::keep_freed_memory();
     tmrotor::sequential_dense_kernels();
-    tmrotor::record::replay::main()
+    tmrotor::cli::replay::main()
 }

@@ -34,11 +34,11 @@ use plotters::style::{BLACK, RGBColor};
 use rayon::prelude::*;
 
 use super::{CampaignError, Manifest, ManifestEntry, sha256_file};
+use crate::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::figure::{
     self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
     draw_chart, draw_legend, legend_height, lighter, render_png, tick,
 };
-use crate::record::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::record::{ReadError, read_recording};
 use crate::stability::BifurcationKind;
 

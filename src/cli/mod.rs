@@ -5,6 +5,7 @@ pub mod campaign;
 pub mod campbell;
 pub mod model;
 pub mod modes;
+pub mod replay;
 pub mod report;
 pub mod sweep;
 pub mod truncation;
@@ -184,6 +185,55 @@ impl std::error::Error for Interrupted {}
 
 /// Exit status of an [`Interrupted`] run (128 + SIGINT, the shell's convention).
 pub const INTERRUPTED_EXIT: u8 = 130;
+
+/// A re-derivation the recording cannot support (e.g. its embedded model cannot be rebuilt
+/// by this version): exit status [`NOT_AVAILABLE_EXIT`], not a failure of the tool.
+#[derive(Debug, thiserror::Error)]
+#[error("{0}")]
+pub struct NotAvailable(pub String);
+
+/// Exit status of a [`NotAvailable`] outcome.
+pub const NOT_AVAILABLE_EXIT: u8 = 2;
+
+/// The one mapping from a command's outcome to the process's exit status, for both
+/// binaries (`prog` prefixes the message):
+///
+/// | outcome | status | message (stderr) |
+/// |---|---|---|
+/// | success | 0 | none |
+/// | output pipe closed by the reader (`replay branch … \| head`) | 0 | none |
+/// | [`Interrupted`] (Ctrl-C, SIGTERM, SIGHUP) after saving what was computed | 130 | `interrupted: …` |
+/// | [`NotAvailable`] | 2 | the reason |
+/// | any other error | 1 | `error: …` with its causes ([`error_text`]) |
+pub fn exit_code(prog: &str, result: anyhow::Result<()>) -> std::process::ExitCode {
+    use std::process::ExitCode;
+    let Err(err) = result else {
+        return ExitCode::SUCCESS;
+    };
+    if closed_pipe(&err) {
+        return ExitCode::SUCCESS;
+    }
+    if let Some(stop) = err.downcast_ref::<Interrupted>() {
+        eprintln!("{prog}: interrupted: {stop}");
+        return ExitCode::from(INTERRUPTED_EXIT);
+    }
+    if err.downcast_ref::<NotAvailable>().is_some() {
+        eprintln!("{prog}: {}", error_text(&err));
+        return ExitCode::from(NOT_AVAILABLE_EXIT);
+    }
+    eprintln!("{prog}: error: {}", error_text(&err));
+    ExitCode::from(1)
+}
+
+/// Whether an error comes from writing to a pipe whose reader has gone (`| head`): the
+/// reader has all it wanted, so the command ends quietly.
+fn closed_pipe(err: &anyhow::Error) -> bool {
+    err.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
 
 /// Runs the parsed command line.
 pub fn run(cli: Cli) -> anyhow::Result<()> {

@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::ProgressBar;
 
-use crate::record::derive::PERIOD_DOUBLED_SHARE;
+use crate::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::{McapOptions, McapSink, install_interrupt_flag};
 use crate::sweep::{Progress, StudySettings, SweepProblem};
 

@@ -21,7 +21,7 @@ pub fn branch_csv(branch: &Branch, dof: usize) -> Result<String, ContinuationErr
 /// As [`branch_csv`], with the first column (the continuation parameter) named
 /// `parameter` instead of `omega`, for systems whose continuation parameter is not a
 /// speed (e.g. a forcing amplitude written as the base frequency of a rescaled time, see
-/// [`crate::systems::period_doubling::GammaParametrized`]).
+/// `systems::period_doubling::GammaParametrized`).
 pub fn branch_csv_with_parameter(
     branch: &Branch,
     dof: usize,

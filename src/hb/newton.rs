@@ -12,7 +12,7 @@
 //! Newton, iterations: a residual and a solve each, about 2.5 ms on the dual rotor against
 //! 16 ms for a Jacobian and a factorization) as long as each cuts the residual by that
 //! factor. One that does not is followed by a new Jacobian and factorization. The bearing
-//! model is not smooth everywhere (see [`crate::truncation`]): Newton's convergence there
+//! model is not smooth everywhere (see the truncation study, `truncation`): Newton's convergence there
 //! is far from quadratic, and where a contact event falls on an AFT sample at the
 //! solution the exact Jacobian may give no descent at all. A chord step, with the
 //! Jacobian of a nearby iterate, can pass such a point (order 1 at 484 rad/s, traced over
@@ -31,7 +31,7 @@
 //! Newton step itself is invariant to a scaling of the unknowns; what is not invariant is
 //! handled explicitly: the convergence tests and the line-search merit use the two
 //! normalised residuals above, and the continuation measures arclength in scaled unknowns
-//! (see [`crate::continuation`]).
+//! (see `continuation`).
 
 use thiserror::Error;
 
@@ -236,7 +236,7 @@ pub struct Converged {
     /// The matrix the last chord iterations solved with (bordered with the arclength
     /// row, when there is one), when they led to the solution: the Jacobian of an earlier
     /// iterate. A tangent at the solution can be refined with it instead of factoring
-    /// the Jacobian there (see [`crate::continuation`]).
+    /// the Jacobian there (see `continuation`).
     pub matrix: Option<Factorization>,
 }
 

@@ -176,7 +176,7 @@ impl<'a> StateSpace<'a> {
     /// `S` reads `[x_P, T_Q]` (`p + q` rows instead of `2p + q`): exact for derivatives
     /// whose `∂f/∂v` and `∂g/∂v` vanish, which are then not read. The dual rotor's forces
     /// (Hertz contacts, heat sources) do not depend on velocities, so its Floquet products
-    /// gather 36 rows instead of 46 (see [`crate::stability::ExpSip`]).
+    /// gather 36 rows instead of 46 (see the exponential-split product, `stability::ExpSip`).
     pub fn with_velocity_gather(&self, on: bool) -> Self {
         Self {
             velocity: on,

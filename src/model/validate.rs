@@ -37,6 +37,9 @@ pub const DOF_PER_NODE: usize = 4;
 pub struct Model {
     /// File name (or the built-in name) used in error messages.
     pub source: String,
+    /// The model file's text as read: what a recording embeds, so that replay rebuilds
+    /// exactly this model without the file.
+    pub text: String,
     /// The validated file contents.
     pub spec: ModelFile,
     nodes: Vec<u32>,
@@ -99,7 +102,9 @@ impl Model {
                 kind,
             }
         })?;
-        Validator::new(name).run(spec)
+        let mut model = Validator::new(name).run(spec)?;
+        model.text = text.to_string();
+        Ok(model)
     }
 
     /// Node ids in DoF order (ascending id).
@@ -638,6 +643,7 @@ impl<'a> Validator<'a> {
 
         Ok(Model {
             source: self.file.to_string(),
+            text: String::new(),
             spec,
             nodes,
             node_rotor,

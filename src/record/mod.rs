@@ -9,9 +9,7 @@
 //! | [`schema`] | topics, message types and their embedded descriptor sets |
 //! | [`convert`] | the only domain ↔ protobuf conversion |
 //! | [`reader`] | [`read_recording`]: back to domain types, tolerant of files cut short |
-//! | [`derive`](mod@derive) | time histories and Eq. 35 amplitudes from coefficients; re-derivation seams |
 //! | [`synthetic`] | a closed-form 2-DoF run for tests and examples |
-//! | [`replay`] | the `replay` command line (info, branch, orbit, stability, plot) |
 //!
 //! Only this module uses `mcap` and `prost`.
 //!
@@ -36,11 +34,9 @@
 //! ```
 
 pub mod convert;
-pub mod derive;
 pub mod mcap_sink;
 pub mod pb;
 pub mod reader;
-pub mod replay;
 pub mod schema;
 pub mod sink;
 pub mod synthetic;

@@ -26,7 +26,7 @@
 //!
 //! Everything here is computed directly from these formulas — orbits included — so that
 //! tests can compare what the recording layer re-derives from the coefficients
-//! ([`super::derive`], which uses [`crate::hb::Basis::eval`]) against an independent value.
+//! (`derive`, which uses [`crate::hb::Basis::eval`]) against an independent value.
 
 use num_complex::Complex64;
 

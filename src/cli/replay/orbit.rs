@@ -4,7 +4,7 @@ use std::io::Write;
 
 use anyhow::{Context, bail};
 
-use crate::record::derive::{self, rederivers_for};
+use crate::derive::{self, rederivers_for};
 use crate::record::reader::Recording;
 
 /// Writes CSV time histories of one point at `samples` points per period, re-derived

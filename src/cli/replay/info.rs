@@ -2,9 +2,7 @@
 
 use std::io::Write;
 
-use crate::record::derive::{
-    PERIOD_DOUBLED_SHARE, period_doubled_stretches, point_half_order_share,
-};
+use crate::derive::{PERIOD_DOUBLED_SHARE, period_doubled_stretches, point_half_order_share};
 use crate::record::reader::Recording;
 
 fn stable_label(s: Option<bool>) -> &'static str {

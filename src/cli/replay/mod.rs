@@ -12,7 +12,7 @@
 //! | `stability FILE [--sip-intervals N]` | Floquet multipliers recomputed (optionally with a finer product) and compared with the stored ones |
 //! | `plot FILE [--out DIR]` | PNG amplitude–frequency curves, RC variations, temperatures |
 //!
-//! Model-dependent re-derivations go through [`super::derive::rederivers_for`]; where it
+//! Model-dependent re-derivations go through [`crate::derive::rederivers_for`]; where it
 //! has nothing for the recording's model, replay says so instead of guessing.
 
 pub mod branch;
@@ -27,7 +27,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use super::reader::{Recording, read_recording};
+pub use super::NotAvailable;
+use crate::record::reader::{Recording, read_recording};
 
 /// Inspect, export and re-derive tmrotor recordings (MCAP) without rerunning anything.
 #[derive(Debug, Parser)]
@@ -93,11 +94,6 @@ pub enum Command {
     },
 }
 
-/// A requested re-derivation is not available for this recording (exit code 2).
-#[derive(Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct NotAvailable(pub String);
-
 /// Reads a recording and reports on stderr when it is incomplete.
 pub fn open(file: &PathBuf, err: &mut dyn Write) -> anyhow::Result<Recording> {
     let rec = read_recording(file)?;
@@ -135,32 +131,22 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result
             points,
             unfinished,
         } => {
-            let options = super::synthetic::SyntheticOptions {
+            let options = crate::record::synthetic::SyntheticOptions {
                 points_per_side: points,
                 thermal: !mechanical,
                 ..Default::default()
             };
-            let n = super::synthetic::write_mcap(&file, &options, !unfinished)?;
+            let n = crate::record::synthetic::write_mcap(&file, &options, !unfinished)?;
             writeln!(out, "wrote {} ({n} points)", file.display())?;
             Ok(())
         }
     }
 }
 
-/// Entry point of the binary: parse, run, map errors to exit codes (1 error, 2 not
-/// available for this recording).
+/// Entry point of the binary: parse, run, and exit with the status [`super::exit_code`]
+/// maps the outcome to (the same mapping as `tmrotor`'s).
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let (mut out, mut err) = (std::io::stdout().lock(), std::io::stderr());
-    match run(cli, &mut out, &mut err) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) if e.downcast_ref::<NotAvailable>().is_some() => {
-            eprintln!("replay: {}", crate::cli::error_text(&e));
-            ExitCode::from(2)
-        }
-        Err(e) => {
-            eprintln!("replay: error: {}", crate::cli::error_text(&e));
-            ExitCode::from(1)
-        }
-    }
+    super::exit_code("replay", run(cli, &mut out, &mut err))
 }

@@ -2,7 +2,7 @@
 
 use std::io::Write;
 
-use crate::record::derive::{StabilityRederive, multiplier_deviation, rederivers_with_intervals};
+use crate::derive::{StabilityRederive, multiplier_deviation, rederivers_with_intervals};
 use crate::record::reader::Recording;
 
 use super::NotAvailable;

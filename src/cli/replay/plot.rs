@@ -5,7 +5,7 @@
 //!   stable parts blue, unstable parts red, not-assessed parts grey; bifurcations marked
 //!   with black circles and labelled SN / PD / NS (like the paper's Figs. 7–11); points
 //!   whose `ω/2` share reaches [`PERIOD_DOUBLED_SHARE`] (the period-doubled response,
-//!   see [`crate::record::derive::half_order_share`]) dotted in purple;
+//!   see [`crate::derive::half_order_share`]) dotted in purple;
 //! * `clearance.png`: RC variation δv (µm) of every bearing against ω, when recorded;
 //! * `temperatures.png`: mean temperature of every thermal node against ω, when recorded.
 //!
@@ -18,8 +18,8 @@ use std::path::Path;
 use anyhow::Context;
 use plotters::prelude::*;
 
+use crate::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::figure::{Chart, LineStyle, Marker, PALETTE, Series, draw_chart, font, render_png};
-use crate::record::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::record::reader::Recording;
 
 const WIDTH: u32 = 1000;

@@ -1,5 +1,9 @@
-//! Quantities re-derived from stored harmonic coefficients, and the seams through which
-//! replay re-derives model-dependent quantities.
+//! Physical quantities from harmonic coefficients: the one place where stored (or just
+//! computed) coefficients become orbits, amplitudes, temperatures, bearing loads,
+//! clearances and thermal forces. The sweep records each point through
+//! [`point_record`]; replay re-derives the same quantities from a recording through
+//! [`rederivers_for`]. Both sit above this module; it imports only the recording's domain
+//! types, the basis and (in [`coupled`]) the study and the coupled model.
 //!
 //! Time histories come from [`Basis::eval`] (the one evaluator of the crate) at any
 //! sampling `t_k = k·T/S`, `k = 0..S`, over the period `T = 2π q_base/ω` of the basis.
@@ -13,14 +17,18 @@
 //! [`StabilityRederive`], built from the recording's embedded model file by
 //! [`rederivers_for`].
 
+pub mod coupled;
+
 use num_complex::Complex64;
 use thiserror::Error;
 
-use super::types::{
+use crate::hb::{Basis, BasisError, Ratio};
+use crate::record::types::{
     BearingLoad, ClearanceVariation, NodeOrbit, PointRecord, RunInfo, TemperatureStats,
     ThermalForces,
 };
-use crate::hb::{Basis, BasisError, Ratio};
+
+pub use coupled::{CoupledRederive, bearing_quantities, point_record};
 
 /// Orbit samples per period recommended for recordings: 128.
 ///
@@ -284,7 +292,7 @@ pub struct Rederivers {
 }
 
 /// Builds the re-derivation seams for a recording from its embedded model file and
-/// settings (through [`crate::sweep::CoupledRederive`]).
+/// settings (through [`CoupledRederive`]).
 ///
 /// This is the single place where model kinds are wired to replay.
 pub fn rederivers_for(run: &RunInfo) -> Rederivers {
@@ -292,9 +300,9 @@ pub fn rederivers_for(run: &RunInfo) -> Rederivers {
 }
 
 /// [`rederivers_for`] with the stability method's SIP intervals replaced (see
-/// [`crate::sweep::CoupledRederive::from_run_with_intervals`]).
+/// [`coupled::CoupledRederive::from_run_with_intervals`]).
 pub fn rederivers_with_intervals(run: &RunInfo, sip_intervals: Option<usize>) -> Rederivers {
-    match crate::sweep::CoupledRederive::from_run_with_intervals(run, sip_intervals) {
+    match coupled::CoupledRederive::from_run_with_intervals(run, sip_intervals) {
         Ok(r) => {
             let r = std::sync::Arc::new(r);
             Rederivers {
@@ -315,7 +323,7 @@ pub fn rederivers_with_intervals(run: &RunInfo, sip_intervals: Option<usize>) ->
     }
 }
 
-struct SharedRederive(std::sync::Arc<crate::sweep::CoupledRederive>);
+struct SharedRederive(std::sync::Arc<coupled::CoupledRederive>);
 
 impl ModelRederive for SharedRederive {
     fn bearings(

@@ -2,7 +2,7 @@
 
 use std::io::Write;
 
-use crate::record::derive::point_half_order_share;
+use crate::derive::point_half_order_share;
 use crate::record::reader::Recording;
 
 /// Column name of a node's amplitude: `amp_<id>_m`.
@@ -12,7 +12,7 @@ pub fn amplitude_column(id: u32) -> String {
 
 /// Writes one row per point: index, ω, arc length, RMS amplitude per node (Eq. 35),
 /// stable (`1`, `0`, empty when not assessed), bifurcation label, residuals, iterations,
-/// and the [`crate::record::derive::half_order_share`] (empty when the basis has no
+/// and the [`crate::derive::half_order_share`] (empty when the basis has no
 /// half-order harmonic).
 pub fn run(rec: &Recording, csv: bool, out: &mut dyn Write) -> anyhow::Result<()> {
     let mut header = vec!["index".to_string(), "omega".into(), "arc_length".into()];

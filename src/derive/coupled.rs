@@ -1,0 +1,192 @@
+//! Model-dependent quantities of the coupled rotor ([`CoupledRotor`]): bearing loads,
+//! effective clearances and thermal forces over one period of a solution, the whole
+//! recorded form of a point, and the re-derivation of a recording's points from its
+//! embedded model and settings ([`CoupledRederive`]).
+
+use num_complex::Complex64;
+
+use super::{DeriveError, ModelRederive, RederivedBearings, StabilityRederive};
+use crate::coupled::CoupledRotor;
+use crate::hb::HbSolution;
+use crate::model::Model;
+use crate::record::types::{BearingLoad, ClearanceVariation, PointRecord, RunInfo, ThermalForces};
+use crate::stability::{IntervalMap, StabilityError};
+use crate::study::{StudyError, StudySettings, SweepProblem, stability_method};
+
+/// The recorded form of one solution of `problem` (index `index`): orbits, amplitudes and
+/// temperatures from the coefficients ([`super::point_from_coefficients`]), bearing loads,
+/// clearances and thermal forces through the model ([`bearing_quantities`]), the residuals
+/// and Newton iterations, each sampled `samples` times per period. The stability fields
+/// (multipliers, stable flag, bifurcation) are the caller's.
+pub fn point_record(
+    problem: &SweepProblem,
+    index: u64,
+    sol: &HbSolution,
+    samples: usize,
+) -> Result<PointRecord, DeriveError> {
+    let mut rec = super::point_from_coefficients(
+        &problem.run,
+        index,
+        sol.omega,
+        sol.mech.clone(),
+        sol.therm.clone(),
+        samples,
+    )?;
+    rec.residual_mech = sol.residual.mech;
+    rec.residual_therm = sol.residual.therm;
+    rec.newton_iterations = sol.iterations as u32;
+    let derived = bearing_quantities(&problem.system, sol, samples);
+    rec.bearing_loads = derived.loads;
+    rec.clearances = derived.clearances;
+    rec.thermal_forces = derived.thermal_forces;
+    Ok(rec)
+}
+
+/// Bearing loads, clearances and thermal forces over one period of a solution.
+pub fn bearing_quantities(
+    system: &CoupledRotor,
+    sol: &HbSolution,
+    samples: usize,
+) -> RederivedBearings {
+    use crate::system::PeriodicOrbit;
+    let n = system.assembly().n_dof;
+    let nt = sol.n_therm();
+    let period = sol.period();
+    let nb = system.bearing_ids().len();
+    let mut loads = vec![
+        BearingLoad {
+            mean_n: 0.0,
+            radial_n: Vec::with_capacity(samples),
+        };
+        nb
+    ];
+    let mut clear = vec![ClearanceVariation::default(); nb];
+    let mut forces = vec![ThermalForces::default(); nb];
+    let (mut x, mut v, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; nt]);
+    let inv = 1.0 / samples as f64;
+    for j in 0..samples {
+        let time = period * j as f64 * inv;
+        sol.state_at(time, &mut x, &mut v, &mut t);
+        let states = system.bearing_states(sol.omega, time, &x, &t);
+        for (k, st) in states.iter().enumerate() {
+            loads[k].radial_n.push(st.fb_n);
+            loads[k].mean_n += st.fb_n * inv;
+            clear[k].delta_v_m += st.delta_v_m * inv;
+            clear[k].ub_m += st.u_b_m * inv;
+            clear[k].ui_m += st.u_i_m * inv;
+            clear[k].uo_m += st.u_o_m * inv;
+        }
+        for (k, out) in system
+            .thermal_outputs_from_states(sol.omega, &states, &t)
+            .iter()
+            .enumerate()
+            .take(nb)
+        {
+            forces[k].bearing_w += out.f_bear_b_w * inv;
+            forces[k].lubricant_w += out.f_lub_l_w * inv;
+            forces[k].generation_w += out.q_g_w * inv;
+            forces[k].dissipation_w += out.q_d_w * inv;
+        }
+    }
+    let initial = system.initial_clearances_m();
+    for (c, d0) in clear.iter_mut().zip(initial) {
+        c.effective_m = d0 + c.delta_v_m;
+    }
+    RederivedBearings {
+        loads,
+        clearances: clear,
+        thermal_forces: if system.network().is_some() {
+            forces
+        } else {
+            Vec::new()
+        },
+    }
+}
+
+/// Re-derivation of bearing quantities and stability for `replay`, from a recording's
+/// embedded model text and settings.
+pub struct CoupledRederive {
+    problem: SweepProblem,
+}
+
+impl CoupledRederive {
+    /// Rebuilds the sweep problem from a recording's run description.
+    pub fn from_run(run: &RunInfo) -> Result<Self, StudyError> {
+        Self::from_run_with_intervals(run, None)
+    }
+
+    /// [`CoupledRederive::from_run`] with the SIP intervals of the stability method
+    /// replaced (`sip_intervals`, checked like a study setting): to audit a recording's
+    /// stability with a finer product.
+    pub fn from_run_with_intervals(
+        run: &RunInfo,
+        sip_intervals: Option<usize>,
+    ) -> Result<Self, StudyError> {
+        let mut settings: StudySettings =
+            toml::from_str(&run.settings_toml).map_err(|e| StudyError::Setting {
+                field: "settings_toml",
+                value: "(embedded)".into(),
+                reason: if e.message().is_empty() {
+                    "unreadable"
+                } else {
+                    "embedded settings are not readable by this version"
+                },
+            })?;
+        // settings embedded before the interval map was a setting: Strang's map, the only
+        // one then
+        let has_map = run
+            .settings_toml
+            .parse::<toml::Table>()
+            .is_ok_and(|t| t.contains_key("interval_map"));
+        if !has_map {
+            settings.interval_map = IntervalMap::Strang;
+        }
+        let model = Model::from_str(&run.model_text, &run.model_name)?;
+        settings.model = None;
+        if let Some(n) = sip_intervals {
+            settings.sip_intervals = n;
+        }
+        Ok(Self {
+            problem: SweepProblem::with_model(&settings, model)?,
+        })
+    }
+
+    fn solution(&self, point: &PointRecord) -> HbSolution {
+        HbSolution {
+            omega: point.omega_rad_s,
+            basis: self.problem.basis.clone(),
+            mech: point.coeffs_mech.clone(),
+            therm: point.coeffs_therm.clone(),
+            residual: Default::default(),
+            relative_residual: Default::default(),
+            iterations: point.newton_iterations as usize,
+        }
+    }
+}
+
+impl ModelRederive for CoupledRederive {
+    fn bearings(
+        &self,
+        point: &PointRecord,
+        samples: usize,
+    ) -> Result<RederivedBearings, DeriveError> {
+        Ok(bearing_quantities(
+            &self.problem.system,
+            &self.solution(point),
+            samples,
+        ))
+    }
+}
+
+impl StabilityRederive for CoupledRederive {
+    fn multipliers(&self, point: &PointRecord) -> Result<Vec<Complex64>, DeriveError> {
+        let s = &self.problem.settings;
+        let derive_err = |e: StabilityError| DeriveError::Model(e.to_string());
+        let method =
+            stability_method(s, &self.problem.system, s.omega_start).map_err(derive_err)?;
+        method
+            .multipliers(&self.problem.system, &self.solution(point))
+            .map(|f| f.multipliers)
+            .map_err(derive_err)
+    }
+}
