@@ -6,8 +6,8 @@
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
+use tmrotor::bearing::{ContactLaw, HertzLaw};
 use tmrotor::linear;
-use tmrotor::model::bearing_linear::HertzLaw;
 use tmrotor::model::{Assembly, Dir, Model, dof};
 use tmrotor::system::DenseMatrix;
 
@@ -222,10 +222,13 @@ fn unbalance_force_uses_each_disks_own_speed() {
 /// stiffness along the load is n times the secant stiffness across it.
 #[test]
 fn hertz_linearisation_without_clearance_has_ratio_n() {
-    for (n, count) in [(1.5, 22), (10.0 / 9.0, 28)] {
+    for (law, n, count) in [
+        (ContactLaw::Ball, 1.5, 22),
+        (ContactLaw::Roller, 10.0 / 9.0, 28),
+    ] {
         let law = HertzLaw {
             stiffness: 1.45e9,
-            exponent: n,
+            law,
             count,
             clearance_m: 0.0,
         };
@@ -284,7 +287,7 @@ fn static_bearing_loads_of_a_symmetric_rotor_are_half_the_weight() {
         assert!(b.load_n[1].abs() < 1e-9 * half_weight);
         let law = HertzLaw {
             stiffness: 1e9,
-            exponent: 1.5,
+            law: ContactLaw::Ball,
             count: 12,
             clearance_m: 1e-6,
         };

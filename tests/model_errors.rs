@@ -298,3 +298,73 @@ fn thermal_table_is_kept_opaque() {
     assert_eq!(t.get("nodes").and_then(|v| v.as_integer()), Some(66));
     assert!(t.get("resistances").is_some());
 }
+
+/// A Jeffcott rotor as a new user writes it: a solid shaft, one disk, one ball bearing with
+/// only the keys the mechanics needs (no geometry record, no `[thermal]`) and a linear
+/// support. It loads, assembles and builds the coupled system.
+#[test]
+fn a_minimal_rotor_with_a_solid_shaft_and_one_ball_bearing_loads() {
+    let text = r#"
+name = "jeffcott"
+[[materials]]
+id = "steel"
+youngs_modulus_pa = 2.1e11
+poisson_ratio = 0.3
+density_kg_m3 = 7850
+[[rotors]]
+id = "r"
+nodes = [1, 2, 3]
+[[shafts]]
+nodes = [1, 2]
+length_m = 0.3
+inner_diameter_m = 0.0
+outer_diameter_m = 0.03
+material = "steel"
+[[shafts]]
+nodes = [2, 3]
+length_m = 0.3
+inner_diameter_m = 0.0
+outer_diameter_m = 0.03
+material = "steel"
+[[disks]]
+id = "d"
+node = 2
+mass_kg = 10
+polar_inertia_kg_m2 = 0.05
+diametral_inertia_kg_m2 = 0.025
+eccentricity_m = 1e-5
+[[supports]]
+id = "s"
+node = 3
+stiffness_n_m = 1e7
+[[bearings]]
+id = "b"
+kind = "ball"
+inner_node = 1
+material = "steel"
+inner_race_diameter_m = 0.035
+outer_race_diameter_m = 0.055
+element_count = 9
+hertz_stiffness = 1e9
+initial_clearance_m = 5e-6
+"#;
+    let model = tmrotor::model::Model::from_str(text, "jeffcott.toml").expect("loads");
+    let asm = tmrotor::model::Assembly::new(&model).expect("assembles");
+    assert_eq!(asm.n_dof, 12);
+    let coupled = tmrotor::coupled::CoupledRotor::new(
+        &model,
+        &Default::default(),
+        tmrotor::coupled::CouplingOptions::default(),
+    )
+    .expect("coupled system");
+    assert!(coupled.network().is_none());
+    // a geometry record that is given is still checked
+    let bad = text.replace(
+        "inner_race_diameter_m = 0.035",
+        "inner_race_diameter_m = 0.035\nbore_diameter_m = 0.04",
+    );
+    let err = tmrotor::model::Model::from_str(&bad, "jeffcott.toml")
+        .expect_err("bore above the inner raceway")
+        .to_string();
+    assert!(err.contains("bore_diameter_m"), "{err}");
+}

@@ -27,7 +27,11 @@
 use super::{BearingError, check_positive};
 use std::f64::consts::PI;
 
-/// Contact type, fixing the load–deflection exponent `n` of Eq. 4.
+/// The contact law of a rolling element: the one definition of a bearing kind, used by the
+/// model file (`kind = "ball" | "roller"`), the linearised bearings of the modal analysis
+/// ([`super::linear`]), the thermal network's contact resistances and the coupled rotor's
+/// nonlinear force ([`HertzBearing`]). A new law is a new variant with its
+/// [`Self::element_load`]; everything above takes it from there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ContactLaw {
@@ -44,6 +48,31 @@ impl ContactLaw {
             ContactLaw::Ball => 1.5,
             ContactLaw::Roller => 10.0 / 9.0,
         }
+    }
+
+    /// The name in model files (`"ball"`, `"roller"`).
+    pub fn label(self) -> &'static str {
+        match self {
+            ContactLaw::Ball => "ball",
+            ContactLaw::Roller => "roller",
+        }
+    }
+
+    /// Load `p = k δⁿ` (N) of one rolling element with contact stiffness `k` (N/m^n) at
+    /// deflection `δ` (m), and its exact slope `dp/dδ = n k δⁿ⁻¹`; both 0 for `δ ≤ 0`
+    /// (Heaviside contact, Eq. 4).
+    #[inline]
+    pub fn element_load(self, stiffness: f64, delta: f64) -> (f64, f64) {
+        if delta <= 0.0 {
+            return (0.0, 0.0);
+        }
+        // δ^{3/2} = δ √δ for balls (cheaper than powf, exact to rounding)
+        let p = stiffness
+            * match self {
+                ContactLaw::Ball => delta * delta.sqrt(),
+                ContactLaw::Roller => delta.powf(10.0 / 9.0),
+            };
+        (p, self.exponent() * p / delta)
     }
 }
 
@@ -129,7 +158,6 @@ impl HertzBearing {
     /// * `delta_v_m`: thermal clearance variation `δv` (effective clearance `δ0 + δv`);
     /// * `cage_angle_rad`: `ω_c t`.
     pub fn force(&self, dx_m: f64, dy_m: f64, delta_v_m: f64, cage_angle_rad: f64) -> BearingForce {
-        let n = self.law.exponent();
         let k = self.stiffness;
         let clearance = self.clearance_m + delta_v_m;
         let mut out = BearingForce::default();
@@ -147,12 +175,7 @@ impl HertzBearing {
                 continue;
             }
             out.n_loaded += 1;
-            // k δⁿ and its slope n k δⁿ⁻¹ = n p / δ (δ > 0); δ^{3/2} = δ √δ for balls
-            let p = k * match self.law {
-                ContactLaw::Ball => delta * delta.sqrt(),
-                ContactLaw::Roller => delta.powf(n),
-            };
-            let dp = n * p / delta;
+            let (p, dp) = self.law.element_load(k, delta);
             out.fx += p * c;
             out.fy += p * s;
             out.fb += p;

@@ -5,7 +5,10 @@
 //!   derivatives with respect to the relative ring displacement and the clearance variation;
 //! * [`expansion`]: the radial thermal expansions of rolling elements, inner ring and outer
 //!   ring (Eqs. 1–2) and the resulting clearance variation `δv = −(u_b + (u_i − u_o)/2)`
-//!   with its derivatives with respect to the temperatures involved.
+//!   with its derivatives with respect to the temperatures involved;
+//! * [`linear`]: the cage-averaged law linearised at a radial load, for modal analysis.
+//!
+//! [`ContactLaw`] is the one definition of a bearing's kind.
 //!
 //! Everything here is pointwise (one instant, one bearing) and allocation-free, so that the
 //! coupled model can call it inside the harmonic-balance AFT loop and chain the derivatives.
@@ -13,9 +16,11 @@
 
 pub mod expansion;
 pub mod hertz;
+pub mod linear;
 
 pub use expansion::{ClearanceVariation, ExpansionGeometry, OuterSeat};
 pub use hertz::{BearingForce, ContactLaw, HertzBearing, cage_speed_rad_s};
+pub use linear::HertzLaw;
 
 /// Errors raised when bearing data are inconsistent.
 #[derive(Debug, thiserror::Error, PartialEq)]

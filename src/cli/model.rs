@@ -36,6 +36,13 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
         ModelCommand::Check { file } => {
             let model = Model::from_file(file)?;
             let asm = Assembly::new(&model)?;
+            // what a sweep builds (the coupled system with its thermal network and the
+            // checks between the mechanical and thermal tables): one validation path
+            crate::coupled::CoupledRotor::new(
+                &model,
+                &crate::coupled::StudyOverrides::default(),
+                crate::coupled::CouplingOptions::default(),
+            )?;
             // the thermal layer's own checks: the table's fields and ranges, then the
             // network it describes
             let thermal = match model.thermal() {

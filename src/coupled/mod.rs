@@ -33,8 +33,8 @@ use std::sync::Mutex;
 
 use thiserror::Error;
 
-use crate::bearing::{ContactLaw, ExpansionGeometry, HertzBearing};
-use crate::model::{Assembly, BearingKind, Dir, Model, ModelError};
+use crate::bearing::{ExpansionGeometry, HertzBearing};
+use crate::model::{Assembly, Dir, Model, ModelError};
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 use crate::thermal::{
     BearingLoad, BearingThermalOutputs, ThermalEval, ThermalNetwork, ThermalSpec,
@@ -151,6 +151,28 @@ impl std::fmt::Debug for CoupledRotor {
     }
 }
 
+/// A thermal bearing's contact law (its `kind`, which sets the contact resistances of
+/// Eqs. 15–17) must be that of the mechanical bearing of the same name.
+fn same_contact_laws(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledError> {
+    for (i, t) in spec.bearings.iter().enumerate() {
+        if let Some(b) = model.spec.bearings.iter().find(|b| b.id == t.name)
+            && b.kind != t.kind
+        {
+            return Err(mismatch(
+                model,
+                &format!("thermal.bearings[{i}].kind"),
+                format!(
+                    "{:?} is a {} bearing in [[thermal.bearings]] but a {} bearing in [[bearings]]",
+                    t.name,
+                    t.kind.label(),
+                    b.kind.label()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl CoupledRotor {
     /// Builds the coupled system from a validated model, study overrides and coupling
     /// options.
@@ -164,6 +186,7 @@ impl CoupledRotor {
             (true, Some(table)) => {
                 let mut spec = ThermalSpec::from_table(table, &model.source)?;
                 apply_overrides(&mut spec, study)?;
+                same_contact_laws(model, &spec)?;
                 Some(ThermalNetwork::new(&spec)?)
             }
             _ => None,
@@ -206,10 +229,7 @@ impl CoupledRotor {
         let mut bearings = Vec::new();
         for (k, b) in model.spec.bearings.iter().enumerate() {
             let field = format!("bearings[{k}] ({})", b.id);
-            let law = match b.kind {
-                BearingKind::Ball => ContactLaw::Ball,
-                BearingKind::Roller => ContactLaw::Roller,
-            };
+            let law = b.kind;
             let hertz = HertzBearing {
                 law,
                 n_elements: b.element_count as usize,

@@ -1,7 +1,7 @@
 //! Linear analyses of an assembled rotor: damped modes and the Campbell diagram.
 //!
 //! The linearised equations (paper Eq. 8 with the bearings replaced by their linearised
-//! stiffness, [`crate::model::bearing_linear`]) at reference speed `ω`,
+//! stiffness, [`crate::bearing::linear`]) at reference speed `ω`,
 //!
 //! ```text
 //!   M q̈ + (C + Σ_r s_r ω G_r) q̇ + (K + K_b) q = 0,

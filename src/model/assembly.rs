@@ -17,7 +17,7 @@
 //! * `stiffness`: shafts and linear supports — the linear `K_M` of Eq. 8; the rolling
 //!   bearings are nonlinear forces there and are *not* in it;
 //! * `damping`: Rayleigh `a0 M + a1 K` (with that `K`) plus support dashpots;
-//! * `bearing_stiffness`: the linearised bearings (see [`super::bearing_linear`]), used
+//! * `bearing_stiffness`: the linearised bearings (see [`crate::bearing::linear`]), used
 //!   only by the linear analyses ([`Assembly::linear_part_with_bearings`]);
 //! * `gravity`: consistent load `−g M e_x` (`e_x` = 1 on every x DoF): for Hermite shape
 //!   functions it equals the consistent distributed load `∫ Nᵀ ρA g dz` plus the disk
@@ -30,10 +30,10 @@
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
-use super::bearing_linear::HertzLaw;
 use super::element::{Mat4, ShaftSection};
 use super::error::ModelError;
 use super::validate::{Dir, Model, dof};
+use crate::bearing::HertzLaw;
 use crate::hb::Ratio;
 use crate::system::{DenseMatrix, LinearPart};
 
@@ -337,7 +337,7 @@ impl Assembly {
             dofs.push((dof(i, Dir::X), o.map(|o| dof(o, Dir::X))));
             laws.push(HertzLaw {
                 stiffness: b.hertz_stiffness,
-                exponent: b.kind.exponent(),
+                law: b.kind,
                 count: b.element_count,
                 clearance_m: b.initial_clearance_m,
             });

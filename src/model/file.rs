@@ -6,6 +6,8 @@
 
 use serde::Deserialize;
 
+use crate::bearing::ContactLaw;
+
 /// A whole model file.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -189,32 +191,13 @@ pub struct SupportSpec {
     pub rotational_stiffness_n_m_rad: f64,
 }
 
-/// Rolling-element type, which sets the Hertz exponent `n` of Eq. 4.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-pub enum BearingKind {
-    /// Point contact, `n = 3/2`.
-    Ball,
-    /// Line contact, `n = 10/9`.
-    Roller,
-}
-
-impl BearingKind {
-    /// The Hertz load–deflection exponent of Eq. 4.
-    pub fn exponent(self) -> f64 {
-        match self {
-            Self::Ball => 1.5,
-            Self::Roller => 10.0 / 9.0,
-        }
-    }
-}
-
 /// `[[bearings]]`: a rolling bearing with all data of paper Tables A.1/A.2.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BearingSpec {
     pub id: String,
-    pub kind: BearingKind,
+    /// Rolling-element contact law (`"ball"`: n = 3/2, `"roller"`: n = 10/9).
+    pub kind: ContactLaw,
     /// Node carrying the inner ring.
     pub inner_node: u32,
     /// Node carrying the outer ring; absent means the outer ring sits in a rigid housing
@@ -224,24 +207,25 @@ pub struct BearingSpec {
     pub material: String,
     /// Material id of the housing (or of the shaft holding the outer ring).
     pub housing_material: Option<String>,
-    /// Bore `d_b` / `d_r` (m).
-    pub bore_diameter_m: f64,
-    /// Outside diameter `D_b` / `D_r` (m).
-    pub outside_diameter_m: f64,
+    /// Bore `d_b` / `d_r` (m). Geometry record (Tables A.1/A.2): the thermal network
+    /// takes its own from `[[thermal.bearings]]`.
+    pub bore_diameter_m: Option<f64>,
+    /// Outside diameter `D_b` / `D_r` (m). Geometry record.
+    pub outside_diameter_m: Option<f64>,
     /// Inner-ring raceway diameter `d_bi` / `d_ri` (m).
     pub inner_race_diameter_m: f64,
     /// Outer-ring raceway diameter `d_bo` / `d_ro` (m).
     pub outer_race_diameter_m: f64,
-    /// Pitch diameter `D_bm` / `D_rm` (m).
-    pub pitch_diameter_m: f64,
+    /// Pitch diameter `D_bm` / `D_rm` (m). Geometry record.
+    pub pitch_diameter_m: Option<f64>,
     /// Number of rolling elements `N`.
     pub element_count: u32,
-    /// Ball or roller diameter (m).
-    pub element_diameter_m: f64,
+    /// Ball or roller diameter (m). Geometry record.
+    pub element_diameter_m: Option<f64>,
     /// Roller length `a_roller` (m); rollers only.
     pub roller_length_m: Option<f64>,
-    /// Bearing width `B` (m).
-    pub width_m: f64,
+    /// Bearing width `B` (m). Geometry record.
+    pub width_m: Option<f64>,
     /// Hertz contact stiffness `k_b` of Eq. 4, in N/m^n (n = 3/2 ball, 10/9 roller).
     pub hertz_stiffness: f64,
     /// Initial radial clearance `δ0` (m).
@@ -252,13 +236,14 @@ pub struct BearingSpec {
     pub housing_length_m: Option<f64>,
     /// Length of the part of the housing `l_hs` (m).
     pub housing_part_length_m: Option<f64>,
-    /// Inner radius of the shaft element under the inner ring, `r_LP` (m).
-    pub shaft_inner_radius_m: f64,
+    /// Inner radius of the shaft element under the inner ring, `r_LP` (m); 0 for a solid
+    /// shaft. Geometry record.
+    pub shaft_inner_radius_m: Option<f64>,
     /// Outer radius of the shaft element holding the outer ring, `r_HP` (m);
     /// inter-shaft bearings only.
     pub outer_shaft_radius_m: Option<f64>,
     /// Linearised radial stiffness for modal analysis (N/m, isotropic). If absent, it is
-    /// derived from the Hertz law (see [`crate::model::bearing_linear`]).
+    /// derived from the Hertz law (see [`crate::bearing::linear`]).
     pub linear_stiffness_n_m: Option<f64>,
     /// Radial load (N) at which the Hertz law is linearised when `linear_stiffness_n_m` is
     /// absent. If both are absent, the load of the static gravity equilibrium is used.

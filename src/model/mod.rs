@@ -43,7 +43,6 @@
 //! ```
 
 pub mod assembly;
-pub mod bearing_linear;
 pub mod element;
 pub mod error;
 pub mod file;
@@ -51,5 +50,5 @@ pub mod validate;
 
 pub use assembly::{Assembly, LinearBearing, RotorGyro, Unbalance};
 pub use error::{InvalidKind, ModelError};
-pub use file::{BearingKind, ModelFile};
+pub use file::ModelFile;
 pub use validate::{BUILTIN_NAME, BUILTIN_TOML, DOF_PER_NODE, Dir, Model, dof};

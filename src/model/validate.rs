@@ -4,7 +4,8 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use super::error::{InvalidKind, ModelError};
-use super::file::{BearingKind, ModelFile, SpeedRatioSpec};
+use super::file::{ModelFile, SpeedRatioSpec};
+use crate::bearing::ContactLaw;
 use crate::hb::Ratio;
 
 /// Largest denominator accepted for a speed ratio given as a number.
@@ -551,26 +552,39 @@ impl<'a> Validator<'a> {
                 self.material(&spec, p("housing_material"), h)?;
             }
             for (f, v) in [
-                ("bore_diameter_m", b.bore_diameter_m),
                 ("inner_race_diameter_m", b.inner_race_diameter_m),
-                ("pitch_diameter_m", b.pitch_diameter_m),
                 ("outer_race_diameter_m", b.outer_race_diameter_m),
-                ("outside_diameter_m", b.outside_diameter_m),
-                ("element_diameter_m", b.element_diameter_m),
-                ("width_m", b.width_m),
                 ("hertz_stiffness", b.hertz_stiffness),
-                ("shaft_inner_radius_m", b.shaft_inner_radius_m),
             ] {
                 self.positive(p(f), v)?;
             }
-            // Radial order of the diameters: bore < inner race < pitch < outer race < outside.
-            let order = [
+            // the geometry record: checked where given
+            for (f, v) in [
                 ("bore_diameter_m", b.bore_diameter_m),
-                ("inner_race_diameter_m", b.inner_race_diameter_m),
                 ("pitch_diameter_m", b.pitch_diameter_m),
-                ("outer_race_diameter_m", b.outer_race_diameter_m),
                 ("outside_diameter_m", b.outside_diameter_m),
-            ];
+                ("element_diameter_m", b.element_diameter_m),
+                ("width_m", b.width_m),
+            ] {
+                if let Some(v) = v {
+                    self.positive(p(f), v)?;
+                }
+            }
+            if let Some(r) = b.shaft_inner_radius_m {
+                self.non_negative(p("shaft_inner_radius_m"), r)?;
+            }
+            // Radial order of the diameters given: bore < inner race < pitch < outer race
+            // < outside.
+            let order: Vec<(&str, f64)> = [
+                ("bore_diameter_m", b.bore_diameter_m),
+                ("inner_race_diameter_m", Some(b.inner_race_diameter_m)),
+                ("pitch_diameter_m", b.pitch_diameter_m),
+                ("outer_race_diameter_m", Some(b.outer_race_diameter_m)),
+                ("outside_diameter_m", b.outside_diameter_m),
+            ]
+            .into_iter()
+            .filter_map(|(f, v)| v.map(|v| (f, v)))
+            .collect();
             for w in order.windows(2) {
                 if w[0].1 >= w[1].1 {
                     return Err(self.err(
@@ -593,13 +607,13 @@ impl<'a> Validator<'a> {
             }
             self.non_negative(p("initial_clearance_m"), b.initial_clearance_m)?;
             match (b.kind, b.roller_length_m) {
-                (BearingKind::Roller, None) => {
+                (ContactLaw::Roller, None) => {
                     return Err(self.err(
                         p("roller_length_m"),
                         InvalidKind::MissingKey("`roller_length_m` (required for rollers)".into()),
                     ));
                 }
-                (BearingKind::Ball, Some(_)) => {
+                (ContactLaw::Ball, Some(_)) => {
                     return Err(self.err(
                         p("roller_length_m"),
                         InvalidKind::Conflict("a ball bearing has no roller length".into()),

@@ -19,9 +19,11 @@
 //! `K = F'(r) ê êᵀ + (F(r)/r) (I − ê êᵀ)` — the tangent stiffness along the load and the
 //! secant stiffness across it. The operating point is the radial load the bearing carries
 //! (given in the model file, or the static gravity equilibrium computed by
-//! [`super::Assembly`]).
+//! the model's assembly).
 
 use std::f64::consts::PI;
+
+use super::ContactLaw;
 
 /// Cage positions sampled per element pitch when averaging Eq. 4.
 pub const CAGE_SAMPLES: usize = 64;
@@ -31,8 +33,8 @@ pub const CAGE_SAMPLES: usize = 64;
 pub struct HertzLaw {
     /// `k_b` (N/m^n).
     pub stiffness: f64,
-    /// Exponent `n` (3/2 ball, 10/9 roller).
-    pub exponent: f64,
+    /// Element law (exponent `n`: 3/2 ball, 10/9 roller).
+    pub law: ContactLaw,
     /// Number of rolling elements `N`.
     pub count: u32,
     /// Initial radial clearance `δ0` (m).
@@ -50,11 +52,9 @@ impl HertzLaw {
             let phase = (s as f64 + 0.5) / CAGE_SAMPLES as f64 * pitch;
             for k in 0..n {
                 let c = (phase + k as f64 * pitch).cos();
-                let d = r * c - self.clearance_m;
-                if d > 0.0 {
-                    f += d.powf(self.exponent) * c;
-                    df += self.exponent * d.powf(self.exponent - 1.0) * c * c;
-                }
+                let (p, dp) = self.law.element_load(1.0, r * c - self.clearance_m);
+                f += p * c;
+                df += dp * c * c;
             }
         }
         let scale = self.stiffness / CAGE_SAMPLES as f64;
