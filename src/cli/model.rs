@@ -1,4 +1,4 @@
-//! `tmrotor model check FILE` and `tmrotor model show`.
+//! `tmrotor model check FILE`, `tmrotor model show` and `tmrotor model reference`.
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -17,8 +17,12 @@ pub enum ModelCommand {
         /// The model file (TOML).
         file: PathBuf,
     },
-    /// Print the built-in dual-rotor model file (a documented starting point to copy).
+    /// Print the built-in dual-rotor model file (a documented starting point to copy; every
+    /// key is described in docs/model-reference.md, or `tmrotor model reference`).
     Show,
+    /// Print the model-file reference (markdown): every key with unit, default, whether it
+    /// is required, the range checked and its meaning.
+    Reference,
 }
 
 /// Loads the model named by an optional `--model` flag (built-in when absent).
@@ -32,7 +36,15 @@ pub fn load(file: Option<&PathBuf>) -> anyhow::Result<Model> {
 /// Runs a model command, writing to `out`.
 pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
     match cmd {
-        ModelCommand::Show => out.write_all(BUILTIN_TOML.as_bytes())?,
+        ModelCommand::Show => {
+            writeln!(
+                out,
+                "# Every key of this file is described in docs/model-reference.md \
+                 (also: tmrotor model reference)."
+            )?;
+            out.write_all(BUILTIN_TOML.as_bytes())?
+        }
+        ModelCommand::Reference => out.write_all(crate::model::reference::markdown().as_bytes())?,
         ModelCommand::Check { file } => {
             let model = Model::from_file(file)?;
             let asm = Assembly::new(&model)?;

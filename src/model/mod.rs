@@ -9,9 +9,10 @@
 //! shaft elements; rigid disks with unbalance; linear supports to ground or between two
 //! nodes; rolling bearings with all data of paper Tables A.1/A.2; Rayleigh damping; gravity;
 //! and an optional `[thermal]` table that this layer keeps opaque
-//! ([`Model::thermal`]) for the thermal network. The format is documented key by key at
-//! the top of the built-in file `models/dual_rotor.toml` (print it with
-//! `tmrotor model show`); the serde structures are in [`mod@file`].
+//! ([`Model::thermal`]) for the thermal network. The format is documented key by key in
+//! `docs/model-reference.md`, generated from [`reference`] (`tmrotor model reference`);
+//! the built-in file `models/dual_rotor.toml` (`tmrotor model show`) gives the paper's
+//! sources in its comments; the serde structures are in [`mod@file`].
 //!
 //! Loading ([`Model::from_file`], [`Model::from_str`], [`Model::builtin`]) never panics:
 //! every problem is a [`ModelError`] naming the file, the field path
@@ -46,6 +47,8 @@ pub mod assembly;
 pub mod element;
 pub mod error;
 pub mod file;
+pub mod reference;
+mod reference_keys;
 pub mod validate;
 
 pub use assembly::{Assembly, LinearBearing, RotorGyro, Unbalance};

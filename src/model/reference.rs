@@ -1,0 +1,125 @@
+//! The model-file reference: every key with its meaning, unit, default, whether it is
+//! required and the range the loader checks, generated from [`KEYS`] (one entry per serde
+//! field; `tests/model_reference.rs` fails when a field of the serde structures has no
+//! entry or an entry names no field, and when `docs/model-reference.md` differs from
+//! [`markdown`]). Print it with `tmrotor model reference`.
+
+pub use super::reference_keys::KEYS;
+
+/// Whether a key must be given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Need {
+    /// Always.
+    Required,
+    /// Never; the default applies.
+    Optional,
+    /// Only when the file has a `[thermal]` table.
+    WithThermal,
+    /// One of the alternatives described.
+    OneOf(&'static str),
+}
+
+impl Need {
+    fn text(self) -> String {
+        match self {
+            Need::Required => "required".into(),
+            Need::Optional => "optional".into(),
+            Need::WithThermal => "required with `[thermal]`".into(),
+            Need::OneOf(alt) => format!("one of: {alt}"),
+        }
+    }
+}
+
+/// One key of the model file.
+#[derive(Clone, Copy, Debug)]
+pub struct Key {
+    /// Table path: `""` top level, `bearings` for `[[bearings]]`, `thermal.viscosity`, …
+    pub table: &'static str,
+    /// The key as written in the file.
+    pub key: &'static str,
+    /// SI unit (`""` for text, counts and dimensionless numbers).
+    pub unit: &'static str,
+    pub need: Need,
+    /// Default when optional (`""` when required).
+    pub default: &'static str,
+    /// What the loader checks (`""` when nothing).
+    pub range: &'static str,
+    /// What it is, with the paper's symbol, table or equation.
+    pub meaning: &'static str,
+}
+
+/// Tables in the order of the reference, with the heading text of each.
+pub const TABLES: &[(&str, &str)] = &[
+    ("", "Top level"),
+    ("gravity", "`[gravity]`"),
+    ("damping", "`[damping]`: Rayleigh damping C = a0·M + a1·K"),
+    ("materials", "`[[materials]]`"),
+    ("rotors", "`[[rotors]]`"),
+    (
+        "shafts",
+        "`[[shafts]]`: hollow Timoshenko elements (Appendix B)",
+    ),
+    ("disks", "`[[disks]]`: rigid disks (Eq. 6)"),
+    ("supports", "`[[supports]]`: linear spring–dashpots"),
+    ("bearings", "`[[bearings]]`: rolling bearings (Eqs. 3–5)"),
+    ("thermal", "`[thermal]`: the thermal network (Section 3)"),
+    ("thermal.viscosity", "`[thermal.viscosity]`: Eq. 12"),
+    ("thermal.lubricant", "`[thermal.lubricant]`: Table A.6"),
+    ("thermal.air", "`[thermal.air]`"),
+    ("thermal.materials", "`[thermal.materials]`"),
+    (
+        "thermal.materials.bearing",
+        "`[thermal.materials.bearing]`: Table A.5",
+    ),
+    (
+        "thermal.materials.shaft",
+        "`[thermal.materials.shaft]`: Table A.5",
+    ),
+    ("thermal.shafts", "`[[thermal.shafts]]`: shaft segments"),
+    ("thermal.disks", "`[[thermal.disks]]`"),
+    ("thermal.housings", "`[[thermal.housings]]`"),
+    ("thermal.bearings", "`[[thermal.bearings]]`: Eqs. 9–17"),
+];
+
+/// Escapes a table cell.
+fn cell(text: &str) -> String {
+    if text.is_empty() {
+        "–".into()
+    } else {
+        text.replace('|', "\\|")
+    }
+}
+
+/// The reference as markdown (`docs/model-reference.md`).
+pub fn markdown() -> String {
+    let mut out = String::from(
+        "# Model-file reference\n\n\
+         Generated from the code (`src/model/reference_keys.rs`) by `tmrotor model reference`;\n\
+         a test fails when this file, the table in the code and the loader's keys disagree.\n\n\
+         A model file is TOML. Units are SI and appear in the key names (`length_m`,\n\
+         `mass_kg`); every table rejects keys it does not know. Start from the built-in dual\n\
+         rotor (`tmrotor model show > my_rotor.toml`, its comments give the paper's sources)\n\
+         and check a file with `tmrotor model check my_rotor.toml`. A rotor without a\n\
+         `[thermal]` table is solved mechanically (the bearings keep their initial clearance);\n\
+         the `[thermal]` table describes the lumped thermal network of the paper's Section 3.\n\n\
+         Columns: the key, its unit, whether it is required, its default, what the loader\n\
+         checks, and its meaning.\n",
+    );
+    for (table, heading) in TABLES {
+        out.push_str(&format!("\n## {heading}\n\n"));
+        out.push_str("| key | unit | need | default | checked | meaning |\n");
+        out.push_str("|---|---|---|---|---|---|\n");
+        for k in KEYS.iter().filter(|k| k.table == *table) {
+            out.push_str(&format!(
+                "| `{}` | {} | {} | {} | {} | {} |\n",
+                k.key,
+                cell(k.unit),
+                k.need.text(),
+                cell(k.default),
+                cell(k.range),
+                cell(k.meaning)
+            ));
+        }
+    }
+    out
+}

@@ -1,0 +1,195 @@
+//! The model-file reference against the code: every field of the serde structures of a
+//! model file (mechanical and `[thermal]`) has exactly one entry in
+//! `tmrotor::model::reference::KEYS` and vice versa; `docs/model-reference.md` is what
+//! `tmrotor model reference` prints; each key the reference calls required is one the
+//! loader asks for when it is missing from the built-in file, and each optional one is not.
+
+use std::collections::BTreeSet;
+
+use serde::Deserialize;
+use serde::de::{self, Deserializer, Visitor};
+use tmrotor::model::file as mf;
+use tmrotor::model::reference::{KEYS, Need, TABLES, markdown};
+use tmrotor::thermal::spec as ts;
+
+/// A deserializer that records the field names a derived `Deserialize` asks for and then
+/// stops: the serde structures' own list of keys.
+struct Fields(Vec<&'static str>);
+
+#[derive(Debug)]
+struct Stop;
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("stop")
+    }
+}
+impl std::error::Error for Stop {}
+impl de::Error for Stop {
+    fn custom<T: std::fmt::Display>(_: T) -> Self {
+        Stop
+    }
+}
+
+impl<'de> Deserializer<'de> for &mut Fields {
+    type Error = Stop;
+    fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Stop> {
+        Err(Stop)
+    }
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _: &'static str,
+        fields: &'static [&'static str],
+        _: V,
+    ) -> Result<V::Value, Stop> {
+        self.0.extend_from_slice(fields);
+        Err(Stop)
+    }
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 u8 u16 u32 u64 f32 f64 char str string bytes byte_buf option
+        unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+        ignored_any
+    }
+}
+
+fn fields<T: for<'de> Deserialize<'de>>() -> BTreeSet<&'static str> {
+    let mut f = Fields(Vec::new());
+    let _ = T::deserialize(&mut f);
+    assert!(!f.0.is_empty(), "no fields recorded");
+    f.0.into_iter().collect()
+}
+
+fn structs() -> Vec<(&'static str, BTreeSet<&'static str>)> {
+    vec![
+        ("", fields::<mf::ModelFile>()),
+        ("gravity", fields::<mf::GravitySpec>()),
+        ("damping", fields::<mf::DampingSpec>()),
+        ("materials", fields::<mf::MaterialSpec>()),
+        ("rotors", fields::<mf::RotorSpec>()),
+        ("shafts", fields::<mf::ShaftSpec>()),
+        ("disks", fields::<mf::DiskSpec>()),
+        ("supports", fields::<mf::SupportSpec>()),
+        ("bearings", fields::<mf::BearingSpec>()),
+        ("thermal", fields::<ts::ThermalSpec>()),
+        ("thermal.viscosity", fields::<ts::ViscositySpec>()),
+        ("thermal.lubricant", fields::<ts::LubricantSpec>()),
+        ("thermal.air", fields::<ts::AirSpec>()),
+        ("thermal.materials", fields::<ts::MaterialsSpec>()),
+        ("thermal.materials.bearing", fields::<ts::MaterialSpec>()),
+        ("thermal.materials.shaft", fields::<ts::MaterialSpec>()),
+        ("thermal.shafts", fields::<ts::ShaftSpec>()),
+        ("thermal.disks", fields::<ts::DiskSpec>()),
+        ("thermal.housings", fields::<ts::HousingSpec>()),
+        ("thermal.bearings", fields::<ts::BearingThermalSpec>()),
+    ]
+}
+
+#[test]
+fn every_key_of_the_loader_has_one_entry_and_every_entry_is_a_key() {
+    let tables: BTreeSet<&str> = TABLES.iter().map(|t| t.0).collect();
+    for k in KEYS {
+        assert!(
+            tables.contains(k.table),
+            "{}.{}: unknown table",
+            k.table,
+            k.key
+        );
+        assert!(!k.meaning.is_empty(), "{}.{}: no meaning", k.table, k.key);
+        if k.need == Need::Optional {
+            assert!(
+                !k.default.is_empty(),
+                "{}.{}: optional without a default",
+                k.table,
+                k.key
+            );
+        }
+    }
+    for (table, want) in structs() {
+        let listed: Vec<&str> = KEYS
+            .iter()
+            .filter(|k| k.table == table)
+            .map(|k| k.key)
+            .collect();
+        let got: BTreeSet<&str> = listed.iter().copied().collect();
+        assert_eq!(got.len(), listed.len(), "[{table}]: a key listed twice");
+        let missing: Vec<_> = want.difference(&got).collect();
+        let extra: Vec<_> = got.difference(&want).collect();
+        assert!(
+            missing.is_empty() && extra.is_empty(),
+            "[{table}]: keys without an entry {missing:?}, entries without a key {extra:?}"
+        );
+    }
+}
+
+#[test]
+fn the_document_is_the_generated_reference() {
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/model-reference.md");
+    let doc = std::fs::read_to_string(path).expect("docs/model-reference.md");
+    assert!(
+        doc == markdown(),
+        "docs/model-reference.md is out of date: regenerate it with \
+         `cargo run --release -- model reference > docs/model-reference.md`"
+    );
+}
+
+/// Removes the first `key = …` line of the `[[table]]` whose header is `header` in `text`.
+fn without_key(text: &str, header: &str, key: &str) -> Option<String> {
+    let start = text.find(&format!("\n{header}\n"))?;
+    let body = start + header.len() + 2;
+    let end = text[body..].find("\n[").map_or(text.len(), |e| body + e);
+    let line_start = text[body..end]
+        .find(&format!("\n{key} = "))
+        .map(|i| body + i + 1)
+        .or_else(|| {
+            text[body..end]
+                .starts_with(&format!("{key} = "))
+                .then_some(body)
+        })?;
+    let line_end = text[line_start..]
+        .find('\n')
+        .map_or(text.len(), |e| line_start + e + 1);
+    Some(format!("{}{}", &text[..line_start], &text[line_end..]))
+}
+
+/// Each scalar key of the mechanical tables marked required makes the loader report a
+/// missing key when removed from the built-in file; each marked optional does not.
+#[test]
+fn required_means_the_loader_asks_for_it() {
+    let text = tmrotor::model::BUILTIN_TOML;
+    let mut tried = 0;
+    for k in KEYS
+        .iter()
+        .filter(|k| !k.table.starts_with("thermal") && !k.table.is_empty())
+    {
+        let header = if matches!(k.table, "gravity" | "damping") {
+            format!("[{}]", k.table)
+        } else {
+            format!("[[{}]]", k.table)
+        };
+        let Some(cut) = without_key(text, &header, k.key) else {
+            continue;
+        };
+        tried += 1;
+        let result = tmrotor::model::Model::from_str(&cut, "cut.toml");
+        let missing = match &result {
+            Err(e) => {
+                let m = e.to_string();
+                m.contains("missing") && m.contains(k.key)
+            }
+            Ok(_) => false,
+        };
+        match k.need {
+            Need::Required => assert!(
+                missing,
+                "{}.{} is required, but: {result:?}",
+                k.table, k.key
+            ),
+            Need::Optional => assert!(
+                !missing,
+                "{}.{} is optional, but: {result:?}",
+                k.table, k.key
+            ),
+            _ => {}
+        }
+    }
+    assert!(tried >= 30, "only {tried} keys tried");
+}
