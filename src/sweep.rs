@@ -128,6 +128,9 @@ pub struct SweepReport {
     pub timings: Timings,
     /// Time spent deriving the recorded quantities of the points and writing them.
     pub record_seconds: f64,
+    /// Recorded points flagged stable and unstable (points without a verdict in neither).
+    pub stable_points: usize,
+    pub unstable_points: usize,
 }
 
 impl SweepReport {
@@ -136,6 +139,12 @@ impl SweepReport {
     /// calls (see [`Timings`]); the stability part names the instruction set of the
     /// Floquet kernel ([`crate::stability::panel_kernel_isa`]), which sets its speed.
     pub fn time_summary(&self) -> String {
+        self.time_summary_with(true)
+    }
+
+    /// [`Self::time_summary`], naming the Floquet product's kernel (its instruction set)
+    /// only when `kernel` is set.
+    pub fn time_summary_with(&self, kernel: bool) -> String {
         let t = &self.timings;
         let per = |secs: f64, n: usize| {
             if n > 0 {
@@ -152,11 +161,15 @@ impl SweepReport {
         );
         if t.evaluations > 0 {
             line += &format!(
-                ", stability {:.1} s ({} evaluations{}, beside the corrector, {} kernel)",
+                ", stability {:.1} s ({} evaluations{}, beside the corrector{})",
                 t.stability_seconds,
                 t.evaluations,
                 per(t.stability_seconds, t.evaluations),
-                crate::stability::panel_kernel_isa()
+                if kernel {
+                    format!(", {} kernel", crate::stability::panel_kernel_isa())
+                } else {
+                    String::new()
+                }
             );
         }
         if t.searches > 0 {
@@ -441,6 +454,7 @@ impl SweepProblem {
         let mut finish = None;
         let mut lead_in_from = None;
         let mut record_seconds = 0.0;
+        let (mut stable_points, mut unstable_points) = (0, 0);
         // (index, ω, ω/2 share) per point, for the period-doubled stretches
         let mut shares = Vec::new();
         let interrupted = || {
@@ -496,6 +510,11 @@ impl SweepProblem {
                             point_half_order_share(&self.run, &rec),
                         ));
                         sink.write_point(&rec)?;
+                        match rec.stable {
+                            Some(true) => stable_points += 1,
+                            Some(false) => unstable_points += 1,
+                            None => {}
+                        }
                         record_seconds += recording.elapsed().as_secs_f64();
                         prog.points += 1;
                         prog.omega_rad_s = point.solution.omega;
@@ -574,6 +593,8 @@ impl SweepProblem {
                     lead_in_from,
                     timings: cont.timings(),
                     record_seconds,
+                    stable_points,
+                    unstable_points,
                 })
             }
             Err(e) => {
@@ -625,6 +646,8 @@ mod tests {
             lead_in_from: None,
             timings,
             record_seconds: 0.25,
+            stable_points: 0,
+            unstable_points: 0,
         }
     }
 

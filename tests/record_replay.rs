@@ -259,3 +259,37 @@ fn plot_binary_writes_pngs_with_stable_and_unstable_colours_and_handles_bad_file
         "not available has its own exit code"
     );
 }
+
+/// `replay branch … | head`: the reader closes the pipe early; replay ends quietly with
+/// status 0 instead of an error about a broken pipe.
+#[test]
+fn a_closed_pipe_ends_replay_quietly() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let bin = env!("CARGO_BIN_EXE_replay");
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = dir.path().join("long.mcap");
+    let made = Command::new(bin)
+        .args(["synthetic", "--points", "3000"])
+        .arg(&file)
+        .output()
+        .expect("synthetic recording");
+    assert!(made.status.success(), "{made:?}");
+    let mut child = Command::new(bin)
+        .args(["branch", "--csv"])
+        .arg(&file)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("replay runs");
+    let mut first = String::new();
+    BufReader::new(child.stdout.take().expect("stdout"))
+        .read_line(&mut first)
+        .expect("a line");
+    // the reader is dropped here: the pipe is closed with most of the output unread
+    assert!(first.starts_with("index,omega"), "{first}");
+    let out = child.wait_with_output().expect("replay ends");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{:?}: {stderr}", out.status);
+    assert!(!stderr.contains("error"), "{stderr}");
+}

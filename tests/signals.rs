@@ -108,14 +108,42 @@ fn a_finished_sweep_reports_its_time_and_cpu() {
         String::from_utf8_lossy(&run.stderr)
     );
     let lines: Vec<&str> = stdout.lines().collect();
+    // plain words, no debug formatting: "12 points in 1.3 s, completed → short.mcap"
     assert!(
-        lines[0].contains(" points in ") && lines[0].contains("(Completed)"),
+        lines[0].contains(" points in ") && lines[0].contains(", completed → "),
         "{stdout}"
     );
-    assert!(lines[1].starts_with("  time: corrector "), "{stdout}");
+    assert!(!stdout.contains("(Completed)"), "{stdout}");
+    // the stability verdicts counted
+    let counts: Vec<usize> = lines[1]
+        .trim()
+        .split(", ")
+        .filter_map(|part| part.split(' ').next()?.parse().ok())
+        .collect();
+    assert!(
+        lines[1].contains(" stable, ") && lines[1].ends_with(" unstable") && counts.len() == 2,
+        "{stdout}"
+    );
+    let points: usize = lines[0]
+        .split(' ')
+        .next()
+        .and_then(|n| n.parse().ok())
+        .expect("point count");
+    assert_eq!(counts[0] + counts[1], points, "{stdout}");
+    // the kernel's instruction set only with -v
+    assert!(
+        lines[2].starts_with("  time: corrector ") && !lines[2].contains("kernel"),
+        "{stdout}"
+    );
+    assert!(
+        lines
+            .last()
+            .is_some_and(|l| l.starts_with("next: replay info ")),
+        "{stdout}"
+    );
     if cfg!(target_os = "linux") {
         assert!(
-            lines[2].starts_with("  CPU ") && lines[2].contains("% of one core"),
+            lines[3].starts_with("  CPU ") && lines[3].contains("% of one core"),
             "{stdout}"
         );
     }

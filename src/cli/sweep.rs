@@ -100,6 +100,9 @@ pub struct SweepArgs {
     /// No progress: no bar on a terminal, no progress lines when the output goes to a file.
     #[arg(long, short)]
     pub quiet: bool,
+    /// More detail in the closing summary (the Floquet kernel's instruction set).
+    #[arg(long, short)]
+    pub verbose: bool,
 }
 
 impl SweepArgs {
@@ -223,13 +226,20 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     })?;
     writeln!(
         out,
-        "{} points in {:.1} s ({:?}) → {}",
-        report.points,
+        "{} in {:.1} s, {} → {}",
+        plural(report.points, "point", "points"),
         report.total_seconds,
-        report.status,
+        report.status.label(),
         args.output.display()
     )?;
-    writeln!(out, "  time: {}", report.time_summary())?;
+    if report.stable_points + report.unstable_points > 0 {
+        writeln!(
+            out,
+            "  {} stable, {} unstable",
+            report.stable_points, report.unstable_points
+        )?;
+    }
+    writeln!(out, "  time: {}", report.time_summary_with(args.verbose))?;
     let cpu = super::cpu_seconds_since(cpu_start);
     if let Some(share) = super::cpu_share(report.total_seconds, cpu) {
         let steal = super::steal_note(steal_start, report.total_seconds);
@@ -248,8 +258,8 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     if report.rejected_steps > 0 {
         writeln!(
             out,
-            "  {} steps refused and retried with half the step",
-            report.rejected_steps
+            "  {} refused and retried with half the step",
+            plural(report.rejected_steps, "step", "steps")
         )?;
     }
     if let Some(note) = &report.stability_note {
@@ -265,6 +275,12 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             100.0 * PERIOD_DOUBLED_SHARE
         )?;
     }
+    let file = args.output.display();
+    writeln!(
+        out,
+        "next: replay info {file}; replay plot {file} --out figures/; or open it in Foxglove \
+         or Rerun (docs/user-guide.md)"
+    )?;
     if report.status == crate::record::RunStatus::Interrupted {
         return Err(super::Interrupted(format!(
             "the sweep stopped after {} points; {} is a complete recording of them",
@@ -274,6 +290,11 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         .into());
     }
     Ok(())
+}
+
+/// `"1 point"`, `"2 points"`.
+pub fn plural(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
 }
 
 /// The progress bar's message: speed, points and bifurcations, or the lead-in's speed while
@@ -286,8 +307,10 @@ pub fn progress_message(p: &Progress, omega: &str) -> String {
         )
     } else {
         format!(
-            "{omega}{:.1} rad/s, {} points, {} bifurcations",
-            p.omega_rad_s, p.points, p.bifurcations
+            "{omega}{:.1} rad/s, {}, {}",
+            p.omega_rad_s,
+            plural(p.points, "point", "points"),
+            plural(p.bifurcations, "bifurcation", "bifurcations")
         )
     }
 }
