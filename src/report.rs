@@ -68,14 +68,6 @@ pub enum ReportError {
     Input { path: String, reason: String },
 }
 
-fn setting(rec: &Recording, key: &str) -> Option<f64> {
-    rec.run
-        .settings
-        .iter()
-        .find(|(k, _)| k == key)
-        .and_then(|(_, v)| v.parse().ok())
-}
-
 fn mean_temp(rec: &Recording, p: &PointRecord, id: u32) -> Option<f64> {
     let idx = rec.run.thermal_nodes.iter().position(|n| n.id == id)?;
     p.temperatures.get(idx).map(|t| t.mean_c)
@@ -83,6 +75,7 @@ fn mean_temp(rec: &Recording, p: &PointRecord, id: u32) -> Option<f64> {
 
 /// Findings of one recording.
 pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
+    let study = crate::study::StudySettings::from_run(&rec.run).ok();
     let node = rec.run.nodes.iter().position(|n| n.id == NODE);
     let pts = &rec.points;
     let amp = |p: &PointRecord| node.and_then(|i| p.amplitude_rms_m.get(i)).copied();
@@ -163,8 +156,8 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
         });
     RunFindings {
         name: name.to_string(),
-        flow_l_min: setting(rec, "flow_l_min").unwrap_or(f64::NAN),
-        cooling_c: setting(rec, "cooling_temp_c").unwrap_or(f64::NAN),
+        flow_l_min: study.as_ref().map_or(f64::NAN, |s| s.flow_l_min),
+        cooling_c: study.as_ref().map_or(f64::NAN, |s| s.cooling_temp_c),
         points: pts.len(),
         complete: rec.complete,
         peaks,

@@ -121,6 +121,63 @@ impl Default for StudySettings {
     }
 }
 
+impl StudySettings {
+    /// The settings a recording was made with, from its embedded settings TOML, as this
+    /// version reads them: settings embedded before the interval map was a setting get
+    /// Strang's map (the only one then); the model path is dropped (the recording embeds the
+    /// model itself).
+    pub fn from_run(run: &RunInfo) -> Result<Self, StudyError> {
+        let table: toml::Table = run.settings_toml.parse().map_err(|_| StudyError::Setting {
+            field: "settings_toml",
+            value: "(embedded)".into(),
+            reason: "unreadable",
+        })?;
+        let mut settings = Self::from_table(&table)?;
+        if !table.contains_key("interval_map") {
+            settings.interval_map = IntervalMap::Strang;
+        }
+        settings.model = None;
+        Ok(settings)
+    }
+
+    /// Settings from a TOML table (a study file's, a campaign manifest's); absent keys take
+    /// their defaults.
+    pub fn from_table(table: &toml::Table) -> Result<Self, StudyError> {
+        toml::Value::Table(table.clone())
+            .try_into()
+            .map_err(|_| StudyError::Setting {
+                field: "settings",
+                value: "(table)".into(),
+                reason: "not readable by this version",
+            })
+    }
+
+    /// The settings as (key, value) pairs for a recording's metadata, in the order and
+    /// spelling of their TOML form (generated from it, so a new setting appears without a
+    /// list to keep), plus `model` (`built-in` or the file's path).
+    pub fn key_values(&self) -> Vec<(String, String)> {
+        let mut kv: Vec<(String, String)> = toml::Table::try_from(self)
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|(k, _)| k != "model")
+            .map(|(k, v)| {
+                let text = match v {
+                    toml::Value::String(s) => s,
+                    other => other.to_string(),
+                };
+                (k, text)
+            })
+            .collect();
+        kv.push((
+            "model".to_string(),
+            self.model
+                .as_ref()
+                .map_or("built-in".to_string(), |p| p.display().to_string()),
+        ));
+        kv
+    }
+}
+
 /// Default SIP intervals per period of a sweep: [`ExpSip`]'s default, 512 extrapolated
 /// with 256 and refined up to 4096 intervals near the unit circle (the reason, with the
 /// measured errors, is on [`ExpSip::default`]).
@@ -402,45 +459,7 @@ fn run_info(
         })
         .collect();
     let settings_toml = toml::to_string(settings).unwrap_or_default();
-    let mut kv = vec![
-        ("flow_l_min".to_string(), settings.flow_l_min.to_string()),
-        (
-            "cooling_temp_c".to_string(),
-            settings.cooling_temp_c.to_string(),
-        ),
-        (
-            "ambient_temp_c".to_string(),
-            settings.ambient_temp_c.to_string(),
-        ),
-        ("order".to_string(), settings.order.to_string()),
-        ("omega_start".to_string(), settings.omega_start.to_string()),
-        ("omega_end".to_string(), settings.omega_end.to_string()),
-        ("thermal".to_string(), settings.thermal.to_string()),
-        ("stability".to_string(), settings.stability.to_string()),
-        (
-            "stability_method".to_string(),
-            settings.stability_method.label().to_string(),
-        ),
-        (
-            "sip_intervals".to_string(),
-            settings.sip_intervals.to_string(),
-        ),
-        (
-            "interval_map".to_string(),
-            settings.interval_map.label().to_string(),
-        ),
-        (
-            "reduction_cutoff_rad_s".to_string(),
-            settings.reduction_cutoff_rad_s.to_string(),
-        ),
-    ];
-    kv.push((
-        "model".to_string(),
-        settings
-            .model
-            .as_ref()
-            .map_or("built-in".to_string(), |p| p.display().to_string()),
-    ));
+    let kv = settings.key_values();
     RunInfo {
         tool_name: "tmrotor".to_string(),
         tool_version: env!("CARGO_PKG_VERSION").to_string(),

@@ -39,8 +39,9 @@ use crate::figure::{
     self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
     draw_chart, draw_legend, legend_height, lighter, render_png, tick,
 };
-use crate::record::{ReadError, read_recording};
+use crate::record::{ReadError, RunInfo, read_recording};
 use crate::stability::BifurcationKind;
+use crate::study::StudySettings;
 
 /// What [`plot_campaign`] draws.
 #[derive(Clone, Debug)]
@@ -141,43 +142,25 @@ pub fn read_manifest_file(path: &Path) -> Result<Manifest, CampaignError> {
     Ok(manifest)
 }
 
-fn setting(entry: &ManifestEntry, rec_settings: &[(String, String)], key: &str) -> Option<f64> {
-    entry
-        .settings
-        .get(key)
-        .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-        .or_else(|| {
-            rec_settings
-                .iter()
-                .find(|(k, _)| k == key)
-                .and_then(|(_, v)| v.parse().ok())
-        })
+/// The settings of a run: the manifest's, else the recording's embedded ones.
+fn run_settings(entry: &ManifestEntry, run: Option<&RunInfo>) -> Option<StudySettings> {
+    StudySettings::from_table(&entry.settings)
+        .ok()
+        .filter(|_| !entry.settings.is_empty())
+        .or_else(|| StudySettings::from_run(run?).ok())
 }
 
 /// Legend label of a run from its settings (manifest first, then the recording's).
-fn run_label(entry: &ManifestEntry, rec_settings: &[(String, String)]) -> String {
-    let thermal_on = entry
-        .settings
-        .get("thermal")
-        .and_then(toml::Value::as_bool)
-        .or_else(|| {
-            rec_settings
-                .iter()
-                .find(|(k, _)| k == "thermal")
-                .map(|(_, v)| v != "false")
-        })
-        .unwrap_or(true);
-    let flow = setting(entry, rec_settings, "flow_l_min");
-    let cooling = setting(entry, rec_settings, "cooling_temp_c");
-    match (thermal_on, flow, cooling) {
-        (false, _, _) => format!("{}: no thermal coupling", entry.name),
-        (true, Some(q), Some(t)) => format!(
+fn run_label(entry: &ManifestEntry, run: Option<&RunInfo>) -> String {
+    match run_settings(entry, run) {
+        Some(s) if !s.thermal => format!("{}: no thermal coupling", entry.name),
+        Some(s) => format!(
             "{}: flow {} L/min, cooling {} °C",
             entry.name,
-            tick(&q),
-            tick(&t)
+            tick(&s.flow_l_min),
+            tick(&s.cooling_temp_c)
         ),
-        _ => entry.name.clone(),
+        None => entry.name.clone(),
     }
 }
 
@@ -235,7 +218,7 @@ fn load_run(
                 entry.status
             );
             let data = RunData {
-                legend: format!("{} (incomplete: no recording)", run_label(entry, &[])),
+                legend: format!("{} (incomplete: no recording)", run_label(entry, None)),
                 colour,
                 node_ids: Vec::new(),
                 bearings: Vec::new(),
@@ -273,7 +256,7 @@ fn load_run(
             path.display()
         ));
     }
-    let mut legend = run_label(entry, &rec.run.settings);
+    let mut legend = run_label(entry, Some(&rec.run));
     if incomplete {
         legend.push_str(" (incomplete)");
     }

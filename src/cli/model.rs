@@ -36,14 +36,7 @@ pub fn load(file: Option<&PathBuf>) -> anyhow::Result<Model> {
 /// Runs a model command, writing to `out`.
 pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
     match cmd {
-        ModelCommand::Show => {
-            writeln!(
-                out,
-                "# Every key of this file is described in docs/model-reference.md \
-                 (also: tmrotor model reference)."
-            )?;
-            out.write_all(BUILTIN_TOML.as_bytes())?
-        }
+        ModelCommand::Show => out.write_all(BUILTIN_TOML.as_bytes())?,
         ModelCommand::Reference => out.write_all(crate::model::reference::markdown().as_bytes())?,
         ModelCommand::Check { file } => {
             let model = Model::from_file(file)?;

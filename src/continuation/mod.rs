@@ -260,7 +260,7 @@ pub struct ContinuationOptions {
     /// labours has usually started across a turn of the branch: on the 5 L/min branch
     /// the step over the fold pair at 658–661 rad/s needs five (test
     /// `a_step_over_a_fold_pair_is_refused_and_both_folds_are_located`). It does not catch
-    /// every such step (see the README on the fold pair at 612.9 and 618.0 rad/s).
+    /// every such step (see docs/results.md on the fold pair at 612.9 and 618.0 rad/s).
     pub max_step_iterations: usize,
     /// Maximum number of accepted points (default 2000).
     pub max_points: usize,

@@ -10,7 +10,7 @@ use crate::coupled::CoupledRotor;
 use crate::hb::HbSolution;
 use crate::model::Model;
 use crate::record::types::{BearingLoad, ClearanceVariation, PointRecord, RunInfo, ThermalForces};
-use crate::stability::{IntervalMap, StabilityError};
+use crate::stability::StabilityError;
 use crate::study::{StudyError, StudySettings, SweepProblem, stability_method};
 
 /// The recorded form of one solution of `problem` (index `index`): orbits, amplitudes and
@@ -122,27 +122,8 @@ impl CoupledRederive {
         run: &RunInfo,
         sip_intervals: Option<usize>,
     ) -> Result<Self, StudyError> {
-        let mut settings: StudySettings =
-            toml::from_str(&run.settings_toml).map_err(|e| StudyError::Setting {
-                field: "settings_toml",
-                value: "(embedded)".into(),
-                reason: if e.message().is_empty() {
-                    "unreadable"
-                } else {
-                    "embedded settings are not readable by this version"
-                },
-            })?;
-        // settings embedded before the interval map was a setting: Strang's map, the only
-        // one then
-        let has_map = run
-            .settings_toml
-            .parse::<toml::Table>()
-            .is_ok_and(|t| t.contains_key("interval_map"));
-        if !has_map {
-            settings.interval_map = IntervalMap::Strang;
-        }
+        let mut settings = StudySettings::from_run(run)?;
         let model = Model::from_str(&run.model_text, &run.model_name)?;
-        settings.model = None;
         if let Some(n) = sip_intervals {
             settings.sip_intervals = n;
         }

@@ -378,7 +378,7 @@ pub const PERIOD_DOUBLED_SHARE: f64 = 0.05;
 /// On the dual rotor's basis (Eq. 34) the half-order harmonic is `ω/2`; `λω/2 = 3ω/5` is
 /// not one. A response without it repeats every five shaft revolutions; where the share
 /// is large the branch runs through the period-doubled (`ω/2`) response, which the
-/// continuation follows where it joins the primary one (see the README). Figures mark
+/// continuation follows where it joins the primary one (see docs/results.md). Figures mark
 /// the points whose share reaches [`PERIOD_DOUBLED_SHARE`].
 pub fn half_order_share(harmonics: &[Ratio], n_mech: usize, coeffs_mech: &[f64]) -> Option<f64> {
     let n_h = harmonics.len();
