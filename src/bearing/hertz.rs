@@ -70,7 +70,7 @@ impl ContactLaw {
         let p = stiffness
             * match self {
                 ContactLaw::Ball => delta * delta.sqrt(),
-                ContactLaw::Roller => delta.powf(10.0 / 9.0),
+                ContactLaw::Roller => delta.powf(self.exponent()),
             };
         (p, self.exponent() * p / delta)
     }

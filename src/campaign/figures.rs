@@ -144,10 +144,10 @@ pub fn read_manifest_file(path: &Path) -> Result<Manifest, CampaignError> {
 
 /// The settings of a run: the manifest's, else the recording's embedded ones.
 fn run_settings(entry: &ManifestEntry, run: Option<&RunInfo>) -> Option<StudySettings> {
-    StudySettings::from_table(&entry.settings)
-        .ok()
-        .filter(|_| !entry.settings.is_empty())
-        .or_else(|| StudySettings::from_run(run?).ok())
+    let manifest = (!entry.settings.is_empty())
+        .then(|| StudySettings::from_table(&entry.settings).ok())
+        .flatten();
+    manifest.or_else(|| StudySettings::from_run(run?).ok())
 }
 
 /// Legend label of a run from its settings (manifest first, then the recording's).

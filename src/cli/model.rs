@@ -5,8 +5,9 @@ use std::path::PathBuf;
 
 use clap::Subcommand;
 
-use crate::model::{Assembly, BUILTIN_TOML, Model};
-use crate::thermal::{ThermalNetwork, ThermalSpec};
+use crate::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
+use crate::model::{BUILTIN_TOML, Model};
+use crate::thermal::ThermalSpec;
 
 /// Model-file commands.
 #[derive(Debug, Subcommand)]
@@ -40,22 +41,18 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
         ModelCommand::Reference => out.write_all(crate::model::reference::markdown().as_bytes())?,
         ModelCommand::Check { file } => {
             let model = Model::from_file(file)?;
-            let asm = Assembly::new(&model)?;
-            // what a sweep builds (the coupled system with its thermal network and the
-            // checks between the mechanical and thermal tables): one validation path
-            crate::coupled::CoupledRotor::new(
+            // what a sweep builds, so every check a sweep makes: the assembly, the
+            // `[thermal]` table's fields and ranges, its network, and the checks between
+            // the mechanical and thermal tables (one validation path)
+            let coupled = CoupledRotor::new(
                 &model,
-                &crate::coupled::StudyOverrides::default(),
-                crate::coupled::CouplingOptions::default(),
+                &StudyOverrides::default(),
+                CouplingOptions::default(),
             )?;
-            // the thermal layer's own checks: the table's fields and ranges, then the
-            // network it describes
+            let asm = coupled.assembly();
+            // the table's study values for the summary (already validated above)
             let thermal = match model.thermal() {
-                Some(table) => {
-                    let spec = ThermalSpec::from_table(table, &model.source)?;
-                    ThermalNetwork::new(&spec)?;
-                    Some(spec)
-                }
+                Some(table) => Some(ThermalSpec::from_table(table, &model.source)?),
                 None => None,
             };
             let spec = &model.spec;
