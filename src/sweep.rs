@@ -24,9 +24,9 @@ use crate::continuation::{
 };
 use crate::derive::{Stretch, period_doubled_stretches, point_half_order_share};
 use crate::hb::HarmonicBalance;
-use crate::record::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+use crate::record::types::{BifurcationRecord, FloquetCounts, PointRecord, RunInfo, RunStatus};
 use crate::record::{RecordError, Sink};
-use crate::stability::{ExpSip, StabilityError, StabilityMethod};
+use crate::stability::{BifurcationKind, ExpSip, FloquetResult, StabilityError, StabilityMethod};
 pub use crate::study::{
     DEFAULT_INTERVALS, RECORD_SAMPLES, StabilityChoice, StudyError, StudySettings, SweepProblem,
     stability_method,
@@ -131,6 +131,105 @@ pub struct SweepReport {
     /// Recorded points flagged stable and unstable (points without a verdict in neither).
     pub stable_points: usize,
     pub unstable_points: usize,
+    /// Warnings about the branch, also written to the recording's `/log`: changes of
+    /// stability that could not be located, folds the multipliers do not confirm.
+    pub warnings: Vec<String>,
+}
+
+/// What one step of the branch (from point `after_point` to the next) says beyond its
+/// located bifurcations ([`audit_step`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepAudit {
+    /// Per located bifurcation (in the order given): whether the multipliers confirm it
+    /// (see `BifurcationRecord::confirmed`).
+    pub confirmed: Vec<bool>,
+    /// Warnings for the recording's `/log` and the summary.
+    pub notes: Vec<String>,
+}
+
+/// The real fast multiplier nearest +1, for a warning.
+fn nearest_real_to_one(f: &FloquetResult) -> Option<f64> {
+    f.multipliers
+        .iter()
+        .filter(|m| m.im.abs() <= 0.05 * m.norm() && m.re > 0.0)
+        .map(|m| m.re)
+        .min_by(|a, b| (a - 1.0).abs().total_cmp(&(b - 1.0).abs()))
+}
+
+/// Audits one step of the branch between points `after_point` (ω `omegas.0`, stability
+/// `before`) and the next (ω `omegas.1`, `after`), with the bifurcations `located`
+/// between them:
+///
+/// * a saddle-node is *confirmed* when the monodromy product's count of real multipliers
+///   above +1 (without the fold-parity correction) changes across the step; a lone
+///   unconfirmed fold gets a warning (the fold belongs to the truncated balance). A step
+///   with two folds (a pair inside one step) cannot tell and counts as confirmed;
+/// * a change of the number of multipliers outside the circle with nothing located gets
+///   a warning with the reason: a real multiplier through +1 where the branch does not
+///   fold (the balance and the product disagree), time scales not separated, or a jump
+///   of the count (a collision of real multipliers outside the circle).
+pub fn audit_step(
+    before: Option<&FloquetResult>,
+    after: Option<&FloquetResult>,
+    located: &[BifurcationKind],
+    omegas: (f64, f64),
+    after_point: u64,
+) -> StepAudit {
+    let between = format!(
+        "between points {after_point} and {} (ω {:.4} → {:.4} rad/s)",
+        after_point + 1,
+        omegas.0,
+        omegas.1
+    );
+    let product_real = |f: &FloquetResult| f.product_real_above_one();
+    let folds = located
+        .iter()
+        .filter(|k| **k == BifurcationKind::SaddleNode)
+        .count();
+    let mut audit = StepAudit::default();
+    for kind in located {
+        let confirmed = match (kind, before, after) {
+            (BifurcationKind::SaddleNode, Some(a), Some(b)) if folds == 1 => {
+                product_real(a) != product_real(b)
+            }
+            _ => true,
+        };
+        if !confirmed && let (Some(a), Some(b)) = (before, after) {
+            let show = |f: &FloquetResult| {
+                nearest_real_to_one(f).map_or("none".to_string(), |m| format!("{m:.4}"))
+            };
+            audit.notes.push(format!(
+                "saddle-node {between} not confirmed by the orbits' multipliers: no real multiplier of the monodromy product passes +1 there (the real one nearest +1 is {} before and {} after); the fold belongs to the truncated harmonic balance, whose real exponent is counted instead — check it with a higher truncation order",
+                show(a),
+                show(b)
+            ));
+        }
+        audit.confirmed.push(confirmed);
+    }
+    if let (Some(a), Some(b)) = (before, after)
+        && located.is_empty()
+        && a.unstable_count() != b.unstable_count()
+    {
+        let reason = if a.fold_parity_mismatch != b.fold_parity_mismatch {
+            "a real multiplier of the monodromy product passes +1 where the branch does not fold: the truncated harmonic balance, whose real exponents pass zero only at folds, and the orbit's linearisation disagree here — raise the truncation order to decide"
+                .to_string()
+        } else if a.split_uncertain() || b.split_uncertain() {
+            format!(
+                "a fast multiplier near +1 is not separated from the slow thermal exponents (split ratio {:.2} and {:.2}): the slow/fast split cannot decide here",
+                a.split_ratio.unwrap_or(0.0),
+                b.split_ratio.unwrap_or(0.0)
+            )
+        } else {
+            "the count changed by a jump, not a crossing: real multipliers outside the circle collided into a complex pair, or a pair split (nothing to locate)"
+                .to_string()
+        };
+        audit.notes.push(format!(
+            "stability changes {between} ({} → {} multipliers outside the unit circle) without a located bifurcation: {reason}",
+            a.unstable_count(),
+            b.unstable_count()
+        ));
+    }
+    audit
 }
 
 impl SweepReport {
@@ -455,6 +554,9 @@ impl SweepProblem {
         let mut lead_in_from = None;
         let mut record_seconds = 0.0;
         let (mut stable_points, mut unstable_points) = (0, 0);
+        let mut warnings = Vec::new();
+        // the last recorded point's ω and stability, for the audit of the next step
+        let mut previous: Option<(f64, Option<FloquetResult>)> = None;
         // (index, ω, ω/2 share) per point, for the period-doubled stretches
         let mut shares = Vec::new();
         let interrupted = || {
@@ -481,7 +583,28 @@ impl SweepProblem {
                         point,
                         bifurcations,
                     } => {
-                        for b in &bifurcations {
+                        let after_point = prog.points.saturating_sub(1) as u64;
+                        let kinds: Vec<BifurcationKind> =
+                            bifurcations.iter().filter_map(|b| b.bifurcation).collect();
+                        let audit = if prog.points == 0 {
+                            StepAudit::default()
+                        } else {
+                            audit_step(
+                                previous.as_ref().and_then(|(_, f)| f.as_ref()),
+                                point.stability.as_ref(),
+                                &kinds,
+                                (
+                                    previous.as_ref().map_or(f64::NAN, |(w, _)| *w),
+                                    point.solution.omega,
+                                ),
+                                after_point,
+                            )
+                        };
+                        for (b, confirmed) in bifurcations
+                            .iter()
+                            .filter(|b| b.bifurcation.is_some())
+                            .zip(audit.confirmed.iter().copied())
+                        {
                             if let Some(kind) = b.bifurcation {
                                 let rec = BifurcationRecord {
                                     // 0, 1, … (the schema's running number)
@@ -489,19 +612,27 @@ impl SweepProblem {
                                     kind,
                                     omega_rad_s: b.solution.omega,
                                     arc_length: b.arclength,
-                                    after_point: prog.points.saturating_sub(1) as u64,
+                                    after_point,
                                     amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
                                     multipliers: b
                                         .stability
                                         .as_ref()
                                         .map(|f| f.multipliers.clone())
                                         .unwrap_or_default(),
+                                    confirmed,
+                                    coeffs_mech: b.solution.mech.clone(),
+                                    coeffs_therm: b.solution.therm.clone(),
                                 };
                                 sink.write_bifurcation(&rec)?;
                                 n_bif += 1;
                                 bifs.push((b.solution.omega, kind.label().to_string()));
                             }
                         }
+                        for note in audit.notes {
+                            sink.write_note(after_point, &note)?;
+                            warnings.push(note);
+                        }
+                        previous = Some((point.solution.omega, point.stability.clone()));
                         let recording = std::time::Instant::now();
                         let rec = self.point_record(prog.points as u64, &point)?;
                         shares.push((
@@ -595,6 +726,7 @@ impl SweepProblem {
                     record_seconds,
                     stable_points,
                     unstable_points,
+                    warnings,
                 })
             }
             Err(e) => {
@@ -616,11 +748,11 @@ impl SweepProblem {
         rec.arc_length = p.arclength;
         rec.stable = p.stable();
         rec.bifurcation = p.bifurcation;
-        rec.multipliers = p
-            .stability
-            .as_ref()
-            .map(|f| f.multipliers.clone())
-            .unwrap_or_default();
+        if let Some(f) = &p.stability {
+            rec.multipliers.clone_from(&f.multipliers);
+            rec.slow_exponents.clone_from(&f.slow_exponents);
+            rec.floquet_counts = Some(FloquetCounts::of(f));
+        }
         Ok(rec)
     }
 }
@@ -648,7 +780,98 @@ mod tests {
             record_seconds: 0.25,
             stable_points: 0,
             unstable_points: 0,
+            warnings: Vec::new(),
         }
+    }
+
+    fn floquet(reals: &[f64], odd_folds: bool) -> FloquetResult {
+        FloquetResult::new(
+            reals
+                .iter()
+                .map(|&r| num_complex::Complex64::new(r, 0.0))
+                .collect(),
+        )
+        .with_branch_parity(odd_folds)
+    }
+
+    #[test]
+    fn a_fold_the_product_crosses_with_it_is_confirmed_without_a_warning() {
+        let (a, b) = (floquet(&[0.9, 0.2], false), floquet(&[1.2, 0.2], true));
+        let audit = audit_step(
+            Some(&a),
+            Some(&b),
+            &[BifurcationKind::SaddleNode],
+            (1.0, 1.1),
+            4,
+        );
+        assert_eq!(audit.confirmed, vec![true]);
+        assert!(audit.notes.is_empty());
+        // the count of real multipliers above +1 changes by one, the verdict with it
+        assert_eq!((a.real_above_one(), b.real_above_one()), (0, 1));
+    }
+
+    #[test]
+    fn a_fold_the_product_does_not_see_is_counted_by_parity_and_reported() {
+        let (a, b) = (floquet(&[0.7, 0.2], false), floquet(&[0.77, 0.2], true));
+        assert!(a.stable && !b.stable, "the middle segment is unstable");
+        assert!(b.fold_parity_mismatch);
+        let audit = audit_step(
+            Some(&a),
+            Some(&b),
+            &[BifurcationKind::SaddleNode],
+            (582.3286, 582.2960),
+            30,
+        );
+        assert_eq!(audit.confirmed, vec![false]);
+        assert_eq!(audit.notes.len(), 1);
+        assert!(
+            audit.notes[0].contains("not confirmed"),
+            "{}",
+            audit.notes[0]
+        );
+        assert!(audit.notes[0].contains("between points 30 and 31"));
+    }
+
+    #[test]
+    fn a_fold_pair_inside_one_step_is_not_judged() {
+        let (a, b) = (floquet(&[0.7], false), floquet(&[0.7], false));
+        let kinds = [BifurcationKind::SaddleNode, BifurcationKind::SaddleNode];
+        let audit = audit_step(Some(&a), Some(&b), &kinds, (1.0, 1.1), 2);
+        assert_eq!(audit.confirmed, vec![true, true]);
+        assert!(audit.notes.is_empty());
+    }
+
+    #[test]
+    fn a_change_of_stability_without_a_located_bifurcation_is_reported_with_its_reason() {
+        // a real multiplier through +1 where the branch does not fold
+        let (a, b) = (floquet(&[0.9], false), floquet(&[1.1], false));
+        let audit = audit_step(Some(&a), Some(&b), &[], (694.0, 694.5), 7);
+        assert_eq!(audit.notes.len(), 1);
+        assert!(
+            audit.notes[0].contains("does not fold"),
+            "{}",
+            audit.notes[0]
+        );
+        // a jump of the count: two real multipliers outside become a pair outside
+        let c = FloquetResult::new(vec![
+            num_complex::Complex64::new(1.1, 0.3),
+            num_complex::Complex64::new(1.1, -0.3),
+        ]);
+        let d = floquet(&[1.3, 1.2], false);
+        let e = floquet(&[0.5], false);
+        assert!(
+            audit_step(Some(&c), Some(&d), &[], (1.0, 1.1), 1)
+                .notes
+                .is_empty()
+        );
+        let jump = audit_step(Some(&c), Some(&e), &[], (1.0, 1.1), 1);
+        assert!(jump.notes[0].contains("jump"), "{}", jump.notes[0]);
+        // nothing changes: nothing to say
+        assert!(
+            audit_step(Some(&a), Some(&a), &[], (1.0, 1.1), 1)
+                .notes
+                .is_empty()
+        );
     }
 
     #[test]

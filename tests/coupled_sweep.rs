@@ -161,7 +161,7 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
     assert!(!p.multipliers.is_empty() && p.stable == Some(true));
 
     let same = CoupledRederive::from_run(run).expect("rebuilds");
-    let again = same.multipliers(p).expect("recomputes");
+    let again = same.floquet(p).expect("recomputes").multipliers;
     let dev = multiplier_deviation(&p.multipliers, &again).expect("same count");
     assert!(
         dev < 1e-12,
@@ -169,13 +169,13 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
     );
 
     let fine = CoupledRederive::from_run_with_intervals(run, Some(2048)).expect("rebuilds");
-    let finer = fine.multipliers(p).expect("recomputes");
-    let dev = multiplier_deviation(&p.multipliers, &finer).expect("same count");
+    let finer = fine.floquet(p).expect("recomputes");
+    let dev = multiplier_deviation(&p.multipliers, &finer.multipliers).expect("same count");
     assert!(
         dev > 0.0 && dev < 1e-2,
         "a finer product moves them a little: {dev:e}"
     );
-    assert!(tmrotor::stability::FloquetResult::new(finer).stable);
+    assert!(finer.stable);
 
     let err = CoupledRederive::from_run_with_intervals(run, Some(511))
         .err()
@@ -210,8 +210,9 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
         .join("\n");
     let again = CoupledRederive::from_run(&older)
         .expect("rebuilds")
-        .multipliers(p_strang)
-        .expect("recomputes");
+        .floquet(p_strang)
+        .expect("recomputes")
+        .multipliers;
     let dev = multiplier_deviation(&p_strang.multipliers, &again).expect("same count");
     assert!(
         dev < 1e-12,

@@ -9,6 +9,7 @@ use tmrotor::cli::replay::{self, Cli, stability};
 use tmrotor::derive::{DeriveError, StabilityRederive};
 use tmrotor::record::synthetic::{self, SyntheticOptions};
 use tmrotor::record::{PointRecord, read_recording};
+use tmrotor::stability::FloquetResult;
 
 fn recording(dir: &Path, finish: bool) -> PathBuf {
     let path = dir.join(if finish { "run.mcap" } else { "cut.mcap" });
@@ -124,13 +125,15 @@ fn orbit_rederives_closed_form_histories_at_any_sampling() {
 
 struct Perturbed(f64);
 impl StabilityRederive for Perturbed {
-    fn multipliers(&self, p: &PointRecord) -> Result<Vec<Complex64>, DeriveError> {
+    fn floquet(&self, p: &PointRecord) -> Result<FloquetResult, DeriveError> {
         // Reverse the order (matching must not depend on it) and shift by a known amount.
-        Ok(p.multipliers
-            .iter()
-            .rev()
-            .map(|m| m + Complex64::new(0.0, self.0))
-            .collect())
+        Ok(FloquetResult::new(
+            p.multipliers
+                .iter()
+                .rev()
+                .map(|m| m + Complex64::new(0.0, self.0))
+                .collect(),
+        ))
     }
 }
 

@@ -275,6 +275,21 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             100.0 * PERIOD_DOUBLED_SHARE
         )?;
     }
+    const SHOWN_WARNINGS: usize = 5;
+    for w in report.warnings.iter().take(SHOWN_WARNINGS) {
+        writeln!(out, "  warning: {w}")?;
+    }
+    if report.warnings.len() > SHOWN_WARNINGS {
+        writeln!(
+            out,
+            "  … and {} more in the recording's /log (replay info lists them)",
+            plural(
+                report.warnings.len() - SHOWN_WARNINGS,
+                "warning",
+                "warnings"
+            )
+        )?;
+    }
     let file = args.output.display();
     writeln!(
         out,

@@ -1162,14 +1162,30 @@ impl<'a> Continuation<'a> {
         }
     }
 
-    /// The stability of `solution`, or the method's error message.
-    fn assess(&self, solution: &HbSolution) -> (Option<FloquetResult>, Option<String>) {
+    /// The stability of `solution`, an accepted point with unit tangent `tangent`, or the
+    /// method's error message. The count of real multipliers above +1 is reconciled with
+    /// the number of folds passed ([`FloquetResult::with_branch_parity`]): odd where the
+    /// branch runs against its start direction.
+    fn assess(
+        &self,
+        solution: &HbSolution,
+        tangent: &[f64],
+    ) -> (Option<FloquetResult>, Option<String>) {
         if self.stability.is_none() {
             return (None, None);
         }
-        Clock::time(&self.clock.evaluations, &self.clock.stability_ns, || {
+        let odd_folds = self.runs_backward(tangent);
+        let (f, e) = Clock::time(&self.clock.evaluations, &self.clock.stability_ns, || {
             self.assess_with(solution, |m, system, orbit| m.multipliers(system, orbit))
-        })
+        });
+        (f.map(|f| f.with_branch_parity(odd_folds)), e)
+    }
+
+    /// Whether the tangent's ω-component points against the start direction (from
+    /// `omega_start` to `omega_end`): the branch has passed an odd number of folds.
+    fn runs_backward(&self, tangent: &[f64]) -> bool {
+        let nu = self.hb.n_unknowns();
+        tangent[nu] * (self.opts.omega_end - self.opts.omega_start) < 0.0
     }
 
     /// As [`Self::assess`], with the method's evaluation for a bifurcation search
@@ -1190,12 +1206,13 @@ impl<'a> Continuation<'a> {
         evaluate: impl FnOnce(
             &dyn StabilityMethod,
             &dyn crate::system::System,
-            &HbSolution,
-        ) -> Result<FloquetResult, crate::stability::StabilityError>,
+            &dyn crate::system::PeriodicOrbit,
+        ) -> Result<FloquetResult, crate::stability::StabilityError>
+        + Send,
     ) -> (Option<FloquetResult>, Option<String>) {
         match self.stability {
             None => (None, None),
-            Some(m) => match evaluate(m, self.hb.system(), solution) {
+            Some(m) => match crate::stability::assess(m, &self.hb, solution, evaluate) {
                 Ok(f) => (Some(f), None),
                 Err(e) => (None, Some(e.to_string())),
             },
@@ -1582,8 +1599,8 @@ impl<'a> Continuation<'a> {
         let Some(held) = self.held.as_ref().filter(|h| !h.assessed()) else {
             return;
         };
-        let result = self.assess(&held.point.solution);
         if let Some(mut cur) = self.current.take() {
+            let result = self.assess(&held.point.solution, &cur.tangent);
             self.settle(&mut cur, result);
             self.current = Some(cur);
         }
@@ -1771,7 +1788,7 @@ impl<'a> Continuation<'a> {
                 let index = held.point.index;
                 let ((result, crossings), (candidate, folds)) = rayon::join(
                     || {
-                        let result = self.assess(&held.point.solution);
+                        let result = self.assess(&held.point.solution, &cur.tangent);
                         let found = self.previous.as_ref().map(|prev| {
                             let ends = [prev.stability.as_ref(), result.0.as_ref()];
                             self.located_crossings(prev, cur, ends, index)
@@ -1810,7 +1827,7 @@ impl<'a> Continuation<'a> {
                 return Ok(out);
             }
             // nothing was held (not reached): assessed and handed out at once
-            (point.stability, point.stability_error) = self.assess(&point.solution);
+            (point.stability, point.stability_error) = self.assess(&point.solution, &next.tangent);
             next.stability.clone_from(&point.stability);
         }
         let bifurcations = self.located_changes(cur, &next, point.index);

@@ -352,8 +352,9 @@ where
                 let cont = self.cont;
                 let tx = Reply(Some(self.tx.clone()));
                 let solution: HbSolution = p.solution.clone();
+                let at = Arc::clone(&state);
                 self.scope.spawn_fifo(move |_| {
-                    tx.send(Done::Stability(k, cont.assess(&solution)));
+                    tx.send(Done::Stability(k, cont.assess(&solution, &at.tangent)));
                 });
                 if let Some(prev) = self.slots.back() {
                     slot.crossings = Search::Waiting;

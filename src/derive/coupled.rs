@@ -3,14 +3,12 @@
 //! recorded form of a point, and the re-derivation of a recording's points from its
 //! embedded model and settings ([`CoupledRederive`]).
 
-use num_complex::Complex64;
-
 use super::{DeriveError, ModelRederive, RederivedBearings, StabilityRederive};
 use crate::coupled::CoupledRotor;
-use crate::hb::HbSolution;
+use crate::hb::{HarmonicBalance, HbSolution};
 use crate::model::Model;
 use crate::record::types::{BearingLoad, ClearanceVariation, PointRecord, RunInfo, ThermalForces};
-use crate::stability::StabilityError;
+use crate::stability::{FloquetResult, StabilityError};
 use crate::study::{StudyError, StudySettings, SweepProblem, stability_method};
 
 /// The recorded form of one solution of `problem` (index `index`): orbits, amplitudes and
@@ -160,14 +158,34 @@ impl ModelRederive for CoupledRederive {
 }
 
 impl StabilityRederive for CoupledRederive {
-    fn multipliers(&self, point: &PointRecord) -> Result<Vec<Complex64>, DeriveError> {
+    fn floquet(&self, point: &PointRecord) -> Result<FloquetResult, DeriveError> {
+        let s = &self.problem.settings;
+        let derive_err = |e: String| DeriveError::Model(e);
+        let method = stability_method(s, &self.problem.system, s.omega_start)
+            .map_err(|e| derive_err(e.to_string()))?;
+        let hb = HarmonicBalance::new(&self.problem.system, &self.problem.basis, s.aft_samples)
+            .map_err(|e| derive_err(e.to_string()))?;
+        crate::stability::assess(
+            method.as_ref(),
+            &hb,
+            &self.solution(point),
+            |m, sys, orbit| m.multipliers(sys, orbit),
+        )
+        .map_err(|e| derive_err(e.to_string()))
+    }
+}
+
+impl CoupledRederive {
+    /// The multipliers of the product over the whole coupled state (mechanical and
+    /// thermal, no split by time scale): what versions before the split recorded, kept to
+    /// measure the difference (`examples/stability_split.rs`).
+    pub fn coupled_product(&self, point: &PointRecord) -> Result<FloquetResult, DeriveError> {
         let s = &self.problem.settings;
         let derive_err = |e: StabilityError| DeriveError::Model(e.to_string());
         let method =
             stability_method(s, &self.problem.system, s.omega_start).map_err(derive_err)?;
         method
             .multipliers(&self.problem.system, &self.solution(point))
-            .map(|f| f.multipliers)
             .map_err(derive_err)
     }
 }

@@ -27,6 +27,7 @@ use crate::record::types::{
     BearingLoad, ClearanceVariation, NodeOrbit, PointRecord, RunInfo, TemperatureStats,
     ThermalForces,
 };
+use crate::stability::FloquetResult;
 
 pub use coupled::{CoupledRederive, bearing_quantities, point_record};
 
@@ -255,6 +256,8 @@ pub fn point_from_coefficients(
         bearing_loads: Vec::new(),
         thermal_forces: Vec::new(),
         multipliers: Vec::new(),
+        slow_exponents: Vec::new(),
+        floquet_counts: None,
     })
 }
 
@@ -280,7 +283,8 @@ pub trait ModelRederive {
 /// Recomputes the Floquet multipliers of a recorded point from its coefficients and the
 /// embedded model.
 pub trait StabilityRederive {
-    fn multipliers(&self, point: &PointRecord) -> Result<Vec<Complex64>, DeriveError>;
+    /// The point's Floquet result as the sweep computes it ([`crate::stability::assess`]).
+    fn floquet(&self, point: &PointRecord) -> Result<FloquetResult, DeriveError>;
 }
 
 /// The re-derivation seams available for a recording, and why the missing ones are missing.
@@ -336,8 +340,8 @@ impl ModelRederive for SharedRederive {
 }
 
 impl StabilityRederive for SharedRederive {
-    fn multipliers(&self, point: &PointRecord) -> Result<Vec<Complex64>, DeriveError> {
-        self.0.multipliers(point)
+    fn floquet(&self, point: &PointRecord) -> Result<FloquetResult, DeriveError> {
+        self.0.floquet(point)
     }
 }
 

@@ -13,8 +13,8 @@ use sha2::{Digest, Sha256};
 use super::pb::foxglove as fg;
 use super::pb::tmrotor::v1 as pb;
 use super::types::{
-    BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, NodeOrbit,
-    PointRecord, RunInfo, TemperatureStats, ThermalForces, ThermalNode,
+    BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, FloquetCounts,
+    NodeOrbit, PointRecord, RunInfo, TemperatureStats, ThermalForces, ThermalNode,
 };
 use crate::hb::Ratio;
 use crate::stability::BifurcationKind;
@@ -408,6 +408,11 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
         stability: stability as i32,
         spectral_radius: p.spectral_radius(),
         multipliers: p.multipliers.iter().map(complex_to_pb).collect(),
+        slow_exponents: p.slow_exponents.iter().map(complex_to_pb).collect(),
+        unstable_count: p.floquet_counts.map_or(0, |c| c.unstable),
+        real_above_one: p.floquet_counts.map_or(0, |c| c.real_above_one),
+        fold_parity_mismatch: p.floquet_counts.is_some_and(|c| c.fold_parity_mismatch),
+        split_ratio: p.floquet_counts.map_or(0.0, |c| c.split_ratio),
     });
     PointMessages {
         summary,
@@ -526,6 +531,17 @@ pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, S
             .as_ref()
             .map(|f| f.multipliers.iter().map(complex_from_pb).collect())
             .unwrap_or_default(),
+        slow_exponents: parts
+            .floquet
+            .as_ref()
+            .map(|f| f.slow_exponents.iter().map(complex_from_pb).collect())
+            .unwrap_or_default(),
+        floquet_counts: parts.floquet.as_ref().map(|f| FloquetCounts {
+            unstable: f.unstable_count,
+            real_above_one: f.real_above_one,
+            fold_parity_mismatch: f.fold_parity_mismatch,
+            split_ratio: f.split_ratio,
+        }),
     };
     validate_point(run, &point)?;
     Ok(point)
@@ -541,6 +557,9 @@ pub fn bifurcation_record_to_pb(b: &BifurcationRecord) -> pb::Bifurcation {
         after_point: b.after_point,
         amplitude_rms_m: b.amplitude_rms_m.clone(),
         multipliers: b.multipliers.iter().map(complex_to_pb).collect(),
+        unconfirmed: !b.confirmed,
+        coeffs_mech: b.coeffs_mech.clone(),
+        coeffs_therm: b.coeffs_therm.clone(),
     }
 }
 
@@ -556,6 +575,9 @@ pub fn bifurcation_record_from_pb(m: &pb::Bifurcation) -> Result<BifurcationReco
         after_point: m.after_point,
         amplitude_rms_m: m.amplitude_rms_m.clone(),
         multipliers: m.multipliers.iter().map(complex_from_pb).collect(),
+        confirmed: !m.unconfirmed,
+        coeffs_mech: m.coeffs_mech.clone(),
+        coeffs_therm: m.coeffs_therm.clone(),
     })
 }
 
@@ -569,11 +591,20 @@ pub fn timestamp(ns: u64) -> prost_types::Timestamp {
 
 /// A `foxglove.Log` message.
 pub fn log_to_pb(time_ns: u64, level: fg::log::Level, text: &str) -> fg::Log {
+    named_log_to_pb(time_ns, level, text, "tmrotor")
+}
+
+/// The `name` of the `/log` entries that carry a sweep's warnings about the branch
+/// (`Sink::write_note`), which `replay info` lists.
+pub const AUDIT_LOG_NAME: &str = "tmrotor.audit";
+
+/// A `/log` entry with the logger name `name`.
+pub fn named_log_to_pb(time_ns: u64, level: fg::log::Level, text: &str, name: &str) -> fg::Log {
     fg::Log {
         timestamp: Some(timestamp(time_ns)),
         level: level as i32,
         message: text.to_string(),
-        name: "tmrotor".into(),
+        name: name.into(),
         file: String::new(),
         line: 0,
     }

@@ -40,8 +40,8 @@ use prost::Message;
 
 use super::RecordError;
 use super::convert::{
-    SceneOptions, bifurcation_record_to_pb, log_to_pb, point_to_pb, run_info_to_pb, scene_to_pb,
-    sha256_hex,
+    AUDIT_LOG_NAME, SceneOptions, bifurcation_record_to_pb, log_to_pb, named_log_to_pb,
+    point_to_pb, run_info_to_pb, scene_to_pb, sha256_hex,
 };
 use super::pb::foxglove::log::Level;
 use super::schema::{self, Topic, names};
@@ -102,6 +102,8 @@ pub struct McapSink {
     sequence: u32,
     since_flush: u32,
     last_time_ns: u64,
+    /// Notes written with [`Sink::write_note`], counted into the closing status.
+    warnings: u32,
 }
 
 impl McapSink {
@@ -136,6 +138,7 @@ impl McapSink {
             channels: BTreeMap::new(),
             sequence: 0,
             since_flush: 0,
+            warnings: 0,
             last_time_ns: 0,
         })
     }
@@ -233,7 +236,12 @@ impl McapSink {
             .checks
             .last_index()
             .map_or("no points".to_string(), |i| format!("last point {i}"));
-        let text = format!("run {} ({points})", status.label());
+        let warned = match self.warnings {
+            0 => String::new(),
+            1 => ", 1 warning".to_string(),
+            n => format!(", {n} warnings"),
+        };
+        let text = format!("run {} ({points}{warned})", status.label());
         let logged = self.publish(
             schema::TOPIC_LOG,
             time_ns,
@@ -241,7 +249,10 @@ impl McapSink {
         );
         let status_md = self.metadata(
             names::METADATA_STATUS,
-            BTreeMap::from([("status".to_string(), status.label())]),
+            BTreeMap::from([
+                ("status".to_string(), status.label()),
+                ("warnings".to_string(), self.warnings.to_string()),
+            ]),
         );
         let mut writer = self.writer.take().ok_or(RecordError::Finished)?;
         let finished = writer.finish().map_err(|e| self.err(e));
@@ -362,6 +373,14 @@ impl Sink for McapSink {
     fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
         self.checks.finish()?;
         self.close(&status)
+    }
+
+    fn write_note(&mut self, after_point: u64, text: &str) -> Result<(), RecordError> {
+        let t = bifurcation_time_ns(after_point);
+        let log = named_log_to_pb(t, Level::Warning, text, AUDIT_LOG_NAME);
+        self.publish(schema::TOPIC_LOG, t, &log)?;
+        self.warnings += 1;
+        self.flush()
     }
 }
 

@@ -58,6 +58,9 @@ pub struct Recording {
     pub complete: bool,
     /// What was missing or skipped, for the user.
     pub notes: Vec<String>,
+    /// The sweep's warnings about the branch (`/log` entries written by
+    /// [`super::Sink::write_note`]), in order.
+    pub warnings: Vec<String>,
     /// Message counts per topic (from the scan, not from the summary).
     pub topics: Vec<TopicCount>,
     /// MCAP metadata records by name.
@@ -133,6 +136,7 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
     let mut run_msg: Option<pb::RunInfo> = None;
     let mut parts: BTreeMap<u64, PointParts> = BTreeMap::new();
     let mut bif_msgs: Vec<pb::Bifurcation> = Vec::new();
+    let mut warnings: Vec<String> = Vec::new();
     let mut notes = Vec::new();
     let (mut saw_data_end, mut saw_footer, mut cut_short) = (false, false, false);
 
@@ -175,8 +179,15 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
                     continue;
                 }
                 let topic = ch.topic.clone();
-                decode_message(&topic, &data, &mut run_msg, &mut parts, &mut bif_msgs)
-                    .map_err(|reason| corrupt(format!("{topic}: {reason}")))?;
+                decode_message(
+                    &topic,
+                    &data,
+                    &mut run_msg,
+                    &mut parts,
+                    &mut bif_msgs,
+                    &mut warnings,
+                )
+                .map_err(|reason| corrupt(format!("{topic}: {reason}")))?;
             }
             Record::Attachment { header, data, .. } => {
                 attachments.push((header.name.clone(), data.into_owned()));
@@ -258,6 +269,7 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
         status,
         complete,
         notes,
+        warnings,
         topics: channels
             .into_values()
             .map(|c| TopicCount {
@@ -281,6 +293,7 @@ fn decode_message(
     run: &mut Option<pb::RunInfo>,
     parts: &mut BTreeMap<u64, PointParts>,
     bifs: &mut Vec<pb::Bifurcation>,
+    warnings: &mut Vec<String>,
 ) -> Result<(), String> {
     match topic {
         t if t == schema::TOPIC_RUN_INFO.name => {
@@ -330,7 +343,13 @@ fn decode_message(
             parts.entry(index).or_default().floquet = Some(m);
         }
         t if t == schema::TOPIC_BIFURCATIONS.name => bifs.push(decode(data)?),
-        _ => {} // /scene, /log and unknown topics are not needed to rebuild the run
+        t if t == schema::TOPIC_LOG.name => {
+            let m: super::pb::foxglove::Log = decode(data)?;
+            if m.name == super::convert::AUDIT_LOG_NAME {
+                warnings.push(m.message);
+            }
+        }
+        _ => {} // /scene and unknown topics are not needed to rebuild the run
     }
     Ok(())
 }

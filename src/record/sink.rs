@@ -23,6 +23,13 @@ pub trait Sink {
     fn write_bifurcation(&mut self, bifurcation: &BifurcationRecord) -> Result<(), RecordError>;
     /// Ends the run with its status. Further writes fail with [`RecordError::Finished`].
     fn finish(&mut self, status: RunStatus) -> Result<(), RecordError>;
+    /// Writes a warning about the branch between point `after_point` and the next (a
+    /// change of stability that could not be located, a fold the multipliers do not
+    /// confirm). Default: dropped.
+    fn write_note(&mut self, after_point: u64, text: &str) -> Result<(), RecordError> {
+        let _ = (after_point, text);
+        Ok(())
+    }
 }
 
 macro_rules! forward_sink {
@@ -39,6 +46,9 @@ macro_rules! forward_sink {
             }
             fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
                 (**self).finish(status)
+            }
+            fn write_note(&mut self, after_point: u64, text: &str) -> Result<(), RecordError> {
+                (**self).write_note(after_point, text)
             }
         }
     )*};
@@ -149,6 +159,8 @@ pub struct MemorySink {
     pub points: Vec<PointRecord>,
     pub bifurcations: Vec<BifurcationRecord>,
     pub status: Option<RunStatus>,
+    /// Warnings written with [`Sink::write_note`]: (after point, text).
+    pub notes: Vec<(u64, String)>,
 }
 
 impl MemorySink {
@@ -179,6 +191,11 @@ impl Sink for MemorySink {
     fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
         self.checks.finish()?;
         self.status = Some(status);
+        Ok(())
+    }
+
+    fn write_note(&mut self, after_point: u64, text: &str) -> Result<(), RecordError> {
+        self.notes.push((after_point, text.to_string()));
         Ok(())
     }
 }

@@ -298,6 +298,9 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
                 after_point: (i - 1) as u64,
                 amplitude_rms_m: vec![(am * am + c * c).sqrt()],
                 multipliers: vec![Complex64::new(1.0, 0.0), Complex64::new(0.5, 0.0)],
+                confirmed: true,
+                coeffs_mech: Vec::new(),
+                coeffs_therm: Vec::new(),
             });
         }
 
@@ -366,7 +369,13 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
             clearances,
             bearing_loads,
             thermal_forces,
+            floquet_counts: (!multipliers.is_empty()).then(|| {
+                crate::record::types::FloquetCounts::of(&crate::stability::FloquetResult::new(
+                    multipliers.clone(),
+                ))
+            }),
             multipliers,
+            slow_exponents: Vec::new(),
         });
     }
     SyntheticRun {

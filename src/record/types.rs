@@ -184,8 +184,38 @@ pub struct PointRecord {
     pub bearing_loads: Vec<BearingLoad>,
     /// Per bearing (empty when not available).
     pub thermal_forces: Vec<ThermalForces>,
-    /// Floquet multipliers (empty when not computed).
+    /// Floquet multipliers (empty when not computed); for the coupled model the fast
+    /// ones (see [`crate::stability::FloquetResult`]).
     pub multipliers: Vec<Complex64>,
+    /// Slow (thermal) Floquet exponents, 1/s (empty when not computed or without a
+    /// thermal field).
+    pub slow_exponents: Vec<Complex64>,
+    /// The count of multipliers outside the unit circle, real multipliers above +1, the
+    /// fold-parity mismatch and the split ratio (see `proto/tmrotor/v1/floquet.proto`);
+    /// `None` when stability was not computed.
+    pub floquet_counts: Option<FloquetCounts>,
+}
+
+/// The counts of a point's Floquet result that its stable flag rests on.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FloquetCounts {
+    pub unstable: u32,
+    pub real_above_one: u32,
+    pub fold_parity_mismatch: bool,
+    /// 0 without slow exponents.
+    pub split_ratio: f64,
+}
+
+impl FloquetCounts {
+    /// The counts of `f`.
+    pub fn of(f: &crate::stability::FloquetResult) -> Self {
+        Self {
+            unstable: f.unstable_count() as u32,
+            real_above_one: f.real_above_one() as u32,
+            fold_parity_mismatch: f.fold_parity_mismatch,
+            split_ratio: f.split_ratio.unwrap_or(0.0),
+        }
+    }
 }
 
 impl PointRecord {
@@ -214,6 +244,13 @@ pub struct BifurcationRecord {
     pub amplitude_rms_m: Vec<f64>,
     /// Floquet multipliers at the located point.
     pub multipliers: Vec<Complex64>,
+    /// Saddle-nodes: whether the monodromy product of the neighbouring orbits confirms the
+    /// fold (see `proto/tmrotor/v1/bifurcation.proto`); `true` for the other kinds.
+    pub confirmed: bool,
+    /// Harmonic coefficients of the located point, mechanical and thermal DoFs (basis
+    /// layout); empty in recordings written before they were recorded.
+    pub coeffs_mech: Vec<f64>,
+    pub coeffs_therm: Vec<f64>,
 }
 
 /// How a run ended, written into the recording by [`super::Sink::finish`].

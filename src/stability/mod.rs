@@ -31,18 +31,22 @@
 
 pub mod exp_sip;
 pub mod expm;
+pub mod frozen;
 pub mod locate;
 pub mod modal;
 pub mod reduced;
 pub mod sip;
+pub mod slow;
 pub mod thermal;
 pub mod variational;
 
 pub use exp_sip::{ExpSip, IntervalMap, MeanSplit, panel_kernel_isa};
 pub use expm::expm;
+pub use frozen::{FrozenOrbit, FrozenTemperature};
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
+pub use slow::{slow_exponents, split_ratio, thermal_schur};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::Variational;
 
@@ -53,17 +57,51 @@ use thiserror::Error;
 use crate::system::{PeriodicOrbit, System};
 
 /// Floquet multipliers of one periodic solution.
+///
+/// For a system with a thermal field the result is split by time scale (see
+/// [`assess`]): `multipliers` are the fast ones, of the vibration with the temperatures
+/// held on their periodic course, and `slow_exponents` the thermal ones as exponents
+/// `λ` (multipliers `exp(P·λ)`, within ~1e-6 of +1 and not resolvable as multipliers).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FloquetResult {
-    /// Eigenvalues of the monodromy matrix (full period), in no particular order.
+    /// Eigenvalues of the monodromy matrix (full period), in no particular order; with a
+    /// slow/fast split, those of the frozen-temperature problem.
     pub multipliers: Vec<Complex64>,
-    /// True when every multiplier lies inside the unit circle (within the method's
-    /// tolerance, see [`FloquetResult::unstable_count`]).
+    /// Slow (thermal) Floquet exponents, 1/s, from the quasi-static reduction
+    /// ([`slow::slow_exponents`]); empty without a thermal field.
+    pub slow_exponents: Vec<Complex64>,
+    /// True when every multiplier lies inside the unit circle and every slow exponent in
+    /// the left half-plane (see [`FloquetResult::unstable_count`]).
     pub stable: bool,
     /// Intervals per period of the product the multipliers came from, for a method that
     /// chooses them per orbit ([`ExpSip`]'s refinement); `None` otherwise.
     pub intervals: Option<usize>,
+    /// Estimated relative error of the slow exponent with the largest real part (the one
+    /// that decides the slow part of the verdict): `|λ|/γ`, `γ` the fast exponent nearest
+    /// zero ([`slow::split_ratio`]). Above [`SPLIT_RATIO_LIMIT`] the time scales are not
+    /// separated (a fast multiplier near +1) and the verdict is uncertain. `None` without
+    /// a split.
+    pub split_ratio: Option<f64>,
+    /// `γ = min |ln μ| / P` over the fast multipliers (1/s): the fast exponent nearest
+    /// zero, the scale the slow exponents must stay below; `None` without a split.
+    pub fast_gap: Option<f64>,
+    /// Set when the parity of the number of real multipliers above +1 disagrees with the
+    /// number of folds the branch has passed (see [`FloquetResult::with_branch_parity`]):
+    /// the harmonic balance that defines the branch then has one real Floquet exponent
+    /// above zero that the monodromy product of the orbit does not show, and it is counted
+    /// as one multiplier outside the circle.
+    pub fold_parity_mismatch: bool,
 }
+
+/// A slow/fast split whose [`FloquetResult::split_ratio`] exceeds this is reported as not
+/// separated: the deciding slow exponent's estimated error is then larger than half of it.
+pub const SPLIT_RATIO_LIMIT: f64 = 0.5;
+
+/// A slow exponent counts as unstable when its real part exceeds this fraction of the
+/// largest slow exponent's modulus: a relative rounding margin of the 66×66 eigenvalue
+/// problem (well below the change of the crossing exponent between neighbouring points of
+/// a branch, which is of the order of the step).
+pub const SLOW_EXPONENT_TOL: f64 = 1e-10;
 
 impl FloquetResult {
     /// Builds a result, deciding `stable` with [`UNIT_CIRCLE_TOL`].
@@ -71,8 +109,12 @@ impl FloquetResult {
         let stable = unstable_count(&multipliers) == 0;
         Self {
             multipliers,
+            slow_exponents: Vec::new(),
             stable,
             intervals: None,
+            split_ratio: None,
+            fast_gap: None,
+            fold_parity_mismatch: false,
         }
     }
 
@@ -84,9 +126,108 @@ impl FloquetResult {
         }
     }
 
-    /// Number of multipliers with modulus above `1 + UNIT_CIRCLE_TOL`.
+    /// The fast multipliers of `self` completed by the slow exponents `slow` (1/s) of an
+    /// orbit of period `period` (s); `stable` decided again on both.
+    pub fn with_slow(self, slow: Vec<Complex64>, period: f64) -> Self {
+        let gamma = slow::fast_gap(&self.multipliers, period);
+        let top = slow.iter().copied().max_by(|a, b| a.re.total_cmp(&b.re));
+        let mut r = Self {
+            split_ratio: top.map(|l| slow::ratio_to_gap(l, gamma)),
+            fast_gap: Some(gamma),
+            slow_exponents: slow,
+            ..self
+        };
+        r.stable = r.unstable_count() == 0;
+        r
+    }
+
+    /// The result on a branch that has passed an odd (`true`) or even number of folds
+    /// since its start, where the count is assumed right: at each fold of a branch of
+    /// harmonic-balance solutions the determinant of the balance's Jacobian changes sign
+    /// and one real Floquet exponent of the balance passes zero, so the number of real
+    /// multipliers above +1 has the parity of the folds passed. Where the product's count
+    /// has the other parity, the balance's real exponent is one the product does not
+    /// resolve (the truncated balance and the orbit's linearisation disagree there, see
+    /// `docs/stability.md`): it is counted, and the disagreement recorded
+    /// ([`FloquetResult::fold_parity_mismatch`]).
+    pub fn with_branch_parity(self, odd_folds: bool) -> Self {
+        let base = Self {
+            fold_parity_mismatch: false,
+            ..self
+        };
+        let mismatch = (base.product_real_above_one() % 2 == 1) != odd_folds;
+        let mut r = Self {
+            fold_parity_mismatch: mismatch,
+            ..base
+        };
+        r.stable = r.unstable_count() == 0;
+        r
+    }
+
+    /// Number of multipliers with modulus above `1 + UNIT_CIRCLE_TOL`, plus the slow
+    /// complex pairs in the right half-plane ([`Self::slow_unstable_count`]), plus one for
+    /// a fold-parity mismatch: the count of multipliers outside the unit circle.
     pub fn unstable_count(&self) -> usize {
         unstable_count(&self.multipliers)
+            + self.slow_unstable_count()
+            + usize::from(self.fold_parity_mismatch)
+    }
+
+    /// The slow exponents in the right half-plane whose sign the split decides: real part
+    /// above [`SLOW_EXPONENT_TOL`] of the largest modulus, and modulus below
+    /// [`SPLIT_RATIO_LIMIT`] of the fast gap (beyond it the exponent is not slow against
+    /// the fast exponent nearest zero and the reduction does not hold for it).
+    pub fn decided_slow(&self) -> impl Iterator<Item = &Complex64> {
+        let scale = self
+            .slow_exponents
+            .iter()
+            .map(|l| l.norm())
+            .fold(0.0, f64::max);
+        let gap = self.fast_gap.unwrap_or(f64::INFINITY);
+        self.slow_exponents.iter().filter(move |l| {
+            l.re > SLOW_EXPONENT_TOL * scale && slow::ratio_to_gap(**l, gap) <= SPLIT_RATIO_LIMIT
+        })
+    }
+
+    /// Number of slow exponents of complex pairs in the right half-plane (a slow,
+    /// oscillating thermo-mechanical instability), counted in the verdict.
+    ///
+    /// Real slow exponents are not counted one by one: `det J = det J_rr · det S`, so a
+    /// real one passes zero only where the branch folds, and the fold parity
+    /// ([`Self::with_branch_parity`]) accounts for it. Counted directly they would also
+    /// carry the poles of the reduction: where the balance's mechanical block `J_rr` is
+    /// nearly singular next to a fold the product does not confirm, `S` has a pole and a
+    /// real slow exponent passes through infinity (measured on the 10 L/min run at
+    /// 582.33 rad/s: +0.16 1/s one point before the fold, −3.4e-5 1/s elsewhere; see
+    /// `docs/stability.md`).
+    pub fn slow_unstable_count(&self) -> usize {
+        self.decided_slow()
+            .filter(|l| BifurcationKind::of_exponent(**l) == BifurcationKind::NeimarkSacker)
+            .count()
+    }
+
+    /// Number of real multipliers above +1: real fast multipliers beyond
+    /// `1 + UNIT_CIRCLE_TOL`, and one for a fold-parity mismatch.
+    pub fn real_above_one(&self) -> usize {
+        self.product_real_above_one() + usize::from(self.fold_parity_mismatch)
+    }
+
+    /// Number of real fast multipliers beyond `1 + UNIT_CIRCLE_TOL` (the monodromy
+    /// product's own count, without the fold-parity correction).
+    pub fn product_real_above_one(&self) -> usize {
+        self.multipliers
+            .iter()
+            .filter(|m| {
+                m.norm() > 1.0 + UNIT_CIRCLE_TOL
+                    && BifurcationKind::of_multiplier(**m) == BifurcationKind::SaddleNode
+            })
+            .count()
+    }
+
+    /// Whether the time scales of the split are too close for a sure verdict (see
+    /// [`FloquetResult::split_ratio`]).
+    pub fn split_uncertain(&self) -> bool {
+        self.split_ratio.is_some_and(|r| r > SPLIT_RATIO_LIMIT)
     }
 
     /// Largest multiplier modulus.
@@ -155,6 +296,19 @@ impl BifurcationKind {
             Self::SaddleNode
         } else {
             Self::PeriodDoubling
+        }
+    }
+}
+
+impl BifurcationKind {
+    /// The kind of crossing a slow exponent `λ` makes when it leaves the left half-plane:
+    /// a real one (imaginary part at most `0.05·|λ|`) a saddle-node (its multiplier
+    /// `exp(P·λ)` passes +1), a complex pair a Neimark–Sacker point.
+    pub fn of_exponent(l: Complex64) -> Self {
+        if l.im.abs() > 0.05 * l.norm() {
+            Self::NeimarkSacker
+        } else {
+            Self::SaddleNode
         }
     }
 }
@@ -238,12 +392,55 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
         return None;
     }
     let outside = if na > nb { after } else { before };
+    if before.slow_unstable_count() != after.slow_unstable_count() {
+        if let Some(l) = outside.decided_slow().min_by(|a, b| a.re.total_cmp(&b.re)) {
+            return Some(BifurcationKind::of_exponent(*l));
+        }
+    }
+    if before.fold_parity_mismatch != after.fold_parity_mismatch {
+        return Some(BifurcationKind::SaddleNode);
+    }
     let crossing = outside
         .multipliers
         .iter()
         .filter(|m| m.norm() > 1.0 + UNIT_CIRCLE_TOL)
         .min_by(|a, b| a.norm().total_cmp(&b.norm()))?;
     Some(BifurcationKind::of_multiplier(*crossing))
+}
+
+/// Multipliers of `solution`, a converged point of `hb`, by `evaluate` (a
+/// [`StabilityMethod`]'s evaluation), split by time scale when the system has a thermal
+/// field: the fast multipliers from `evaluate` on the frozen-temperature problem
+/// ([`FrozenTemperature`]), the slow exponents from the quasi-static reduction of the
+/// harmonic-balance Jacobian ([`slow::slow_exponents`]), side by side. Without thermal
+/// DoFs: `evaluate` on the system itself.
+pub fn assess(
+    method: &dyn StabilityMethod,
+    hb: &crate::hb::HarmonicBalance<'_>,
+    solution: &crate::hb::HbSolution,
+    evaluate: impl FnOnce(
+        &dyn StabilityMethod,
+        &dyn System,
+        &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError>
+    + Send,
+) -> Result<FloquetResult, StabilityError> {
+    let system = hb.system();
+    if system.n_therm() == 0 {
+        return evaluate(method, system, solution);
+    }
+    let frozen = FrozenTemperature::new(system, solution);
+    let (fast, slow) = rayon::join(
+        || {
+            evaluate(
+                method,
+                &frozen,
+                &FrozenOrbit::new(solution, system.n_therm()),
+            )
+        },
+        || slow::slow_exponents(hb, solution),
+    );
+    Ok(fast?.with_slow(slow?, solution.period()))
 }
 
 #[cfg(test)]

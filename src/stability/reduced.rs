@@ -294,6 +294,12 @@ impl CraigBampton {
         Ok(ReducedSystem {
             inner: system,
             cb: self,
+            // the boundary in reduced coordinates; the thermal DoFs of the system at hand
+            // (none for a frozen-temperature view of the system the basis was built for)
+            dofs: NonlinearDofs {
+                mech: self.dofs.mech.clone(),
+                therm: system.nonlinear_dofs().therm.clone(),
+            },
         })
     }
 }
@@ -302,6 +308,7 @@ impl CraigBampton {
 pub struct ReducedSystem<'a> {
     inner: &'a dyn System,
     cb: &'a CraigBampton,
+    dofs: NonlinearDofs,
 }
 
 impl System for ReducedSystem<'_> {
@@ -325,7 +332,7 @@ impl System for ReducedSystem<'_> {
     }
 
     fn nonlinear_dofs(&self) -> &NonlinearDofs {
-        &self.cb.dofs
+        &self.dofs
     }
 
     fn eval_nonlinear(

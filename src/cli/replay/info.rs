@@ -89,12 +89,23 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     for b in &rec.bifurcations {
         writeln!(
             out,
-            "  #{} {} at ω = {:.4} rad/s (after point {})",
+            "  #{} {} at ω = {:.4} rad/s (after point {}){}",
             u64::from(b.number) + 1,
             b.kind.label(),
             b.omega_rad_s,
-            b.after_point
+            b.after_point,
+            if b.confirmed {
+                ""
+            } else {
+                ", not confirmed by the multipliers"
+            }
         )?;
+    }
+    if !rec.warnings.is_empty() {
+        writeln!(out, "warnings:    {}", rec.warnings.len())?;
+        for w in &rec.warnings {
+            writeln!(out, "  {w}")?;
+        }
     }
     let stretches = period_doubled_stretches(
         rec.points

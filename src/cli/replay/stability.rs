@@ -44,8 +44,9 @@ pub fn compare_with(
         flag_changes: Vec::new(),
     };
     for p in rec.points.iter().filter(|p| !p.multipliers.is_empty()) {
-        let fresh = method.multipliers(p)?;
-        let dev = multiplier_deviation(&p.multipliers, &fresh).ok_or_else(|| {
+        let floquet = method.floquet(p)?;
+        let fresh = &floquet.multipliers;
+        let dev = multiplier_deviation(&p.multipliers, fresh).ok_or_else(|| {
             anyhow::anyhow!(
                 "point {}: {} multipliers recomputed, {} stored",
                 p.index,
@@ -58,8 +59,7 @@ pub fn compare_with(
         if result.max_deviation.is_none_or(|(d, _)| dev > d) {
             result.max_deviation = Some((dev, p.index));
         }
-        let stable = crate::stability::FloquetResult::new(fresh).stable;
-        if p.stable.is_some_and(|s| s != stable) {
+        if p.stable.is_some_and(|s| s != floquet.stable) {
             result.flag_changes.push(p.index);
         }
     }
