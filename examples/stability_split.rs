@@ -29,6 +29,9 @@ fn main() -> anyhow::Result<()> {
         None => (f64::NEG_INFINITY, f64::INFINITY),
     };
     let rec = read_recording(&file)?;
+    if std::env::var("TIME_PARTS").is_ok() {
+        return time_parts(&rec);
+    }
     let folds_only = std::env::var("FOLDS_ONLY").is_ok();
     let near_fold = |i: u64| {
         rec.bifurcations
@@ -91,5 +94,49 @@ fn main() -> anyhow::Result<()> {
             folds.join(" ")
         );
     }
+    Ok(())
+}
+
+/// Times the two halves of the split on the first 20 points (with `TIME_PARTS` set).
+fn time_parts(rec: &tmrotor::record::reader::Recording) -> anyhow::Result<()> {
+    use tmrotor::study::{StudySettings, SweepProblem, stability_method};
+    use tmrotor::system::System;
+    let settings = StudySettings::from_run(&rec.run)?;
+    let model = tmrotor::model::Model::from_str(&rec.run.model_text, &rec.run.model_name)?;
+    let problem = SweepProblem::with_model(&settings, model)?;
+    let hb =
+        tmrotor::hb::HarmonicBalance::new(&problem.system, &problem.basis, settings.aft_samples)?;
+    let method = stability_method(&settings, &problem.system, settings.omega_start)?;
+    let (mut t_slow, mut t_fast, mut t_full) = (0.0, 0.0, 0.0);
+    for p in rec.points.iter().take(20) {
+        let sol = tmrotor::hb::HbSolution {
+            omega: p.omega_rad_s,
+            basis: problem.basis.clone(),
+            mech: p.coeffs_mech.clone(),
+            therm: p.coeffs_therm.clone(),
+            residual: Default::default(),
+            relative_residual: Default::default(),
+            iterations: 0,
+        };
+        let t = std::time::Instant::now();
+        tmrotor::stability::slow_exponents(&hb, &sol)?;
+        t_slow += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let frozen = tmrotor::stability::FrozenTemperature::new(&problem.system, &sol);
+        method.multipliers(
+            &frozen,
+            &tmrotor::stability::FrozenOrbit::new(&sol, problem.system.n_therm()),
+        )?;
+        t_fast += t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        method.multipliers(&problem.system, &sol)?;
+        t_full += t.elapsed().as_secs_f64();
+    }
+    println!(
+        "per point: slow exponents {:.1} ms, frozen product {:.1} ms, coupled product {:.1} ms",
+        t_slow * 50.0,
+        t_fast * 50.0,
+        t_full * 50.0
+    );
     Ok(())
 }

@@ -52,6 +52,11 @@ fn fold_frequencies(branch: &Branch) -> Vec<f64> {
 /// Fold frequencies of the single-harmonic frequency-response equation
 /// `a²[(1 − Ω² + ¾k₃a²)² + (cΩ)²] = F²`: interior extrema of `Ω(a)` on both roots.
 fn analytic_folds() -> Vec<f64> {
+    analytic_fold_points().into_iter().map(|(w, _)| w).collect()
+}
+
+/// The folds of the single-harmonic frequency-response equation as points `(Ω, a)`.
+fn analytic_fold_points() -> Vec<(f64, f64)> {
     let (c, k3, f) = (0.05_f64, 0.1_f64, 0.18_f64);
     let omega_of = |a: f64, sign: f64| -> Option<f64> {
         let kap = 1.0 + 0.75 * k3 * a * a;
@@ -91,12 +96,40 @@ fn analytic_folds() -> Vec<f64> {
                         lo = m1;
                     }
                 }
-                folds.push(omega_of(0.5 * (lo + hi), sign).unwrap_or(o1));
+                let a = 0.5 * (lo + hi);
+                folds.push((omega_of(a, sign).unwrap_or(o1), a));
             }
         }
     }
-    folds.sort_by(f64::total_cmp);
+    folds.sort_by(|x, y| x.0.total_cmp(&y.0));
     folds
+}
+
+/// A located saddle-node is the fold as a point on the branch, not only its speed: on
+/// the single-harmonic balance (HB-1, which is the frequency-response equation exactly)
+/// its amplitude equals the amplitude at the extremum of Ω(a) of that equation, found by
+/// golden section without the continuation.
+#[test]
+fn located_saddle_nodes_carry_the_branch_point_at_the_fold() {
+    let analytic = analytic_fold_points();
+    assert_eq!(analytic.len(), 2);
+    let branch = trace(1, 0.1, None);
+    let mut located: Vec<(f64, f64)> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
+        .map(|b| {
+            let c = b.solution.mech_coeffs(0);
+            (b.solution.omega, c[1].hypot(c[2]))
+        })
+        .collect();
+    located.sort_by(|x, y| x.0.total_cmp(&y.0));
+    assert_eq!(located.len(), 2);
+    for ((w, a), (wf, af)) in located.iter().zip(&analytic) {
+        eprintln!("located (Ω, a) = ({w:.12}, {a:.12}), theory ({wf:.12}, {af:.12})");
+        assert!((w - wf).abs() < 1e-8 * wf, "Ω {w} vs {wf}");
+        assert!((a - af).abs() < 1e-6 * af, "amplitude {a} vs {af}");
+    }
 }
 
 #[test]

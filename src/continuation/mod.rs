@@ -1712,7 +1712,9 @@ impl<'a> Continuation<'a> {
         let g_start = from.tangent[nu];
         let mut bracket = Bracket::new(span, g_start, t_end);
         let stop = FOLD_SLOPE_TOL * g_start.abs().max(t_end.abs());
-        let mut best = None;
+        let mut best: Option<(Vec<f64>, f64, newton::NewtonStats, f64, f64)> = None;
+        // (σ, τ_ω) of the step's ends and of every trial, for the closing secant
+        let mut samples = vec![(0.0, g_start), (span, t_end)];
         for _ in 0..self.opts.max_bisections {
             // τ_ω is smooth through the fold: the secant is trusted to 1 % of the ends
             let Some((mid, c)) = self.bracket_trial(from, to, &bracket, bracket.trial(0.01)) else {
@@ -1723,13 +1725,36 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let g_mid = t[nu];
-            best = Some((a, w, st, mid));
+            samples.push((mid, g_mid));
+            if best.as_ref().is_none_or(|b| g_mid.abs() < b.4.abs()) {
+                best = Some((a, w, st, mid, g_mid));
+            }
             if g_mid.abs() <= stop {
                 break;
             }
             bracket.narrow(mid, g_mid, (g_mid > 0.0) == (g_start > 0.0));
         }
-        let (a, w, st, mid) = best?;
+        let (mut a, mut w, mut st, mut mid, g_best) = best?;
+        // The fold as a point on the branch: ω is flat there (quadratic in σ), so the
+        // trial's ω is already close, but the point lies off the fold by σ − σ_f ≈
+        // τ_ω/τ_ω'. One more corrector at the zero of the secant through the best trial
+        // and the nearest sample on the other side of zero puts it there to the
+        // secant's error, second order in the distance between them.
+        if g_best != 0.0
+            && let Some(&(s_other, g_other)) = samples
+                .iter()
+                .filter(|(_, g)| (*g > 0.0) != (g_best > 0.0))
+                .min_by(|x, y| (x.0 - mid).abs().total_cmp(&(y.0 - mid).abs()))
+        {
+            let root = mid - g_best * (s_other - mid) / (g_other - g_best);
+            if root.is_finite()
+                && root > 0.0
+                && root < span
+                && let Ok(c) = self.correct_toward(from, root, Some(to))
+            {
+                (a, w, st, mid) = (c.a, c.omega, c.stats, root);
+            }
+        }
         let mut p = self.bare_point(index, &a, w, &st, from.arclength + mid);
         p.bifurcation = Some(BifurcationKind::SaddleNode);
         p.index = index;

@@ -100,6 +100,7 @@ pub fn thermal_schur(
     let fact = LinearSolver::default()
         .factor(hb, &parts, None)
         .map_err(|e| setup(format!("harmonic-balance Jacobian: {e}")))?;
+
     let nq = q_dofs.len();
     // W = (J⁻¹)_{m q}: the thermal mean coefficients of J⁻¹ e_q
     let mut w = Mat::<f64>::zeros(n_t, nq);
