@@ -1,0 +1,166 @@
+//! The slow/fast split of the coupled model's stability and its agreement with the
+//! branch's folds (docs/stability.md):
+//!
+//! * the Schur complement onto the thermal means, formed with one factorization and the
+//!   Woodbury identity, against the dense Schur complement of the assembled Jacobian;
+//! * the slowest slow exponent against a second method: the real multiplier nearest +1
+//!   of the monodromy product over the whole coupled state, `ln μ / P`;
+//! * on the 10 L/min branch through its fold pair near 582 rad/s: the count of real
+//!   multipliers above +1 changes by one at each fold, the middle segment is unstable, and
+//!   the fold the multipliers do not confirm is reported.
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+use tmrotor::hb::{HarmonicBalance, HbSolution, NewtonOptions, newton};
+use tmrotor::record::MemorySink;
+use tmrotor::stability::{BifurcationKind, slow_exponents, thermal_schur};
+use tmrotor::study::{StudySettings, SweepProblem, stability_method};
+use tmrotor::system::{PeriodicOrbit, System};
+
+/// A converged point of `problem` at `omega`.
+fn point(problem: &SweepProblem, hb: &HarmonicBalance<'_>, omega: f64) -> HbSolution {
+    let guess = problem.system.initial_guess(problem.basis.n_coeffs());
+    let (a, stats) =
+        newton::solve_fixed(hb, omega, &guess, &NewtonOptions::default()).expect("converges");
+    HbSolution::from_unknowns(omega, &problem.basis, problem.system.n_mech(), &a, &stats)
+}
+
+#[test]
+fn the_thermal_schur_complement_equals_the_dense_one() {
+    let settings = StudySettings {
+        order: 1,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let hb = HarmonicBalance::new(&problem.system, &problem.basis, None).expect("hb");
+    let sol = point(&problem, &hb, 420.0);
+    let s = thermal_schur(&hb, &sol).expect("schur");
+
+    // dense: S = J_mm − J_mr J_rr⁻¹ J_rm with m the thermal mean coefficients
+    let coeffs = sol.unknowns();
+    let mut r = vec![0.0; coeffs.len()];
+    let parts = hb
+        .residual_jacobian(&coeffs, sol.omega, &mut r)
+        .expect("jacobian");
+    let j = hb.dense_jacobian(&parts);
+    let nu = hb.n_unknowns();
+    let nc = hb.n_coeffs();
+    let m: Vec<usize> = (0..hb.n_therm()).map(|d| (hb.n_mech() + d) * nc).collect();
+    let rest: Vec<usize> = (0..nu).filter(|i| !m.contains(i)).collect();
+    let at = |rows: &[usize], cols: &[usize]| {
+        Mat::from_fn(rows.len(), cols.len(), |a, b| j[rows[a] * nu + cols[b]])
+    };
+    let (j_mm, j_mr, j_rm, j_rr) = (at(&m, &m), at(&m, &rest), at(&rest, &m), at(&rest, &rest));
+    let x = j_rr.partial_piv_lu().solve(&j_rm);
+    let dense = &j_mm - &j_mr * &x;
+    let scale = (0..m.len())
+        .map(|i| dense[(i, i)].abs())
+        .fold(0.0, f64::max);
+    let mut worst = 0.0f64;
+    for a in 0..m.len() {
+        for b in 0..m.len() {
+            worst = worst.max((s[(a, b)] - dense[(a, b)]).abs());
+        }
+    }
+    assert!(
+        worst < 1e-9 * scale,
+        "Woodbury Schur complement off the dense one by {worst:e} (scale {scale:e})"
+    );
+}
+
+#[test]
+fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
+    let settings = StudySettings {
+        flow_l_min: 10.0,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let hb =
+        HarmonicBalance::new(&problem.system, &problem.basis, settings.aft_samples).expect("hb");
+    let sol = point(&problem, &hb, 400.0);
+    let slow = slow_exponents(&hb, &sol).expect("slow exponents");
+    let top = slow
+        .iter()
+        .max_by(|a, b| a.re.total_cmp(&b.re))
+        .expect("exponents");
+    assert!(top.im == 0.0 && top.re < 0.0, "slowest exponent {top}");
+
+    // second method: the product over the whole coupled state (mechanical and thermal)
+    let method = stability_method(&settings, &problem.system, settings.omega_start).expect("m");
+    let full = method.multipliers(&problem.system, &sol).expect("product");
+    let mu = full
+        .multipliers
+        .iter()
+        .filter(|m| m.im == 0.0)
+        .min_by(|a, b| (a.re - 1.0).abs().total_cmp(&(b.re - 1.0).abs()))
+        .expect("a real multiplier");
+    let from_product = mu.re.ln() / sol.period();
+    eprintln!("slowest exponent {top} 1/s; coupled product μ = {mu} → {from_product} 1/s");
+    assert!(
+        (from_product - top.re).abs() < 1e-5 * top.re.abs(),
+        "reduction {} vs product {from_product}",
+        top.re
+    );
+}
+
+#[test]
+fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
+    let settings = StudySettings {
+        flow_l_min: 10.0,
+        omega_start: 570.0,
+        omega_end: 595.0,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let mut sink = MemorySink::new();
+    let report = problem.run(&mut sink, None, |_| {}).expect("sweep");
+    let folds: Vec<_> = sink
+        .bifurcations
+        .iter()
+        .filter(|b| b.kind == BifurcationKind::SaddleNode)
+        .collect();
+    assert_eq!(folds.len(), 2, "the fold pair near 582 rad/s");
+    let counts = |i: u64| {
+        sink.points[i as usize]
+            .floquet_counts
+            .expect("stability computed")
+    };
+    for b in &folds {
+        let (before, after) = (counts(b.after_point), counts(b.after_point + 1));
+        assert_eq!(
+            before.real_above_one.abs_diff(after.real_above_one),
+            1,
+            "saddle-node at {} rad/s: {before:?} → {after:?}",
+            b.omega_rad_s
+        );
+        assert!(
+            !b.coeffs_mech.is_empty(),
+            "the fold carries its branch point"
+        );
+    }
+    let middle = folds[0].after_point + 1..=folds[1].after_point;
+    assert!(!middle.is_empty());
+    for i in middle {
+        assert_eq!(sink.points[i as usize].stable, Some(false), "point {i}");
+    }
+    // every change of the stable flag is at a located bifurcation or reported
+    for w in sink.points.windows(2) {
+        if w[0].stable != w[1].stable {
+            let located = sink
+                .bifurcations
+                .iter()
+                .any(|b| b.after_point == w[0].index);
+            let noted = sink.notes.iter().any(|(k, _)| *k == w[0].index);
+            assert!(located || noted, "silent change after point {}", w[0].index);
+        }
+    }
+    // what the multipliers do not confirm is said, in the recording and the report
+    let unconfirmed = folds.iter().filter(|b| !b.confirmed).count();
+    let said = sink
+        .notes
+        .iter()
+        .filter(|(_, t)| t.contains("not confirmed"))
+        .count();
+    assert_eq!(said, unconfirmed);
+    assert_eq!(report.warnings.len(), sink.notes.len());
+}
