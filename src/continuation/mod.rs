@@ -403,6 +403,9 @@ pub struct BranchPoint {
     pub stability_error: Option<String>,
     /// Set on located bifurcation points.
     pub bifurcation: Option<BifurcationKind>,
+    /// `∂R/∂A` at the point, when the corrector computed it there (the stability's slow
+    /// exponents reuse it instead of evaluating it again).
+    pub jacobian: Option<std::sync::Arc<JacobianParts>>,
 }
 
 impl BranchPoint {
@@ -1052,6 +1055,8 @@ struct Candidate {
     a: Vec<f64>,
     omega: f64,
     stats: newton::NewtonStats,
+    /// `∂R/∂A` at the point, when the corrector left it.
+    jacobian: Option<std::sync::Arc<JacobianParts>>,
     tangent: Vec<f64>,
     chord: Option<Factorization>,
     arclength: f64,
@@ -1159,6 +1164,7 @@ impl<'a> Continuation<'a> {
             stability: None,
             stability_error: None,
             bifurcation: None,
+            jacobian: None,
         }
     }
 
@@ -1169,6 +1175,7 @@ impl<'a> Continuation<'a> {
     fn assess(
         &self,
         solution: &HbSolution,
+        jacobian: Option<&JacobianParts>,
         tangent: &[f64],
     ) -> (Option<FloquetResult>, Option<String>) {
         if self.stability.is_none() {
@@ -1176,7 +1183,9 @@ impl<'a> Continuation<'a> {
         }
         let odd_folds = self.runs_backward(tangent);
         let (f, e) = Clock::time(&self.clock.evaluations, &self.clock.stability_ns, || {
-            self.assess_with(solution, |m, system, orbit| m.multipliers(system, orbit))
+            self.assess_with(solution, jacobian, |m, system, orbit| {
+                m.multipliers(system, orbit)
+            })
         });
         (f.map(|f| f.with_branch_parity(odd_folds)), e)
     }
@@ -1195,7 +1204,7 @@ impl<'a> Continuation<'a> {
         solution: &HbSolution,
         ends: [&FloquetResult; 2],
     ) -> (Option<FloquetResult>, Option<String>) {
-        self.assess_with(solution, |m, system, orbit| {
+        self.assess_with(solution, None, |m, system, orbit| {
             m.search_multipliers(system, orbit, ends)
         })
     }
@@ -1203,6 +1212,7 @@ impl<'a> Continuation<'a> {
     fn assess_with(
         &self,
         solution: &HbSolution,
+        jacobian: Option<&JacobianParts>,
         evaluate: impl FnOnce(
             &dyn StabilityMethod,
             &dyn crate::system::System,
@@ -1212,7 +1222,7 @@ impl<'a> Continuation<'a> {
     ) -> (Option<FloquetResult>, Option<String>) {
         match self.stability {
             None => (None, None),
-            Some(m) => match crate::stability::assess(m, &self.hb, solution, evaluate) {
+            Some(m) => match crate::stability::assess(m, &self.hb, solution, jacobian, evaluate) {
                 Ok(f) => (Some(f), None),
                 Err(e) => (None, Some(e.to_string())),
             },
@@ -1600,7 +1610,11 @@ impl<'a> Continuation<'a> {
             return;
         };
         if let Some(mut cur) = self.current.take() {
-            let result = self.assess(&held.point.solution, &cur.tangent);
+            let result = self.assess(
+                &held.point.solution,
+                held.point.jacobian.as_deref(),
+                &cur.tangent,
+            );
             self.settle(&mut cur, result);
             self.current = Some(cur);
         }
@@ -1813,7 +1827,11 @@ impl<'a> Continuation<'a> {
                 let index = held.point.index;
                 let ((result, crossings), (candidate, folds)) = rayon::join(
                     || {
-                        let result = self.assess(&held.point.solution, &cur.tangent);
+                        let result = self.assess(
+                            &held.point.solution,
+                            held.point.jacobian.as_deref(),
+                            &cur.tangent,
+                        );
                         let found = self.previous.as_ref().map(|prev| {
                             let ends = [prev.stability.as_ref(), result.0.as_ref()];
                             self.located_crossings(prev, cur, ends, index)
@@ -1852,7 +1870,8 @@ impl<'a> Continuation<'a> {
                 return Ok(out);
             }
             // nothing was held (not reached): assessed and handed out at once
-            (point.stability, point.stability_error) = self.assess(&point.solution, &next.tangent);
+            (point.stability, point.stability_error) =
+                self.assess(&point.solution, point.jacobian.as_deref(), &next.tangent);
             next.stability.clone_from(&point.stability);
         }
         let bifurcations = self.located_changes(cur, &next, point.index);
@@ -1870,7 +1889,8 @@ impl<'a> Continuation<'a> {
         if let Some(wb) = c.bound {
             walk.finish_after = Some(FinishReason::Bound { omega: wb });
         }
-        let point = self.bare_point(walk.n_points, &c.a, c.omega, &c.stats, c.arclength);
+        let mut point = self.bare_point(walk.n_points, &c.a, c.omega, &c.stats, c.arclength);
+        point.jacobian = c.jacobian;
         // step control
         let effort = c.stats.newton_equivalent();
         let factor = if effort == 0 {
@@ -1955,6 +1975,11 @@ impl<'a> Continuation<'a> {
         if distance > self.opts.max_corrector_distance * ds {
             return Err(RejectReason::Distance { ds, distance });
         }
+        // kept for the point's slow exponents when stability is assessed
+        let parts = self
+            .stability
+            .and(jacobian.as_ref())
+            .map(|(p, _)| std::sync::Arc::new(p.clone()));
         let (tangent, chord) = self
             .tangent_factored(&a, omega, Some(&cur.tangent), jacobian, matrix, true)
             .map_err(|e| corrector(&e))?;
@@ -1977,6 +2002,7 @@ impl<'a> Continuation<'a> {
                 a,
                 omega,
                 stats,
+                jacobian: parts,
                 tangent,
                 chord,
                 arclength: cur.arclength + ds,
@@ -1995,6 +2021,7 @@ impl<'a> Continuation<'a> {
             a: ab,
             omega: wb,
             stats: st,
+            jacobian: None,
             tangent,
             chord,
             arclength: cur.arclength + f * ds,

@@ -352,9 +352,11 @@ where
                 let cont = self.cont;
                 let tx = Reply(Some(self.tx.clone()));
                 let solution: HbSolution = p.solution.clone();
+                let jacobian = p.jacobian.clone();
                 let at = Arc::clone(&state);
                 self.scope.spawn_fifo(move |_| {
-                    tx.send(Done::Stability(k, cont.assess(&solution, &at.tangent)));
+                    let result = cont.assess(&solution, jacobian.as_deref(), &at.tangent);
+                    tx.send(Done::Stability(k, result));
                 });
                 if let Some(prev) = self.slots.back() {
                     slot.crossings = Search::Waiting;

@@ -169,8 +169,14 @@ impl StabilityRederive for CoupledRederive {
             method.as_ref(),
             &hb,
             &self.solution(point),
-            |m, sys, orbit| m.multipliers(sys, orbit),
+            None,
+            |m: &dyn crate::stability::StabilityMethod, sys, orbit| m.multipliers(sys, orbit),
         )
+        .map(|f| match point.floquet_counts {
+            // the branch's fold parity, which the recorded count carries
+            Some(c) => f.with_branch_parity(c.real_above_one % 2 == 1),
+            None => f,
+        })
         .map_err(|e| derive_err(e.to_string()))
     }
 }

@@ -46,7 +46,7 @@ pub use frozen::{FrozenOrbit, FrozenTemperature};
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
-pub use slow::{slow_exponents, split_ratio, thermal_schur};
+pub use slow::{slow_exponents, slow_exponents_with, split_ratio, thermal_schur};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::Variational;
 
@@ -412,12 +412,14 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
 /// [`StabilityMethod`]'s evaluation), split by time scale when the system has a thermal
 /// field: the fast multipliers from `evaluate` on the frozen-temperature problem
 /// ([`FrozenTemperature`]), the slow exponents from the quasi-static reduction of the
-/// harmonic-balance Jacobian ([`slow::slow_exponents`]), side by side. Without thermal
-/// DoFs: `evaluate` on the system itself.
+/// harmonic-balance Jacobian ([`slow::slow_exponents`]; `jacobian`, when given, is
+/// `∂R/∂A` at the point), side by side. Without thermal DoFs: `evaluate` on the system
+/// itself.
 pub fn assess(
     method: &dyn StabilityMethod,
     hb: &crate::hb::HarmonicBalance<'_>,
     solution: &crate::hb::HbSolution,
+    jacobian: Option<&crate::hb::JacobianParts>,
     evaluate: impl FnOnce(
         &dyn StabilityMethod,
         &dyn System,
@@ -438,7 +440,7 @@ pub fn assess(
                 &FrozenOrbit::new(solution, system.n_therm()),
             )
         },
-        || slow::slow_exponents(hb, solution),
+        || slow::slow_exponents_with(hb, solution, jacobian),
     );
     Ok(fast?.with_slow(slow?, solution.period()))
 }

@@ -47,7 +47,7 @@ use faer::linalg::solvers::Solve;
 use num_complex::Complex64;
 
 use super::{StabilityError, eigenvalues_checked};
-use crate::hb::{HarmonicBalance, HbSolution, LinearSolver};
+use crate::hb::{HarmonicBalance, HbSolution, JacobianParts, LinearSolver};
 use crate::system::DenseMatrix;
 
 /// Slow exponents `λ` (1/s) of `solution`, a converged point of `hb`: the eigenvalues of
@@ -56,12 +56,23 @@ pub fn slow_exponents(
     hb: &HarmonicBalance<'_>,
     solution: &HbSolution,
 ) -> Result<Vec<Complex64>, StabilityError> {
+    slow_exponents_with(hb, solution, None)
+}
+
+/// [`slow_exponents`] with the Jacobian at the point when the caller has it (the
+/// continuation's corrector computes it with its last residual); `None` or parts of
+/// another ω: evaluated here.
+pub fn slow_exponents_with(
+    hb: &HarmonicBalance<'_>,
+    solution: &HbSolution,
+    parts: Option<&JacobianParts>,
+) -> Result<Vec<Complex64>, StabilityError> {
     let n_t = hb.n_therm();
     if n_t == 0 {
         return Ok(Vec::new());
     }
     let omega = solution.omega;
-    let s = thermal_schur(hb, solution)?;
+    let s = thermal_schur_with(hb, solution, parts)?;
     let lin = hb.system().linear(omega);
     let cap = &lin.thermal_capacity;
     let setup = |reason: String| StabilityError::Setup { omega, reason };
@@ -83,14 +94,30 @@ pub fn thermal_schur(
     hb: &HarmonicBalance<'_>,
     solution: &HbSolution,
 ) -> Result<Mat<f64>, StabilityError> {
+    thermal_schur_with(hb, solution, None)
+}
+
+/// [`thermal_schur`] with the Jacobian at the point given (see [`slow_exponents_with`]).
+pub fn thermal_schur_with(
+    hb: &HarmonicBalance<'_>,
+    solution: &HbSolution,
+    given: Option<&JacobianParts>,
+) -> Result<Mat<f64>, StabilityError> {
     let omega = solution.omega;
     let setup = |reason: String| StabilityError::Setup { omega, reason };
     let (n_m, n_t, nc) = (hb.n_mech(), hb.n_therm(), hb.n_coeffs());
     let coeffs = solution.unknowns();
-    let mut r = vec![0.0; coeffs.len()];
-    let parts = hb
-        .residual_jacobian(&coeffs, omega, &mut r)
-        .map_err(|e| setup(e.to_string()))?;
+    let evaluated;
+    let parts = match given.filter(|p| p.omega == omega) {
+        Some(p) => p,
+        None => {
+            let mut r = vec![0.0; coeffs.len()];
+            evaluated = hb
+                .residual_jacobian(&coeffs, omega, &mut r)
+                .map_err(|e| setup(e.to_string()))?;
+            &evaluated
+        }
+    };
     let k_t = to_mat(&parts.linear.thermal_conductance);
     let q_dofs = hb.nonlinear_dofs().therm.clone();
     if q_dofs.is_empty() {
@@ -98,7 +125,7 @@ pub fn thermal_schur(
         return Ok(k_t);
     }
     let fact = LinearSolver::default()
-        .factor(hb, &parts, None)
+        .factor(hb, parts, None)
         .map_err(|e| setup(format!("harmonic-balance Jacobian: {e}")))?;
 
     let nq = q_dofs.len();

@@ -48,10 +48,17 @@ pub fn compare_with(
         let fresh = &floquet.multipliers;
         let dev = multiplier_deviation(&p.multipliers, fresh).ok_or_else(|| {
             anyhow::anyhow!(
-                "point {}: {} multipliers recomputed, {} stored",
+                "point {}: {} multipliers recomputed, {} stored{}",
                 p.index,
                 fresh.len(),
-                p.multipliers.len()
+                p.multipliers.len(),
+                if p.multipliers.len() > fresh.len() && p.slow_exponents.is_empty() {
+                    " (the recording was written before the stability was split into fast \
+                     multipliers and slow thermal exponents, with the thermal multipliers \
+                     among its own: recompute it with the version that wrote it)"
+                } else {
+                    ""
+                }
             )
         })?;
         result.compared += 1;
