@@ -634,7 +634,12 @@ impl SweepProblem {
                         }
                         previous = Some((point.solution.omega, point.stability.clone()));
                         let recording = std::time::Instant::now();
-                        let rec = self.point_record(prog.points as u64, &point)?;
+                        let mut rec = self.point_record(prog.points as u64, &point)?;
+                        // the point after located bifurcations carries the first one's type
+                        // (`/summary.bifurcation`, the `bifurcation` column of `replay branch`)
+                        if rec.bifurcation.is_none() {
+                            rec.bifurcation = kinds.first().copied();
+                        }
                         shares.push((
                             rec.index,
                             rec.omega_rad_s,
