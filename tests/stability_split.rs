@@ -164,3 +164,82 @@ fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
     assert_eq!(said, unconfirmed);
     assert_eq!(report.warnings.len(), sink.notes.len());
 }
+
+/// The Python interpreter with the official MCAP readers (`.ci/run` exports it), or
+/// `None` with the reason printed (a failure under `CI=true`).
+fn python() -> Option<String> {
+    match std::env::var("TMROTOR_PYTHON") {
+        Ok(p) if !p.is_empty() => Some(p),
+        _ => {
+            let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
+            assert!(!ci, "CI=true but TMROTOR_PYTHON is not set");
+            eprintln!("skipped: TMROTOR_PYTHON is not set");
+            None
+        }
+    }
+}
+
+/// `tools/check_fold_stability.py` (official MCAP readers only) on a recorded branch with a
+/// fold pair: no problem; on the same branch with the middle segment's verdicts replaced
+/// by the product's own (as versions before the fold parity recorded them): problems found
+/// (the check can fail).
+#[test]
+fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
+    use tmrotor::record::Sink;
+    let Some(python) = python() else { return };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let settings = StudySettings {
+        flow_l_min: 10.0,
+        omega_start: 570.0,
+        omega_end: 595.0,
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let mut memory = MemorySink::new();
+    problem.run(&mut memory, None, |_| {}).expect("sweep");
+    let write = |name: &str, tamper: bool| {
+        let path = dir.path().join(name);
+        let mut sink = tmrotor::record::McapSink::create(&path, Default::default()).expect("file");
+        sink.begin_run(memory.run.as_ref().expect("run"))
+            .expect("begin");
+        for p in &memory.points {
+            let mut p = p.clone();
+            if tamper
+                && let Some(c) = p.floquet_counts.as_mut()
+                && c.fold_parity_mismatch
+            {
+                c.fold_parity_mismatch = false;
+                c.real_above_one -= 1;
+                c.unstable -= 1;
+                p.stable = Some(c.unstable == 0);
+            }
+            sink.write_point(&p).expect("point");
+        }
+        for b in &memory.bifurcations {
+            sink.write_bifurcation(b).expect("bifurcation");
+        }
+        for (k, text) in &memory.notes {
+            sink.write_note(*k, text).expect("note");
+        }
+        sink.finish(tmrotor::record::RunStatus::Completed)
+            .expect("finish");
+        path
+    };
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tools/check_fold_stability.py");
+    let run = |file: &std::path::Path| {
+        let out = std::process::Command::new(&python)
+            .arg(script)
+            .arg(file)
+            .output()
+            .expect("python runs");
+        (
+            out.status.success(),
+            String::from_utf8_lossy(&out.stdout).to_string(),
+        )
+    };
+    let (ok, text) = run(&write("q10.mcap", false));
+    assert!(ok && text.contains("2 saddle-nodes, ok"), "{text}");
+    let (ok, text) = run(&write("product_only.mcap", true));
+    assert!(!ok && text.contains("problems"), "{text}");
+    assert!(text.contains("not flagged unstable"), "{text}");
+}
