@@ -5,17 +5,22 @@
 //! `cargo run --release --example contact > contact.csv` (`SAMPLES=2048` for other AFT
 //! sample counts)
 //!
-//! Measured 2026-12-03 (stability by the variational equations, `stability::Variational`):
-//! the physical folds at Ω = 0.6534401 and 0.7556642 (reference 0.6534401, 0.755664), but
-//! also 320 more saddle-nodes in tiny fold pairs on the upper branch between 0.736 and
-//! 0.755, which come from sampling the contact force (208 of them with 2048 samples); a
-//! Neimark–Sacker point at 0.61150 (reference 0.618354) and period doublings at 0.7260 and
-//! 0.6780. Reporting only the physical folds (exact Fourier coefficients of the
-//! piecewise-linear force from its switching times) is not done yet.
+//! Stability by shooting from the balance's orbit (`stability::Shooting`): the variational
+//! equations around the truncated orbit put the Neimark–Sacker point at 0.6115, the shot
+//! orbit at 0.6186 (reference 0.618354). Saddle-nodes are kept when the shot orbits'
+//! count of real multipliers above +1 changes across them (the audit rule of the sweeps):
+//! sampling the contact force puts 320 more, in tiny fold pairs on the upper branch between
+//! Ω = 0.736 and 0.7557 (208 with 2048 samples), which this rule drops.
+//!
+//! Measured 2026-12-03: folds at 0.6534401 and 0.7556594 (reference 0.6534401, 0.755664),
+//! Neimark–Sacker at 0.6186068 and 0.5819007 (where contact is lost). Not yet right: two
+//! period doublings (0.7556, 0.7388) and flickering stable flags inside that sampling
+//! cluster; exact Fourier coefficients of the piecewise-linear force (from its switching
+//! times) would remove the cluster itself.
 
 use tmrotor::continuation::{Continuation, ContinuationOptions, csv::branch_csv};
 use tmrotor::hb::{Basis, HarmonicBalance};
-use tmrotor::stability::{BifurcationKind, Variational};
+use tmrotor::stability::{BifurcationKind, Shooting};
 use tmrotor::systems::contact::UnilateralContact;
 
 fn main() -> anyhow::Result<()> {
@@ -29,9 +34,9 @@ fn main() -> anyhow::Result<()> {
     let (w0, w1) = UnilateralContact::OMEGA_RANGE;
     let mut opts = ContinuationOptions::new(w0, w1);
     opts.ds_max = 0.05;
-    let method = Variational::default();
+    let method = Shooting::default();
     let mut cont = Continuation::new(hb, opts, Some(&method))?;
-    let branch = cont.run(|_| {})?;
+    let mut branch = cont.run(|_| {})?;
     let kinds = |k| {
         branch
             .bifurcations
@@ -45,6 +50,32 @@ fn main() -> anyhow::Result<()> {
         kinds(BifurcationKind::SaddleNode),
         kinds(BifurcationKind::NeimarkSacker),
         kinds(BifurcationKind::PeriodDoubling)
+    );
+    // a fold is confirmed when the shot orbits' count of real multipliers above +1
+    // changes between the points around it
+    let real = |i: usize| {
+        branch
+            .points
+            .iter()
+            .find(|p| p.index == i)
+            .and_then(|p| p.stability.as_ref())
+            .map(|f| f.product_real_above_one())
+    };
+    let confirmed: Vec<bool> = branch
+        .bifurcations
+        .iter()
+        .map(|b| {
+            b.bifurcation != Some(BifurcationKind::SaddleNode)
+                || matches!((real(b.index - 1), real(b.index)), (Some(x), Some(y)) if x != y)
+        })
+        .collect();
+    let mut keep = confirmed.iter();
+    branch
+        .bifurcations
+        .retain(|_| *keep.next().unwrap_or(&true));
+    eprintln!(
+        "{} saddle-nodes not confirmed by the shot orbits' multipliers dropped",
+        confirmed.iter().filter(|c| !**c).count()
     );
     for b in &branch.bifurcations {
         eprintln!("  {:?} at {:.7}", b.bifurcation, b.solution.omega);

@@ -48,7 +48,7 @@ pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionS
 pub use sip::{Sip, SipMonodromy};
 pub use slow::{slow_exponents, slow_exponents_with, split_ratio, thermal_schur};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
-pub use variational::Variational;
+pub use variational::{Shooting, Variational};
 
 use faer::MatRef;
 use num_complex::Complex64;
