@@ -207,6 +207,18 @@ pub fn audit_step(
         audit.confirmed.push(confirmed);
     }
     if let (Some(a), Some(b)) = (before, after)
+        && folds == 1
+        && a.real_above_one().abs_diff(b.real_above_one()) > 1
+    {
+        audit.notes.push(format!(
+            "saddle-node {between}: the count of real multipliers above +1 changes from {} to \
+             {}, not by one: in the same step real multipliers outside the unit circle collide \
+             into complex pairs (or pairs split), besides the one through +1",
+            a.real_above_one(),
+            b.real_above_one()
+        ));
+    }
+    if let (Some(a), Some(b)) = (before, after)
         && located.is_empty()
         && a.unstable_count() != b.unstable_count()
     {
@@ -835,6 +847,32 @@ mod tests {
             audit.notes[0]
         );
         assert!(audit.notes[0].contains("between points 30 and 31"));
+    }
+
+    #[test]
+    fn a_fold_with_a_collision_in_its_step_says_so() {
+        let a = floquet(&[1.02, 5.5, 2.0], true);
+        let pair = [
+            num_complex::Complex64::new(1.1, 0.8),
+            num_complex::Complex64::new(1.1, -0.8),
+        ];
+        let b = FloquetResult::new(vec![
+            pair[0],
+            pair[1],
+            num_complex::Complex64::new(0.92, 0.0),
+        ])
+        .with_branch_parity(false);
+        assert_eq!((a.real_above_one(), b.real_above_one()), (3, 0));
+        let audit = audit_step(
+            Some(&a),
+            Some(&b),
+            &[BifurcationKind::SaddleNode],
+            (562.9414, 562.9610),
+            297,
+        );
+        assert_eq!(audit.confirmed, vec![true]);
+        assert_eq!(audit.notes.len(), 1);
+        assert!(audit.notes[0].contains("collide"), "{}", audit.notes[0]);
     }
 
     #[test]
