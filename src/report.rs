@@ -522,7 +522,7 @@ these findings most:
   2 L/min. At 2 L/min (25 and 50 °C) period-doubling points appear on the narrow fold
   pair near 613–618 rad/s, where three segments of the branch lie within about 0.5 % of
   each other in amplitude; which small fold clusters a run resolves there depends on
-  its step sequence (see the README). At 1 L/min the default step resolves few of the
+  its step sequence (see docs/results.md). At 1 L/min the default step resolves few of the
   clusters of 590–620 rad/s: a run with a step cap of 0.05 instead of 0.15 has 30
   saddle-nodes, 24 Neimark–Sacker and 14 period-doubling points there and elsewhere
   (against 16, 21 and 0 above); at 2 L/min with 50 °C cooling it has exactly the

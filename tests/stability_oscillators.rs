@@ -8,123 +8,9 @@ use tmrotor::integrate::{
     steady_state, steady_state_with,
 };
 use tmrotor::stability::{BifurcationKind, Sip, StabilityMethod, Variational, classify_crossing};
-use tmrotor::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
-
-/// `x'' + 0.05x' + x + 0.1x³ = 0.18 cos(Ωt)`.
-struct Duffing {
-    dofs: NonlinearDofs,
-}
-
-impl Duffing {
-    fn new() -> Self {
-        Self {
-            dofs: NonlinearDofs {
-                mech: vec![0],
-                therm: vec![],
-            },
-        }
-    }
-}
-
-fn dense(n: usize, data: &[f64]) -> DenseMatrix {
-    DenseMatrix {
-        n,
-        data: data.to_vec(),
-    }
-}
-
-impl System for Duffing {
-    fn n_mech(&self) -> usize {
-        1
-    }
-    fn linear(&self, _omega: f64) -> LinearPart {
-        LinearPart {
-            mass: dense(1, &[1.0]),
-            damping: dense(1, &[0.05]),
-            stiffness: dense(1, &[1.0]),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
-    }
-    fn nonlinear_dofs(&self) -> &NonlinearDofs {
-        &self.dofs
-    }
-    fn eval_nonlinear(
-        &self,
-        _omega: f64,
-        _t: f64,
-        x: &[f64],
-        _v: &[f64],
-        _temp: &[f64],
-        out: &mut NonlinearEval,
-    ) {
-        out.f[0] = 0.1 * x[0].powi(3);
-        out.df_dx[0] = 0.3 * x[0] * x[0];
-        out.df_dv[0] = 0.0;
-    }
-    fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
-        out[0] = 0.18 * (omega * t).cos();
-    }
-}
-
-/// Two-DoF primary system with a nonlinear tuned absorber: masses 1, 0.05; springs 1
-/// (DoF 1 to ground), 0.0453 (between); dampers 0.002, 0.013; cubic springs 1 (DoF 1 to
-/// ground), 0.0042 (between); force 0.11 cos(Ωt) on DoF 1.
-struct Absorber {
-    dofs: NonlinearDofs,
-}
-
-impl Absorber {
-    fn new() -> Self {
-        Self {
-            dofs: NonlinearDofs {
-                mech: vec![0, 1],
-                therm: vec![],
-            },
-        }
-    }
-}
-
-impl System for Absorber {
-    fn n_mech(&self) -> usize {
-        2
-    }
-    fn linear(&self, _omega: f64) -> LinearPart {
-        let (k1, k2, c1, c2) = (1.0, 0.0453, 0.002, 0.013);
-        LinearPart {
-            mass: dense(2, &[1.0, 0.0, 0.0, 0.05]),
-            damping: dense(2, &[c1 + c2, -c2, -c2, c2]),
-            stiffness: dense(2, &[k1 + k2, -k2, -k2, k2]),
-            thermal_capacity: DenseMatrix::zeros(0),
-            thermal_conductance: DenseMatrix::zeros(0),
-        }
-    }
-    fn nonlinear_dofs(&self) -> &NonlinearDofs {
-        &self.dofs
-    }
-    fn eval_nonlinear(
-        &self,
-        _omega: f64,
-        _t: f64,
-        x: &[f64],
-        _v: &[f64],
-        _temp: &[f64],
-        out: &mut NonlinearEval,
-    ) {
-        let (k3a, k3b) = (1.0, 0.0042);
-        let r = x[1] - x[0];
-        out.f[0] = k3a * x[0].powi(3) - k3b * r.powi(3);
-        out.f[1] = k3b * r.powi(3);
-        let kr = 3.0 * k3b * r * r;
-        out.df_dx
-            .copy_from_slice(&[3.0 * k3a * x[0] * x[0] + kr, -kr, -kr, kr]);
-        out.df_dv.iter_mut().for_each(|v| *v = 0.0);
-    }
-    fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
-        out[0] = 0.11 * (omega * t).cos();
-        out[1] = 0.0;
-    }
-}
+use tmrotor::system::System;
+use tmrotor::systems::absorber::Absorber;
+use tmrotor::systems::duffing::Duffing;
 
 /// Pairs every multiplier of `a` with its nearest unused one in `b`; returns the largest
 /// distance.
@@ -185,7 +71,7 @@ fn three_ways_from_orbit_start(
 
 #[test]
 fn duffing_multipliers_agree_on_both_stable_branches() {
-    let sys = Duffing::new();
+    let sys = Duffing::default();
     // Below resonance, the resonant (upper) branch inside the fold pair, the lower branch
     // there, and above the upper fold. Starts from the one-term balance of each branch.
     for (omega, a0, b0) in [
@@ -234,7 +120,7 @@ fn one_term_hb(omega: f64, mut a: f64, mut b: f64) -> (f64, f64) {
 
 #[test]
 fn duffing_middle_branch_is_unstable_through_plus_one() {
-    let sys = Duffing::new();
+    let sys = Duffing::default();
     let omega = 1.2;
     let period = 2.0 * std::f64::consts::PI / omega;
     // The three one-term amplitudes at Ω = 1.2 are 0.417, 2.276 and 2.526; the middle one
@@ -289,7 +175,7 @@ fn duffing_middle_branch_is_unstable_through_plus_one() {
 
 #[test]
 fn absorber_multipliers_agree() {
-    let sys = Absorber::new();
+    let sys = Absorber::default();
     // Extrapolated SIP; the plain product at 256 intervals would leave an O(Δ²)
     // error of 3.8e-6 here (see sip_converges_to_the_variational_multipliers).
     let sip_fine = accurate_sip();
@@ -314,7 +200,7 @@ fn absorber_multipliers_agree() {
 fn steady_state_amplitude_matches_the_shooting_orbit() {
     // The steady-state sampler and the shooting orbit are two routes to the same periodic
     // solution; their amplitudes agree far inside the 1e-4 the HB comparison needs.
-    let sys = Duffing::new();
+    let sys = Duffing::default();
     let omega = 1.3;
     let period = 2.0 * std::f64::consts::PI / omega;
     let settled = steady_state_with(
@@ -353,7 +239,7 @@ fn sip_converges_to_the_variational_multipliers() {
     // Absorber at Ω = 0.8: SIP error against the variational multipliers for
     // N_k = 256..2048 falls by 4 per doubling (second order, paper Eq. 32 keeps only the
     // first Magnus term); measured 3.8e-6, 9.7e-7, 2.4e-7, 6.1e-8.
-    let sys = Absorber::new();
+    let sys = Absorber::default();
     let omega = 0.8;
     let period = 2.0 * std::f64::consts::PI / omega;
     let settled = steady_state(&sys, omega, &[0.0; 4], period, 400).expect("settles");
@@ -393,7 +279,7 @@ fn sip_converges_to_the_variational_multipliers() {
 /// Natural-parameter continuation of the absorber's resonant branch from Ω = 0.8 upward
 /// by shooting; returns the orbit start at `target` (the branch has no fold below 1.2).
 fn absorber_branch_start(target: f64) -> Vec<f64> {
-    let sys = Absorber::new();
+    let sys = Absorber::default();
     let mut omega = 0.8;
     let period = 2.0 * std::f64::consts::PI / omega;
     let mut y = steady_state(&sys, omega, &[0.0; 4], period, 2000)
@@ -414,7 +300,7 @@ fn absorber_branch_start(target: f64) -> Vec<f64> {
 
 #[test]
 fn absorber_neimark_sacker_is_detected_and_the_response_past_it_is_not_periodic() {
-    let sys = Absorber::new();
+    let sys = Absorber::default();
     // A shooting sweep of the resonant branch (0.8 → 1.2) shows the leading multipliers
     // as a complex pair whose modulus passes 1 between Ω = 1.11 (0.994) and 1.12 (1.013)
     // at μ ≈ 0.85 ± 0.53i, and returns inside between 1.19 and 1.20.
