@@ -56,21 +56,10 @@ fn main() -> anyhow::Result<()> {
     );
     // a fold is confirmed when the shot orbits' count of real multipliers above +1
     // changes between the points around it
-    let real = |i: usize| {
-        branch
-            .points
-            .iter()
-            .find(|p| p.index == i)
-            .and_then(|p| p.stability.as_ref())
-            .map(|f| f.product_real_above_one())
-    };
     let confirmed: Vec<bool> = branch
         .bifurcations
         .iter()
-        .map(|b| {
-            b.bifurcation != Some(BifurcationKind::SaddleNode)
-                || matches!((real(b.index - 1), real(b.index)), (Some(x), Some(y)) if x != y)
-        })
+        .map(|b| branch.confirmed(b))
         .collect();
     // the verdicts are the shot orbits' own: the dropped folds' parity is not counted
     for p in &mut branch.points {

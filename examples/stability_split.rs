@@ -86,7 +86,7 @@ fn main() -> anyhow::Result<()> {
             split.slow_unstable_count(),
             top.re,
             top.im,
-            split.split_ratio.unwrap_or(f64::NAN),
+            split.split_ratio().unwrap_or(f64::NAN),
             near.re,
             near.im,
             maxmod,

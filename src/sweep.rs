@@ -181,7 +181,6 @@ pub fn audit_step(
         omegas.0,
         omegas.1
     );
-    let product_real = |f: &FloquetResult| f.product_real_above_one();
     let folds = located
         .iter()
         .filter(|k| **k == BifurcationKind::SaddleNode)
@@ -190,7 +189,7 @@ pub fn audit_step(
     for kind in located {
         let confirmed = match (kind, before, after) {
             (BifurcationKind::SaddleNode, Some(a), Some(b)) if folds == 1 => {
-                product_real(a) != product_real(b)
+                crate::stability::confirms_fold(a, b)
             }
             _ => true,
         };
@@ -228,8 +227,8 @@ pub fn audit_step(
         } else if a.split_uncertain() || b.split_uncertain() {
             format!(
                 "a fast multiplier near +1 is not separated from the slow thermal exponents (split ratio {:.2} and {:.2}): the slow/fast split cannot decide here",
-                a.split_ratio.unwrap_or(0.0),
-                b.split_ratio.unwrap_or(0.0)
+                a.split_ratio().unwrap_or(0.0),
+                b.split_ratio().unwrap_or(0.0)
             )
         } else {
             "the count changed by a jump, not a crossing: real multipliers outside the circle collided into a complex pair, or a pair split (nothing to locate)"
@@ -612,33 +611,31 @@ impl SweepProblem {
                                 after_point,
                             )
                         };
-                        for (b, confirmed) in bifurcations
+                        for ((b, kind), confirmed) in bifurcations
                             .iter()
-                            .filter(|b| b.bifurcation.is_some())
+                            .filter_map(|b| b.bifurcation.map(|k| (b, k)))
                             .zip(audit.confirmed.iter().copied())
                         {
-                            if let Some(kind) = b.bifurcation {
-                                let rec = BifurcationRecord {
-                                    // 0, 1, … (the schema's running number)
-                                    number: n_bif,
-                                    kind,
-                                    omega_rad_s: b.solution.omega,
-                                    arc_length: b.arclength,
-                                    after_point,
-                                    amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
-                                    multipliers: b
-                                        .stability
-                                        .as_ref()
-                                        .map(|f| f.multipliers.clone())
-                                        .unwrap_or_default(),
-                                    confirmed,
-                                    coeffs_mech: b.solution.mech.clone(),
-                                    coeffs_therm: b.solution.therm.clone(),
-                                };
-                                sink.write_bifurcation(&rec)?;
-                                n_bif += 1;
-                                bifs.push((b.solution.omega, kind.label().to_string()));
-                            }
+                            let rec = BifurcationRecord {
+                                // 0, 1, … (the schema's running number)
+                                number: n_bif,
+                                kind,
+                                omega_rad_s: b.solution.omega,
+                                arc_length: b.arclength,
+                                after_point,
+                                amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
+                                multipliers: b
+                                    .stability
+                                    .as_ref()
+                                    .map(|f| f.multipliers.clone())
+                                    .unwrap_or_default(),
+                                confirmed,
+                                coeffs_mech: b.solution.mech.clone(),
+                                coeffs_therm: b.solution.therm.clone(),
+                            };
+                            sink.write_bifurcation(&rec)?;
+                            n_bif += 1;
+                            bifs.push((b.solution.omega, kind.label().to_string()));
                         }
                         for note in audit.notes {
                             sink.write_note(after_point, &note)?;

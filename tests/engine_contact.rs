@@ -19,19 +19,10 @@ fn contact_folds_and_neimark_sacker_match_the_published_values() {
     let method = Shooting::default();
     let mut cont = Continuation::new(hb, opts, Some(&method)).expect("continuation");
     let branch = cont.run(|_| {}).expect("run");
-    let real = |i: usize| {
-        branch
-            .points
-            .iter()
-            .find(|p| p.index == i)
-            .and_then(|p| p.stability.as_ref())
-            .map(|f| f.product_real_above_one())
-    };
     let confirmed: Vec<_> = branch
         .bifurcations
         .iter()
-        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
-        .filter(|b| matches!((real(b.index - 1), real(b.index)), (Some(x), Some(y)) if x != y))
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode) && branch.confirmed(b))
         .collect();
     let mut folds: Vec<f64> = confirmed.iter().map(|b| b.solution.omega).collect();
     folds.sort_by(f64::total_cmp);

@@ -674,6 +674,27 @@ pub struct Branch {
     pub rejected_steps: usize,
 }
 
+impl Branch {
+    /// Whether the located bifurcation `b` is confirmed by the multipliers of the points
+    /// on either side ([`crate::stability::confirms_fold`]): always for kinds other than
+    /// saddle-nodes, never when a side has no stability.
+    pub fn confirmed(&self, b: &BranchPoint) -> bool {
+        if b.bifurcation != Some(BifurcationKind::SaddleNode) {
+            return true;
+        }
+        let at = |i: usize| {
+            self.points
+                .iter()
+                .find(|p| p.index == i)
+                .and_then(|p| p.stability.as_ref())
+        };
+        match (b.index.checked_sub(1).and_then(at), at(b.index)) {
+            (Some(x), Some(y)) => crate::stability::confirms_fold(x, y),
+            _ => false,
+        }
+    }
+}
+
 /// The cubic Hermite curve `X(θ)` from an accepted point (`θ = 0`, unit tangent `τ₀`) to
 /// the next (`θ = 1`, tangent `τ₁`):
 /// `X(θ) − X₀ = h₀₁(θ) (X₁ − X₀) + L (h₁₀(θ) τ₀ + h₁₁(θ) τ₁)`, with `L` the arclength of

@@ -213,7 +213,7 @@ impl FloquetCounts {
             unstable: f.unstable_count() as u32,
             real_above_one: f.real_above_one() as u32,
             fold_parity_mismatch: f.fold_parity_mismatch,
-            split_ratio: f.split_ratio.unwrap_or(0.0),
+            split_ratio: f.split_ratio().unwrap_or(0.0),
         }
     }
 }

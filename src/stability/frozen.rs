@@ -9,6 +9,8 @@
 //! the vibration heating the parts and moving the clearances back) acts over thermal time
 //! constants and belongs to the slow exponents.
 
+use std::sync::Mutex;
+
 use crate::system::{LinearPart, NonlinearDofs, NonlinearEval, PeriodicOrbit, System};
 
 /// `system` with its temperatures frozen on `orbit`'s course (see the module docs).
@@ -16,6 +18,9 @@ pub struct FrozenTemperature<'a> {
     system: &'a dyn System,
     orbit: &'a (dyn PeriodicOrbit + Sync),
     dofs: NonlinearDofs,
+    /// Buffers of earlier evaluations (temperatures, the full system's evaluation), reused:
+    /// the method evaluates the terms at every sample of its product, from several threads.
+    scratch: Mutex<Vec<(Vec<f64>, NonlinearEval)>>,
 }
 
 impl<'a> FrozenTemperature<'a> {
@@ -27,6 +32,30 @@ impl<'a> FrozenTemperature<'a> {
                 mech: system.nonlinear_dofs().mech.clone(),
                 therm: Vec::new(),
             },
+            scratch: Mutex::new(Vec::new()),
+        }
+    }
+
+    /// The full system's terms at `t` with the orbit's temperatures, by `evaluate` (its
+    /// `eval_nonlinear` or `eval_nonlinear_values`), handed to `take`.
+    fn with_full_terms(
+        &self,
+        t: f64,
+        evaluate: impl FnOnce(&[f64], &mut NonlinearEval),
+        take: impl FnOnce(&NonlinearEval),
+    ) {
+        let q = self.system.nonlinear_dofs().therm.len();
+        let (mut temp, mut full) = self
+            .scratch
+            .lock()
+            .ok()
+            .and_then(|mut s| s.pop())
+            .unwrap_or_else(|| (vec![0.0; q], NonlinearEval::new(self.dofs.mech.len(), q)));
+        self.temperatures(t, &mut temp);
+        evaluate(&temp, &mut full);
+        take(&full);
+        if let Ok(mut s) = self.scratch.lock() {
+            s.push((temp, full));
         }
     }
 
@@ -67,14 +96,15 @@ impl System for FrozenTemperature<'_> {
         _temp: &[f64],
         out: &mut NonlinearEval,
     ) {
-        let q = self.system.nonlinear_dofs().therm.len();
-        let mut temp = vec![0.0; q];
-        self.temperatures(t, &mut temp);
-        let mut full = NonlinearEval::new(self.dofs.mech.len(), q);
-        self.system.eval_nonlinear(omega, t, x, v, &temp, &mut full);
-        out.f.copy_from_slice(&full.f);
-        out.df_dx.copy_from_slice(&full.df_dx);
-        out.df_dv.copy_from_slice(&full.df_dv);
+        self.with_full_terms(
+            t,
+            |temp, full| self.system.eval_nonlinear(omega, t, x, v, temp, full),
+            |full| {
+                out.f.copy_from_slice(&full.f);
+                out.df_dx.copy_from_slice(&full.df_dx);
+                out.df_dv.copy_from_slice(&full.df_dv);
+            },
+        );
     }
 
     fn eval_nonlinear_values(
@@ -86,13 +116,14 @@ impl System for FrozenTemperature<'_> {
         _temp: &[f64],
         out: &mut NonlinearEval,
     ) {
-        let q = self.system.nonlinear_dofs().therm.len();
-        let mut temp = vec![0.0; q];
-        self.temperatures(t, &mut temp);
-        let mut full = NonlinearEval::new(self.dofs.mech.len(), q);
-        self.system
-            .eval_nonlinear_values(omega, t, x, v, &temp, &mut full);
-        out.f.copy_from_slice(&full.f);
+        self.with_full_terms(
+            t,
+            |temp, full| {
+                self.system
+                    .eval_nonlinear_values(omega, t, x, v, temp, full)
+            },
+            |full| out.f.copy_from_slice(&full.f),
+        );
     }
 
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {

@@ -46,7 +46,7 @@ pub use frozen::{FrozenOrbit, FrozenTemperature};
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
-pub use slow::{slow_exponents, slow_exponents_with, split_ratio, thermal_schur};
+pub use slow::{slow_exponents, slow_exponents_with, thermal_schur};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::{Shooting, Variational};
 
@@ -76,12 +76,6 @@ pub struct FloquetResult {
     /// Intervals per period of the product the multipliers came from, for a method that
     /// chooses them per orbit ([`ExpSip`]'s refinement); `None` otherwise.
     pub intervals: Option<usize>,
-    /// Estimated relative error of the slow exponent with the largest real part (the one
-    /// that decides the slow part of the verdict): `|λ|/γ`, `γ` the fast exponent nearest
-    /// zero ([`slow::split_ratio`]). Above [`SPLIT_RATIO_LIMIT`] the time scales are not
-    /// separated (a fast multiplier near +1) and the verdict is uncertain. `None` without
-    /// a split.
-    pub split_ratio: Option<f64>,
     /// `γ = min |ln μ| / P` over the fast multipliers (1/s): the fast exponent nearest
     /// zero, the scale the slow exponents must stay below; `None` without a split.
     pub fast_gap: Option<f64>,
@@ -112,7 +106,6 @@ impl FloquetResult {
             slow_exponents: Vec::new(),
             stable,
             intervals: None,
-            split_ratio: None,
             fast_gap: None,
             fold_parity_mismatch: false,
         }
@@ -130,9 +123,7 @@ impl FloquetResult {
     /// orbit of period `period` (s); `stable` decided again on both.
     pub fn with_slow(self, slow: Vec<Complex64>, period: f64) -> Self {
         let gamma = slow::fast_gap(&self.multipliers, period);
-        let top = slow.iter().copied().max_by(|a, b| a.re.total_cmp(&b.re));
         let mut r = Self {
-            split_ratio: top.map(|l| slow::ratio_to_gap(l, gamma)),
             fast_gap: Some(gamma),
             slow_exponents: slow,
             ..self
@@ -224,10 +215,23 @@ impl FloquetResult {
             .count()
     }
 
+    /// Estimated relative error of the slow exponent with the largest real part (the one
+    /// that decides the slow part of the verdict): `|λ|/γ`, `γ` the fast exponent nearest
+    /// zero ([`FloquetResult::fast_gap`]). Above [`SPLIT_RATIO_LIMIT`] the time scales are
+    /// not separated (a fast multiplier near +1) and the verdict is uncertain. `None`
+    /// without a split.
+    pub fn split_ratio(&self) -> Option<f64> {
+        let gap = self.fast_gap?;
+        self.slow_exponents
+            .iter()
+            .max_by(|a, b| a.re.total_cmp(&b.re))
+            .map(|l| slow::ratio_to_gap(*l, gap))
+    }
+
     /// Whether the time scales of the split are too close for a sure verdict (see
     /// [`FloquetResult::split_ratio`]).
     pub fn split_uncertain(&self) -> bool {
-        self.split_ratio.is_some_and(|r| r > SPLIT_RATIO_LIMIT)
+        self.split_ratio().is_some_and(|r| r > SPLIT_RATIO_LIMIT)
     }
 
     /// Largest multiplier modulus.
@@ -406,6 +410,13 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
         .filter(|m| m.norm() > 1.0 + UNIT_CIRCLE_TOL)
         .min_by(|a, b| a.norm().total_cmp(&b.norm()))?;
     Some(BifurcationKind::of_multiplier(*crossing))
+}
+
+/// Whether the monodromy product confirms a fold between two neighbouring points with
+/// results `before` and `after`: its own count of real multipliers above +1 (without the
+/// fold-parity correction) changes between them.
+pub fn confirms_fold(before: &FloquetResult, after: &FloquetResult) -> bool {
+    before.product_real_above_one() != after.product_real_above_one()
 }
 
 /// Multipliers of `solution`, a converged point of `hb`, by `evaluate` (a

@@ -5,11 +5,13 @@
 //! A coupled thermo-mechanical orbit has two time scales: the vibration period `P`
 //! (milliseconds to a tenth of a second) and thermal time constants of seconds to hours.
 //! Its thermal multipliers `exp(P·λ)` sit within about `P·|λ| ≈ 1e-6` of +1, which no
-//! product of interval exponentials resolves (its error is of order 1e-4 near the circle),
-//! and at a fold of the coupled branch it is one of these slow, mixed thermo-mechanical
-//! multipliers that passes +1 — not a mechanical one. The mechanical multipliers cross +1
-//! where the *frozen-temperature* problem folds, which is elsewhere. Read off the full
-//! product, the stable flag therefore missed the coupled folds (see `docs/stability.md`).
+//! product of interval exponentials resolves (its error is of order 1e-4 near the circle).
+//! A fold of the coupled branch driven by the thermal feedback would pass one of these
+//! slow multipliers through +1, unseen by the product. Measured on the dual rotor they do
+//! not (the slowest stays at −3.40e-5 1/s across every fold of the paper runs; the folds
+//! the product misses there belong to the truncated balance, see `docs/stability.md`),
+//! but the exponents are recorded so that a user can see it, and the product no longer
+//! carries 66 unresolvable multipliers.
 //!
 //! ## What
 //! With the vibration fast and the temperatures slow, the slow motion follows the
@@ -38,7 +40,7 @@
 //! ## Limits
 //! The reduction neglects `λ` against the fast exponents: its relative error is of order
 //! `|λ|/γ` with `γ = min |ln μ_fast| / P` the fast exponent nearest zero
-//! ([`split_ratio`]). It is exact in the limit at a coupled fold (`λ → 0`) and fails near a
+//! ([`fast_gap`], [`ratio_to_gap`]). It is exact in the limit at a coupled fold (`λ → 0`) and fails near a
 //! fold of the frozen-temperature problem (`γ → 0`, `J_rr` singular, one `λ` through
 //! infinity), where a fast and a slow multiplier interact; the sweep reports such points.
 
@@ -119,7 +121,7 @@ pub fn thermal_schur_with(
         }
     };
     let k_t = to_mat(&parts.linear.thermal_conductance);
-    let q_dofs = hb.nonlinear_dofs().therm.clone();
+    let q_dofs = &hb.nonlinear_dofs().therm;
     if q_dofs.is_empty() {
         // no coupling: the thermal means see their conductance alone
         return Ok(k_t);
@@ -129,8 +131,8 @@ pub fn thermal_schur_with(
         .map_err(|e| setup(format!("harmonic-balance Jacobian: {e}")))?;
 
     let nq = q_dofs.len();
-    // W = (J⁻¹)_{m q}: the thermal mean coefficients of J⁻¹ e_q
-    let mut w = Mat::<f64>::zeros(n_t, nq);
+    // W_qq = E_qᵀ (J⁻¹)_{m q}: the nonlinear thermal DoFs' mean coefficients of J⁻¹ e_q
+    let mut w_qq = Mat::<f64>::zeros(nq, nq);
     let mut rhs = vec![0.0; coeffs.len()];
     for (k, &dq) in q_dofs.iter().enumerate() {
         rhs.iter_mut().for_each(|v| *v = 0.0);
@@ -138,11 +140,10 @@ pub fn thermal_schur_with(
         let (x, _) = fact
             .solve(&rhs, 0.0)
             .map_err(|e| setup(format!("harmonic-balance Jacobian: {e}")))?;
-        for i in 0..n_t {
-            w[(i, k)] = x[(n_m + i) * nc];
+        for (i, &di) in q_dofs.iter().enumerate() {
+            w_qq[(i, k)] = x[(n_m + di) * nc];
         }
     }
-    let w_qq = Mat::from_fn(nq, nq, |i, j| w[(q_dofs[i], j)]);
     // J_mm: the thermal means' own block (conductance and the nonlinear heat terms'
     // dependence on the mean temperatures, the vibration held)
     let p = hb.nonlinear_dofs().mech.len();
@@ -195,11 +196,6 @@ pub fn ratio_to_gap(lambda: Complex64, gap: f64) -> f64 {
     } else {
         lambda.norm() / gap
     }
-}
-
-/// [`ratio_to_gap`] for the fast multipliers `fast` of an orbit of period `period`.
-pub fn split_ratio(lambda: Complex64, fast: &[Complex64], period: f64) -> f64 {
-    ratio_to_gap(lambda, fast_gap(fast, period))
 }
 
 fn to_mat(d: &DenseMatrix) -> Mat<f64> {
