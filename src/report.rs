@@ -14,6 +14,7 @@ use crate::campaign::Manifest;
 use crate::record::reader::{Recording, read_recording};
 use crate::record::types::PointRecord;
 use crate::stability::BifurcationKind;
+use crate::study::StudySettings;
 
 /// Dynamic node the paper plots (3# inter-shaft bearing, LP node 8).
 const NODE: u32 = 8;
@@ -24,6 +25,8 @@ const OMEGA_620: f64 = 620.0;
 #[derive(Clone, Debug)]
 pub struct RunFindings {
     pub name: String,
+    /// Values set on the model file (`path=value, …`; empty when none).
+    pub set: String,
     pub flow_l_min: f64,
     pub cooling_c: f64,
     pub points: usize,
@@ -156,6 +159,10 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
         });
     RunFindings {
         name: name.to_string(),
+        set: study
+            .as_ref()
+            .map(StudySettings::set_summary)
+            .unwrap_or_default(),
         flow_l_min: study.as_ref().map_or(f64::NAN, |s| s.flow_l_min),
         cooling_c: study.as_ref().map_or(f64::NAN, |s| s.cooling_temp_c),
         points: pts.len(),
@@ -262,6 +269,9 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
             r.assessed,
             bif
         );
+    }
+    for r in runs.iter().filter(|r| !r.set.is_empty()) {
+        let _ = writeln!(s, "\n{}: model values set: {}", r.name, r.set);
     }
     let _ = writeln!(
         s,

@@ -17,7 +17,7 @@ use thiserror::Error;
 
 use crate::coupled::{CoupledError, CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::hb::{Basis, Ratio};
-use crate::model::{Dir, Model};
+use crate::model::{Dir, Model, ModelSet};
 use crate::record::types::{BearingInfo, DynamicNode, RunInfo, ThermalNode};
 use crate::stability::{
     CraigBampton, ExpSip, IntervalMap, Reduced, ReductionSettings, Sip, StabilityError,
@@ -96,6 +96,12 @@ pub struct StudySettings {
     pub reduction_cutoff_rad_s: f64,
     /// AFT samples per period; `None` chooses from the basis.
     pub aft_samples: Option<usize>,
+    /// Values of the model file set by path before it is validated (`[set]` in a
+    /// campaign, `--set PATH=VALUE` on the command line; see [`crate::model::set`]), e.g.
+    /// `"thermal.bearings[2#].f_v" = 3.0`. Empty by default; absent from the settings TOML
+    /// when empty.
+    #[serde(skip_serializing_if = "ModelSet::is_empty")]
+    pub set: ModelSet,
 }
 
 impl Default for StudySettings {
@@ -117,6 +123,7 @@ impl Default for StudySettings {
             interval_map: IntervalMap::Exponential,
             reduction_cutoff_rad_s: ReductionSettings::default().cutoff_rad_s,
             aft_samples: None,
+            set: ModelSet::new(),
         }
     }
 }
@@ -152,6 +159,19 @@ impl StudySettings {
             })
     }
 
+    /// The values set on the model file as `path=value` parts joined by `, ` (empty when
+    /// none): how figures and reports label a run of a parameter study.
+    pub fn set_summary(&self) -> String {
+        self.set
+            .iter()
+            .map(|(path, value)| match value {
+                toml::Value::String(s) => format!("{path}={s}"),
+                other => format!("{path}={other}"),
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+
     /// The settings as (key, value) pairs for a recording's metadata, in the order and
     /// spelling of their TOML form (generated from it, so a new setting appears without a
     /// list to keep), plus `model` (`built-in` or the file's path).
@@ -159,7 +179,7 @@ impl StudySettings {
         let mut kv: Vec<(String, String)> = toml::Table::try_from(self)
             .unwrap_or_default()
             .into_iter()
-            .filter(|(k, _)| k != "model")
+            .filter(|(k, _)| k != "model" && k != "set")
             .map(|(k, v)| {
                 let text = match v {
                     toml::Value::String(s) => s,
@@ -168,6 +188,13 @@ impl StudySettings {
                 (k, text)
             })
             .collect();
+        for (path, value) in &self.set {
+            let text = match value {
+                toml::Value::String(s) => s.clone(),
+                other => other.to_string(),
+            };
+            kv.push((format!("set.{path}"), text));
+        }
         kv.push((
             "model".to_string(),
             self.model
@@ -258,16 +285,15 @@ pub struct SweepProblem {
 }
 
 impl SweepProblem {
-    /// Builds the problem from settings (reads the model file if one is given).
+    /// Builds the problem from settings: reads the model file if one is given (else the
+    /// built-in one) and applies the settings' `set` values to it.
     pub fn new(settings: &StudySettings) -> Result<Self, StudyError> {
-        let model = match &settings.model {
-            Some(path) => Model::from_file(path)?,
-            None => Model::builtin()?,
-        };
+        let model = Model::load(settings.model.as_deref(), &settings.set)?;
         Self::with_model(settings, model)
     }
 
-    /// Builds the problem for an already parsed model.
+    /// Builds the problem for an already parsed model, taken as it is (the settings'
+    /// `set` values are not applied again: a recording embeds the edited model).
     pub fn with_model(settings: &StudySettings, model: Model) -> Result<Self, StudyError> {
         check_settings(settings)?;
         let study = StudyOverrides {

@@ -153,13 +153,22 @@ fn run_settings(entry: &ManifestEntry, run: Option<&RunInfo>) -> Option<StudySet
 /// Legend label of a run from its settings (manifest first, then the recording's).
 fn run_label(entry: &ManifestEntry, run: Option<&RunInfo>) -> String {
     match run_settings(entry, run) {
-        Some(s) if !s.thermal => format!("{}: no thermal coupling", entry.name),
-        Some(s) => format!(
-            "{}: flow {} L/min, cooling {} °C",
-            entry.name,
-            tick(&s.flow_l_min),
-            tick(&s.cooling_temp_c)
-        ),
+        Some(s) => {
+            let base = if s.thermal {
+                format!(
+                    "{}: flow {} L/min, cooling {} °C",
+                    entry.name,
+                    tick(&s.flow_l_min),
+                    tick(&s.cooling_temp_c)
+                )
+            } else {
+                format!("{}: no thermal coupling", entry.name)
+            };
+            match s.set_summary() {
+                set if set.is_empty() => base,
+                set => format!("{base}, {set}"),
+            }
+        }
         None => entry.name.clone(),
     }
 }

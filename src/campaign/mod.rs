@@ -24,6 +24,18 @@
 //! cooling_temp_c = [25.0, 50.0]
 //! ```
 //!
+//! Any value of the model file can be set by its path, in `[defaults]`, a run or the grid
+//! (`set` tables merge path by path: defaults, then grid, then run; see
+//! [`crate::model::set`] for the paths); each run's edited model is validated before
+//! anything runs, and the values are recorded in the manifest's settings, the
+//! recording's settings and its embedded model:
+//!
+//! ```toml
+//! [grid]
+//! name = "fv{thermal.bearings[2#].f_v}"
+//! set."thermal.bearings[2#].f_v" = [2.0, 3.0, 4.0]
+//! ```
+//!
 //! * runs execute in parallel, `threads` at a time (default: one per core), each on its
 //!   own thread with its own rayon pool of `threads / concurrent runs` threads (one each
 //!   when there are at least as many runs as threads), so that one run's parallel parts
@@ -215,7 +227,15 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
     for (origin, name, table) in gridded.chain(listed) {
         let mut merged = spec.defaults.clone();
         for (k, v) in table.iter().filter(|(k, _)| k.as_str() != "name") {
-            merged.insert(k.clone(), v.clone());
+            // `set` tables merge path by path (defaults, then grid, then run)
+            match (merged.get_mut(k), v) {
+                (Some(toml::Value::Table(base)), toml::Value::Table(more)) if k == "set" => {
+                    base.extend(more.iter().map(|(p, x)| (p.clone(), x.clone())));
+                }
+                _ => {
+                    merged.insert(k.clone(), v.clone());
+                }
+            }
         }
         let name = name.ok_or_else(|| error(&origin, "missing `name` (a string)".into()))?;
         if name.is_empty() || name.contains(['/', '\\']) || runs.iter().any(|r| r.name == name) {
@@ -247,26 +267,52 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
     Ok((spec, runs, out))
 }
 
+/// The values of one grid axis with their text for run names.
+type Axis = Vec<(toml::Value, String)>;
+
 /// The runs of a `[grid]` table: `(name, settings)` for every combination of the values
 /// of its keys, the keys in alphabetical order with the first varying slowest. Each key is
 /// a [`StudySettings`] key with a non-empty array of numbers, strings or booleans; the
 /// optional `name` is a template whose `{key}` parts are replaced by that run's values
 /// (default: `key=value` parts joined by `_`, e.g. `cooling_temp_c=25_flow_l_min=2`).
-/// Numbers print without a trailing `.0` (20.0 → `20`, 2.5 → `2.5`). The error names the
-/// key.
+/// Numbers print without a trailing `.0` (20.0 → `20`, 2.5 → `2.5`). A `set` table in the
+/// grid gives one axis per model-file path (`set."thermal.bearings[2#].f_v" = [2.0, 3.0]`,
+/// template part `{thermal.bearings[2#].f_v}`), set on the run's model file (see
+/// [`crate::model::set`]). The error names the key.
 pub fn expand_grid(grid: &toml::Table) -> Result<Vec<(String, toml::Table)>, String> {
     let template = match grid.get("name") {
         None => None,
         Some(toml::Value::String(t)) => Some(t.as_str()),
         Some(_) => return Err("grid.name: must be a string (a template)".into()),
     };
-    let mut axes: Vec<(&str, Vec<(toml::Value, String)>)> = Vec::new();
-    for (key, values) in grid.iter().filter(|(k, _)| k.as_str() != "name") {
+    // `set."path" = [..]`: one axis per path of the model file, named by the path
+    let set_axes = match grid.get("set") {
+        None => Vec::new(),
+        Some(toml::Value::Table(t)) => t.iter().map(|(p, v)| (p.as_str(), v, true)).collect(),
+        Some(_) => {
+            return Err(
+                "grid.set: must be a table of model-file paths, each with an array of values"
+                    .into(),
+            );
+        }
+    };
+    let study_axes = grid
+        .iter()
+        .filter(|(k, _)| k.as_str() != "name" && k.as_str() != "set")
+        .map(|(k, v)| (k.as_str(), v, false));
+    // (key, is a model-file path, values with their text)
+    let mut axes: Vec<(&str, bool, Axis)> = Vec::new();
+    for (key, values, is_set) in study_axes.chain(set_axes) {
+        let key_text = if is_set {
+            format!("set.\"{key}\"")
+        } else {
+            key.to_string()
+        };
         let toml::Value::Array(values) = values else {
-            return Err(format!("grid.{key}: must be an array of values"));
+            return Err(format!("grid.{key_text}: must be an array of values"));
         };
         if values.is_empty() {
-            return Err(format!("grid.{key}: has no values"));
+            return Err(format!("grid.{key_text}: has no values"));
         }
         let mut axis = Vec::with_capacity(values.len());
         for v in values {
@@ -278,13 +324,13 @@ pub fn expand_grid(grid: &toml::Table) -> Result<Vec<(String, toml::Table)>, Str
                 toml::Value::Boolean(b) => b.to_string(),
                 _ => {
                     return Err(format!(
-                        "grid.{key}: values must be numbers, strings or booleans"
+                        "grid.{key_text}: values must be numbers, strings or booleans"
                     ));
                 }
             };
             axis.push((v.clone(), text));
         }
-        axes.push((key.as_str(), axis));
+        axes.push((key, is_set, axis));
     }
     if axes.is_empty() {
         return Err("grid: no keys with values".into());
@@ -297,7 +343,7 @@ pub fn expand_grid(grid: &toml::Table) -> Result<Vec<(String, toml::Table)>, Str
                 return Err(format!("grid.name: unclosed `{{` in {t:?}"));
             };
             let key = &rest[open + 1..open + close];
-            if !axes.iter().any(|(k, _)| *k == key) {
+            if !axes.iter().any(|(k, _, _)| *k == key) {
                 return Err(format!(
                     "grid.name: {{{key}}} in {t:?} is not a key of the grid"
                 ));
@@ -305,16 +351,25 @@ pub fn expand_grid(grid: &toml::Table) -> Result<Vec<(String, toml::Table)>, Str
             rest = &rest[open + close + 1..];
         }
     }
-    let count: usize = axes.iter().map(|(_, a)| a.len()).product();
+    let count: usize = axes.iter().map(|(_, _, a)| a.len()).product();
     let mut runs = Vec::with_capacity(count);
     for mut index in (0..count).rev() {
         // mixed radix, the last key fastest; built backwards, reversed below
         let mut table = toml::Table::new();
         let mut picked = Vec::with_capacity(axes.len());
-        for (key, axis) in axes.iter().rev() {
+        for (key, is_set, axis) in axes.iter().rev() {
             let (value, text) = &axis[index % axis.len()];
             index /= axis.len();
-            table.insert((*key).to_string(), value.clone());
+            if *is_set {
+                if let toml::Value::Table(set) = table
+                    .entry("set")
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                {
+                    set.insert((*key).to_string(), value.clone());
+                }
+            } else {
+                table.insert((*key).to_string(), value.clone());
+            }
             picked.push((*key, text.as_str()));
         }
         picked.reverse();

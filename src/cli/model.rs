@@ -17,6 +17,9 @@ pub enum ModelCommand {
     Check {
         /// The model file (TOML).
         file: PathBuf,
+        /// Set a value by its path before checking, as `sweep --set` does (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE", value_parser = crate::model::set::parse_assignment)]
+        set: Vec<(String, toml::Value)>,
     },
     /// Print the built-in dual-rotor model file (a documented starting point to copy; every
     /// key is described in docs/model-reference.md, or `tmrotor model reference`).
@@ -39,8 +42,9 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
     match cmd {
         ModelCommand::Show => out.write_all(BUILTIN_TOML.as_bytes())?,
         ModelCommand::Reference => out.write_all(crate::model::reference::markdown().as_bytes())?,
-        ModelCommand::Check { file } => {
-            let model = Model::from_file(file)?;
+        ModelCommand::Check { file, set } => {
+            let set: crate::model::ModelSet = set.iter().cloned().collect();
+            let model = Model::load(Some(file), &set)?;
             // what a sweep builds, so every check a sweep makes: the assembly, the
             // `[thermal]` table's fields and ranges, its network, and the checks between
             // the mechanical and thermal tables (one validation path)

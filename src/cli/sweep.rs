@@ -26,11 +26,20 @@ pub struct StudyArgs {
     #[arg(long = "flow", value_name = "L_MIN")]
     pub flow_l_min: Option<f64>,
     /// Lubricant cooling temperature (°C) [default: 25].
-    #[arg(long = "cooling-temp", value_name = "C")]
+    #[arg(long = "cooling-temp", value_name = "C", allow_negative_numbers = true)]
     pub cooling_temp_c: Option<f64>,
     /// Ambient temperature (°C) [default: 25].
-    #[arg(long = "ambient-temp", value_name = "C")]
+    #[arg(long = "ambient-temp", value_name = "C", allow_negative_numbers = true)]
     pub ambient_temp_c: Option<f64>,
+    /// Set a value of the model file by its path before it is checked, e.g.
+    /// `--set 'thermal.bearings[2#].f_v=3.0'` (repeatable; the value is TOML; see
+    /// docs/model-reference.md, "Setting values by path").
+    #[arg(long = "set", value_name = "PATH=VALUE", value_parser = parse_set)]
+    pub set: Vec<(String, toml::Value)>,
+}
+
+fn parse_set(text: &str) -> Result<(String, toml::Value), String> {
+    crate::model::set::parse_assignment(text)
 }
 
 impl StudyArgs {
@@ -49,6 +58,7 @@ impl StudyArgs {
         if let Some(v) = self.ambient_temp_c {
             s.ambient_temp_c = v;
         }
+        s.set.extend(self.set.iter().cloned());
         Ok(s)
     }
 }

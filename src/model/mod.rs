@@ -11,6 +11,7 @@
 //! and an optional `[thermal]` table that this layer keeps opaque
 //! ([`Model::thermal`]) for the thermal network. The format is documented key by key in
 //! `docs/model-reference.md`, generated from [`reference`] (`tmrotor model reference`);
+//! values can be set by path before validation ([`mod@set`], [`Model::load`]);
 //! the built-in file `models/dual_rotor.toml` (`tmrotor model show`) gives the paper's
 //! sources in its comments; the serde structures are in [`mod@file`].
 //!
@@ -49,9 +50,11 @@ pub mod error;
 pub mod file;
 pub mod reference;
 mod reference_keys;
+pub mod set;
 pub mod validate;
 
 pub use assembly::{Assembly, LinearBearing, RotorGyro, Unbalance};
 pub use error::{InvalidKind, ModelError};
 pub use file::ModelFile;
+pub use set::ModelSet;
 pub use validate::{BUILTIN_NAME, BUILTIN_TOML, DOF_PER_NODE, Dir, Model, dof};

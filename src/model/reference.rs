@@ -121,5 +121,29 @@ pub fn markdown() -> String {
             ));
         }
     }
+    out.push_str(SET_SECTION);
     out
 }
+
+/// How to set values by path (the `set` of campaigns, `--set` of the command line).
+const SET_SECTION: &str = "\n## Setting values by path\n\n\
+Any value of a model file can be set without editing the file: `tmrotor sweep --set\n\
+PATH=VALUE` (repeatable; also `tmrotor model check FILE --set …`), or a `set` table in a\n\
+campaign's `[defaults]`, a run, or its `[grid]` (an array of values there: one run per\n\
+value). The path joins TOML keys with dots; an array of tables is indexed from 0 or by the\n\
+entry's `name` (or `id`):\n\n\
+```toml\n\
+[grid]                                   # a campaign: three runs\n\
+name = \"fv{thermal.bearings[2#].f_v}\"\n\
+set.\"thermal.bearings[2#].f_v\" = [2.0, 3.0, 4.0]\n\n\
+[[runs]]\n\
+name = \"soft\"\n\
+set.\"damping.damping_ratio\" = 0.03\n\
+set.\"bearings[1#].initial_clearance_m\" = 5e-6\n\
+```\n\n\
+Every table on the path must exist; the last key may be absent when the table allows it\n\
+(an optional key). The edited file is checked as a whole, exactly as if it had been\n\
+written so, and a campaign checks every run's edited model before anything runs; errors\n\
+name the path and the reason. The values are recorded in the recording's settings\n\
+(`set.PATH`), the campaign manifest and the figure legends, and the recording embeds the\n\
+edited model file (comments kept), so replay rebuilds exactly the model that ran.\n";

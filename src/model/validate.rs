@@ -66,6 +66,31 @@ impl Model {
         Self::from_str(&text, &name)
     }
 
+    /// Reads the model file `path` (the built-in model when `None`), applies the values of
+    /// `set` ([`super::set`]) and validates the result; the model's `text` is the edited
+    /// text. Errors name the file, the path and the reason.
+    pub fn load(path: Option<&Path>, set: &super::ModelSet) -> Result<Self, ModelError> {
+        let (text, name) = match path {
+            Some(path) => {
+                let name = path.display().to_string();
+                let text = std::fs::read_to_string(path).map_err(|cause| ModelError::Io {
+                    file: name.clone(),
+                    cause,
+                })?;
+                (text, name)
+            }
+            None => (BUILTIN_TOML.to_string(), BUILTIN_NAME.to_string()),
+        };
+        let text = super::set::apply(&text, &name, set)?;
+        // errors of the edited file say so (the value may come from `set`, not the file)
+        let name = if set.is_empty() {
+            name
+        } else {
+            format!("{name} (edited by `set`)")
+        };
+        Self::from_str(&text, &name)
+    }
+
     /// Parses and validates model text; `name` is used in error messages.
     #[allow(clippy::should_implement_trait)]
     pub fn from_str(text: &str, name: &str) -> Result<Self, ModelError> {
