@@ -80,6 +80,7 @@ fn structs() -> Vec<(&'static str, BTreeSet<&'static str>)> {
         ("thermal.disks", fields::<ts::DiskSpec>()),
         ("thermal.housings", fields::<ts::HousingSpec>()),
         ("thermal.bearings", fields::<ts::BearingThermalSpec>()),
+        ("thermal.bearings.heat_split", fields::<ts::HeatSplit>()),
     ]
 }
 

@@ -5,6 +5,7 @@
 use std::f64::consts::PI;
 use tmrotor::bearing::{ContactLaw, HertzBearing};
 use tmrotor::thermal::convection::shaft_ambient_nusselt;
+use tmrotor::thermal::spec::HeatSplit;
 use tmrotor::thermal::{BearingLoad, ThermalError, ThermalEval, ThermalNetwork, ThermalSpec};
 
 fn spec() -> ThermalSpec {
@@ -244,7 +245,88 @@ fn zero_speed_means_no_heat_and_ambient_temperatures() {
 fn nonlinear_thermal_force_derivatives_match_finite_differences() {
     let mut s = spec();
     s.flow_l_min = 1.0;
+    check_derivatives(&s);
+    // the heat shared between all four nodes of each bearing
+    for b in &mut s.bearings {
+        b.heat_split = HeatSplit {
+            elements: 0.4,
+            inner: 0.2,
+            outer: 0.3,
+            lubricant: 0.1,
+        };
+    }
+    check_derivatives(&s);
+}
+
+/// Where the heat enters moves the temperatures but not the balance: with the heat on the
+/// rings (Bossmanns and Tu's split) the network still removes exactly what the bearings
+/// generate, the rings run hotter and the rolling elements cooler than with the heat at the
+/// elements (the default); a split that does not sum to 1 or has a negative share is refused
+/// with its path.
+#[test]
+fn the_heat_split_moves_temperatures_and_keeps_the_balance() {
+    let loads = representative_loads();
+    let omega = 620.0;
+    let mut s = spec();
+    s.flow_l_min = 2.0;
+    let base = steady(&ThermalNetwork::new(&s).expect("network"), omega, &loads);
+    for b in &mut s.bearings {
+        b.heat_split = HeatSplit {
+            elements: 0.0,
+            inner: 0.5,
+            outer: 0.5,
+            lubricant: 0.0,
+        };
+    }
     let net = ThermalNetwork::new(&s).expect("network");
+    let rings = steady(&net, omega, &loads);
+    let out = net.bearing_outputs(omega, &rings, &loads);
+    let generated: f64 = out.iter().map(|o| o.q_g_w).sum();
+    let removed = net.heat_to_lubricant_flow_w(&rings) + net.heat_to_ambient_w(omega, &rings);
+    assert!(
+        (generated - removed).abs() < 1e-6 * generated,
+        "generated {generated} W, removed {removed} W"
+    );
+    // elements / inner / outer nodes of 1#, 2#, 4# (3# has no housing; its outer ring sits
+    // in the HP shaft)
+    for (b, i) in [(52, 50), (55, 53), (61, 59)] {
+        assert!(
+            rings[b - 1] < base[b - 1],
+            "elements {b}: {} vs {}",
+            rings[b - 1],
+            base[b - 1]
+        );
+        assert!(
+            rings[i - 1] > base[i - 1],
+            "inner {i}: {} vs {}",
+            rings[i - 1],
+            base[i - 1]
+        );
+    }
+    for (split, path) in [
+        (
+            (0.5, 0.5, 0.5, 0.0),
+            "bearings[0].heat_split: the fractions must sum to 1",
+        ),
+        (
+            (1.2, -0.2, 0.0, 0.0),
+            "bearings[0].heat_split.elements: must be a fraction",
+        ),
+    ] {
+        let mut bad = spec();
+        bad.bearings[0].heat_split = HeatSplit {
+            elements: split.0,
+            inner: split.1,
+            outer: split.2,
+            lubricant: split.3,
+        };
+        let err = ThermalNetwork::new(&bad).expect_err("refused").to_string();
+        assert!(err.contains(path), "{err}");
+    }
+}
+
+fn check_derivatives(s: &ThermalSpec) {
+    let net = ThermalNetwork::new(s).expect("network");
     let omega = 550.0;
     let loads = representative_loads();
     let full = steady(&net, omega, &loads);

@@ -79,6 +79,10 @@ pub const TABLES: &[(&str, &str)] = &[
     ("thermal.disks", "`[[thermal.disks]]`"),
     ("thermal.housings", "`[[thermal.housings]]`"),
     ("thermal.bearings", "`[[thermal.bearings]]`: Eqs. 9–17"),
+    (
+        "thermal.bearings.heat_split",
+        "`[thermal.bearings.heat_split]`: where the friction heat enters",
+    ),
 ];
 
 /// Escapes a table cell.

@@ -154,6 +154,8 @@ struct BearingNet {
     inner_contact: ContactResistance,
     outer_contact: ContactResistance,
     palmgren: Palmgren,
+    /// Shares of the friction heat at the local nodes `lb, li, lo, ll`.
+    heat_split: [f64; 4],
     inner_ratio: f64,
     outer_ratio: f64,
     pitch_m: f64,
@@ -439,6 +441,7 @@ impl ThermalNetwork {
                     f_v: b.f_v,
                     pitch_diameter_m: b.pitch_diameter_m,
                 },
+                heat_split: b.heat_split.fractions(),
                 inner_ratio: b.inner_speed_ratio,
                 outer_ratio: b.outer_speed_ratio,
                 pitch_m: b.pitch_diameter_m,
@@ -818,16 +821,22 @@ impl ThermalNetwork {
             lub_link(out, f, c_house, b.area_flank_m2);
         }
 
-        // Friction heat at the rolling elements (Eqs. 9–13), −Q_g on the left-hand side.
+        // Friction heat (Eqs. 9–13), −Q_g on the left-hand side, shared between the
+        // element, ring and lubricant nodes by the bearing's heat split.
         let heat = b.palmgren.heat(load.fb_n.max(0.0), nu_mm, rel);
-        out.g[b.lb] -= heat.total_w();
-        if !derivatives {
-            return;
+        for (node, share) in [b.lb, b.li, b.lo, b.ll].into_iter().zip(b.heat_split) {
+            if share == 0.0 {
+                continue;
+            }
+            out.g[node] -= share * heat.total_w();
+            if !derivatives {
+                continue;
+            }
+            if load.fb_n > 0.0 {
+                out.dg_dfb[node * m + k] -= share * heat.dq_load_d_fb;
+            }
+            out.dg_dt[node * q + b.ll] -= share * heat.dq_visc_d_nu * dnu_mm_dt;
         }
-        if load.fb_n > 0.0 {
-            out.dg_dfb[b.lb * m + k] -= heat.dq_load_d_fb;
-        }
-        out.dg_dt[b.lb * q + b.ll] -= heat.dq_visc_d_nu * dnu_mm_dt;
     }
 
     /// Per-bearing outputs at temperatures `temps` (all nodes).
