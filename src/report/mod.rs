@@ -16,10 +16,16 @@ use crate::record::types::PointRecord;
 use crate::stability::BifurcationKind;
 use crate::study::StudySettings;
 
+pub mod statements;
+pub use statements::{Statement, Verdict};
+
 /// Dynamic node the paper plots (3# inter-shaft bearing, LP node 8).
 const NODE: u32 = 8;
 /// Speed of the paper's temperature and clearance comparisons (rad/s).
 const OMEGA_620: f64 = 620.0;
+/// Thermal nodes of the part holding each outer ring: housing seats of 1#, 2#, 4#, and the
+/// HP shaft segment of 3# (the built-in model's layout table).
+const SEAT_NODES: [u32; 4] = [42, 45, 37, 48];
 
 /// What one run shows.
 #[derive(Clone, Debug)]
@@ -44,6 +50,10 @@ pub struct RunFindings {
     pub max_abs_dv_um: Vec<f64>,
     /// Point nearest 620 rad/s (first along the branch).
     pub at_620: Option<At620>,
+    /// Lowest and highest mean temperature over all thermal nodes and all points (°C).
+    pub temp_range_c: Option<(f64, f64)>,
+    /// Share of the points where both ball bearings (1#, 2#) have T_b > T_i > T_o.
+    pub ball_order_share: f64,
 }
 
 /// Bearing quantities at the point nearest 620 rad/s.
@@ -58,6 +68,8 @@ pub struct At620 {
     pub inner_c: Vec<f64>,
     pub outer_c: Vec<f64>,
     pub lubricant_c: Vec<f64>,
+    /// Housing seat (1#, 2#, 4#; the HP shaft node holding the outer ring for 3#).
+    pub seat_c: Vec<f64>,
     /// Highest and lowest mean temperature over the bearing nodes (rings, elements,
     /// housings, lubricant: paper nodes 50–66, the ones of the paper's Fig. 14).
     pub max_c: f64,
@@ -153,10 +165,38 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
                 lubricant_c: (0..nb as u32)
                     .map(|k| mean_temp(rec, p, 63 + k).unwrap_or(f64::NAN))
                     .collect(),
+                seat_c: SEAT_NODES
+                    .iter()
+                    .take(nb)
+                    .map(|&id| mean_temp(rec, p, id).unwrap_or(f64::NAN))
+                    .collect(),
                 max_c: means.iter().copied().fold(f64::MIN, f64::max),
                 min_c: means.iter().copied().fold(f64::MAX, f64::min),
             }
         });
+    let temp_range_c = pts
+        .iter()
+        .flat_map(|p| p.temperatures.iter().map(|t| t.mean_c))
+        .fold(None, |acc: Option<(f64, f64)>, t| {
+            Some(acc.map_or((t, t), |(lo, hi)| (lo.min(t), hi.max(t))))
+        });
+    let ball_ok = |p: &PointRecord| {
+        (0..2u32).all(|k| {
+            match (
+                mean_temp(rec, p, 52 + 3 * k),
+                mean_temp(rec, p, 50 + 3 * k),
+                mean_temp(rec, p, 51 + 3 * k),
+            ) {
+                (Some(b), Some(i), Some(o)) => b > i && i > o,
+                _ => false,
+            }
+        })
+    };
+    let ball_order_share = if pts.is_empty() {
+        0.0
+    } else {
+        pts.iter().filter(|p| ball_ok(p)).count() as f64 / pts.len() as f64
+    };
     RunFindings {
         name: name.to_string(),
         set: study
@@ -178,6 +218,8 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
         unstable: pts.iter().filter(|p| p.stable == Some(false)).count(),
         max_abs_dv_um,
         at_620,
+        temp_range_c,
+        ball_order_share,
     }
 }
 
@@ -208,9 +250,9 @@ fn count(r: &RunFindings, kind: BifurcationKind) -> usize {
     r.bifurcations.iter().filter(|(k, _)| *k == kind).count()
 }
 
-fn find(runs: &[RunFindings], flow: f64, cooling: f64) -> Option<&RunFindings> {
-    runs.iter()
-        .find(|r| (r.flow_l_min - flow).abs() < 1e-9 && (r.cooling_c - cooling).abs() < 1e-9)
+/// Text for a markdown table cell (pipes escaped).
+fn cell(text: &str) -> String {
+    text.replace('|', "\\|")
 }
 
 fn fmt_list(v: &[f64], prec: usize) -> String {
@@ -218,15 +260,6 @@ fn fmt_list(v: &[f64], prec: usize) -> String {
         .map(|x| format!("{x:.prec$}"))
         .collect::<Vec<_>>()
         .join(" / ")
-}
-
-fn order_string(values: &[f64]) -> String {
-    let mut idx: Vec<usize> = (0..values.len()).collect();
-    idx.sort_by(|&a, &b| values[b].total_cmp(&values[a]));
-    idx.iter()
-        .map(|i| format!("δv{}", i + 1))
-        .collect::<Vec<_>>()
-        .join(" > ")
 }
 
 /// The report as markdown. `truncation` is the text of the truncation study, if any.
@@ -280,193 +313,53 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
          pair narrower than the point spacing adds saddle-nodes but no turning point. A \
          point's stable flag comes from its own multipliers."
     );
-    let _ = writeln!(s, "\n## Findings (SPEC §6)\n");
-    let _ = writeln!(s, "| paper | ours | verdict |");
-    let _ = writeln!(s, "|---|---|---|");
-
-    // 1. Peaks move to lower ω and grow with decreasing flow.
-    let mut series: Vec<&RunFindings> = runs
-        .iter()
-        .filter(|r| (r.cooling_c - 25.0).abs() < 1e-9 && r.peaks.len() == 2)
-        .collect();
-    series.sort_by(|a, b| b.flow_l_min.total_cmp(&a.flow_l_min));
-    if series.len() >= 2 {
-        let shift = |k: usize| {
-            series
-                .windows(2)
-                .all(|w| w[1].peaks[k].0 <= w[0].peaks[k].0)
-        };
-        let grow = |k: usize| {
-            series
-                .windows(2)
-                .all(|w| w[1].peaks[k].1 >= w[0].peaks[k].1)
-        };
-        let text = |k: usize| {
-            series
-                .iter()
-                .map(|r| {
-                    format!(
-                        "{}: {:.1} rad/s, {:.2} µm",
-                        r.flow_l_min, r.peaks[k].0, r.peaks[k].1
-                    )
-                })
-                .collect::<Vec<_>>()
-                .join("; ")
-        };
-        let verdict = match (shift(0) && shift(1), grow(0) && grow(1)) {
-            (true, true) => "match",
-            (true, false) | (false, true) => "partial",
-            _ => "differs",
-        };
+    let rows = truncation.map(truncation_rows);
+    let parsed = match &rows {
+        Some(Ok(r)) => Some(r.as_slice()),
+        _ => None,
+    };
+    let scored = statements::statements(runs, parsed);
+    let (m, p, d) = statements::score(&scored);
+    let _ = writeln!(s, "\n## The paper's statements\n");
+    let _ = writeln!(
+        s,
+        "**{m} of {} match**, {p} partial, {d} differ. Verdicts: **match** only when the \
+         paper's number or order holds as stated; **partial** when part of it holds (the \
+         rule is in the row); **differs** otherwise.\n",
+        scored.len()
+    );
+    let _ = writeln!(s, "| # | the paper | paper | ours | verdict |");
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for st in &scored {
         let _ = writeln!(
             s,
-            "| With decreasing flow (20→1 L/min) node 8's two resonant peaks move to lower ω and grow | first peak: {}. second peak: {}. Shift to lower ω: {}; growth: first {}, second {} | {verdict} |",
-            text(0),
-            text(1),
-            if shift(0) && shift(1) {
-                "both peaks"
-            } else {
-                "not monotone"
-            },
-            if grow(0) { "yes" } else { "no" },
-            if grow(1) { "yes" } else { "no" },
+            "| {} | {} | {} | {} | **{}** |",
+            st.id,
+            cell(st.claim),
+            cell(st.paper),
+            cell(&st.ours),
+            st.verdict
         );
     }
-    // 2. |δv| < 1 µm at 20 L/min.
-    if let Some(r) = find(runs, 20.0, 25.0) {
-        let m = r.max_abs_dv_um.iter().copied().fold(0.0, f64::max);
+    let further = statements::orderings(runs);
+    let (m, _, _) = statements::score(&further);
+    let _ = writeln!(s, "\n## Further orderings in the paper's text\n");
+    let _ = writeln!(
+        s,
+        "{m} of {} hold. At the point nearest 620 rad/s of each run.\n",
+        further.len()
+    );
+    let _ = writeln!(s, "| | ordering | paper | ours | verdict |");
+    let _ = writeln!(s, "|---|---|---|---|---|");
+    for st in &further {
         let _ = writeln!(
             s,
-            "| At 20 L/min \\|δv\\| < 1 µm | max \\|δv\\| per bearing over the sweep: {} µm | {} |",
-            fmt_list(&r.max_abs_dv_um, 2),
-            if m < 1.0 {
-                "match"
-            } else {
-                "differs (magnitude; see notes)"
-            }
-        );
-    }
-    // 3. 2 L/min: saddle-nodes, hysteresis, clearance ratio, δv order.
-    if let Some(r) = find(runs, 2.0, 25.0) {
-        let sn = count(r, BifurcationKind::SaddleNode);
-        let _ = writeln!(
-            s,
-            "| At 2 L/min two saddle-node points and a hysteresis interval appear | {} saddle-nodes, {} Neimark–Sacker, {} ω-turning points (hysteresis at each fold pair) | {} |",
-            sn,
-            count(r, BifurcationKind::NeimarkSacker),
-            r.turning_points.len(),
-            if sn == 2 {
-                "match"
-            } else if sn >= 2 {
-                "partial (more folds than the paper)"
-            } else {
-                "differs"
-            }
-        );
-        if let Some(a) = &r.at_620 {
-            let ok = a.clearance_ratio.len() >= 4
-                && a.clearance_ratio[1] > 5.0
-                && a.clearance_ratio[3] > 5.0;
-            let _ = writeln!(
-                s,
-                "| At 2 L/min the effective clearances of 2# and 4# exceed 5× their initial value near 620 rad/s | δe/δ0 at ω = {:.1} rad/s: {} (1#–4#) | {} |",
-                a.omega,
-                fmt_list(&a.clearance_ratio, 2),
-                if ok { "match" } else { "differs" }
-            );
-            let order = order_string(&a.dv_um);
-            let _ = writeln!(
-                s,
-                "| Order δv4 > δv2 > δv1 > δv3 | δv at {:.1} rad/s: {} µm → {} | {} |",
-                a.omega,
-                fmt_list(&a.dv_um, 2),
-                order,
-                if order == "δv4 > δv2 > δv1 > δv3" {
-                    "match"
-                } else if order.ends_with("δv1 > δv3") {
-                    "partial (2#/4# swapped)"
-                } else {
-                    "differs"
-                }
-            );
-            // Temperature order at 620 rad/s (rolling elements of each bearing).
-            let hottest = argmax(&a.elements_c);
-            let coolest = argmin(&a.elements_c);
-            let _ = writeln!(
-                s,
-                "| Temperature order at 620 rad/s: 4# position hottest, 3# coolest | rolling elements 1#–4#: {} °C → hottest {}#, coolest {}# | {} |",
-                fmt_list(&a.elements_c, 1),
-                hottest + 1,
-                coolest + 1,
-                match (hottest == 3, coolest == 2) {
-                    (true, true) => "match",
-                    (false, false) => "differs",
-                    _ => "partial",
-                }
-            );
-            let balls_ok =
-                (0..2).all(|k| a.elements_c[k] > a.inner_c[k] && a.inner_c[k] > a.outer_c[k]);
-            let elements_hottest = (0..2).all(|k| a.elements_c[k] > a.inner_c[k].max(a.outer_c[k]));
-            let _ = writeln!(
-                s,
-                "| Ball bearings: T_b > T_i > T_o | 1#: {:.1} / {:.1} / {:.1} °C; 2#: {:.1} / {:.1} / {:.1} °C (elements / inner / outer) | {} |",
-                a.elements_c[0],
-                a.inner_c[0],
-                a.outer_c[0],
-                a.elements_c[1],
-                a.inner_c[1],
-                a.outer_c[1],
-                if balls_ok {
-                    "match"
-                } else if elements_hottest {
-                    "partial (elements hottest; the ring order differs)"
-                } else {
-                    "differs"
-                }
-            );
-        }
-    }
-    // 4. 1 L/min: more bifurcations; saddle-nodes become Neimark–Sacker points.
-    if let (Some(r1), Some(r2)) = (find(runs, 1.0, 25.0), find(runs, 2.0, 25.0)) {
-        let more = r1.bifurcations.len() > r2.bifurcations.len();
-        let ns = count(r1, BifurcationKind::NeimarkSacker);
-        let _ = writeln!(
-            s,
-            "| At 1 L/min more bifurcation points; the 2 L/min saddle-nodes become Neimark–Sacker points | 1 L/min: {} bifurcations ({} SN, {} PD, {} NS) vs 2 L/min: {} ({} SN, {} PD, {} NS) | {} |",
-            r1.bifurcations.len(),
-            count(r1, BifurcationKind::SaddleNode),
-            count(r1, BifurcationKind::PeriodDoubling),
-            ns,
-            r2.bifurcations.len(),
-            count(r2, BifurcationKind::SaddleNode),
-            count(r2, BifurcationKind::PeriodDoubling),
-            count(r2, BifurcationKind::NeimarkSacker),
-            match (more, ns > 0) {
-                (true, true) =>
-                    "partial (NS points present; which fold turns into which is not identified)",
-                (false, false) => "differs",
-                _ => "partial",
-            }
-        );
-    }
-    // 5. 50 °C cooling.
-    if let Some(r) = find(runs, 2.0, 50.0) {
-        let sn = count(r, BifurcationKind::SaddleNode);
-        let temps = r
-            .at_620
-            .as_ref()
-            .map(|a| format!("{:.1} °C / {:.1} °C", a.max_c, a.min_c))
-            .unwrap_or_else(|| "no point near 620 rad/s".into());
-        let _ = writeln!(
-            s,
-            "| 2 L/min, 50 °C: four saddle-node points, highest ≈ 72 °C, lowest ≈ 50 °C | {} saddle-nodes; highest / lowest mean temperature of the bearing nodes (50–66) at 620 rad/s: {} | {} |",
-            sn,
-            temps,
-            if sn == 4 {
-                "partial (temperatures: see notes)"
-            } else {
-                "partial"
-            }
+            "| {} | {} | {} | {} | {} |",
+            st.id,
+            cell(st.claim),
+            cell(st.paper),
+            cell(&st.ours),
+            st.verdict
         );
     }
     let _ = writeln!(s, "\n## Why results differ\n\n{NOTES}");
@@ -489,16 +382,50 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
     s
 }
 
-fn argmax(v: &[f64]) -> usize {
-    (0..v.len())
-        .max_by(|&a, &b| v[a].total_cmp(&v[b]))
-        .unwrap_or(0)
-}
-
-fn argmin(v: &[f64]) -> usize {
-    (0..v.len())
-        .min_by(|&a, &b| v[a].total_cmp(&v[b]))
-        .unwrap_or(0)
+/// The sensitivity study as markdown: one row per model variant (the values it sets), the
+/// verdict on statements 1–12 (13, the truncation study, does not depend on a campaign
+/// variant) and the key numbers behind them.
+pub fn sensitivity_markdown(runs: &[RunFindings], source: &str) -> String {
+    let groups = statements::sensitivity(runs);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Generated by `tmrotor report {source} --sensitivity`: the runs grouped by the model \
+         values they set, each group scored on the paper's statements 1–12 (✓ match, ~ partial, \
+         ✗ differs, · run missing; the rules are those of the reproduction report).\n"
+    );
+    let _ = writeln!(
+        s,
+        "| values set | 1 | 2 | 3 | 4 | 5 | 6 | 7 | 8 | 9 | 10 | 11 | 12 | match |"
+    );
+    let _ = writeln!(s, "|---|{}---|", "---|".repeat(12));
+    for (set, st) in &groups {
+        let (m, _, _) = statements::score(&st[..12.min(st.len())]);
+        let marks: String = st
+            .iter()
+            .take(12)
+            .map(|x| format!(" {} |", x.verdict.mark()))
+            .collect();
+        let label = if set.is_empty() {
+            "(the model file as it is)".to_string()
+        } else {
+            cell(set)
+        };
+        let _ = writeln!(s, "| {label} |{marks} {m} |");
+    }
+    let _ = writeln!(s, "\nThe numbers behind the verdicts:\n");
+    for (set, st) in &groups {
+        let label = if set.is_empty() {
+            "(the model file as it is)"
+        } else {
+            set.as_str()
+        };
+        let _ = writeln!(s, "* **{}**", cell(label));
+        for x in st.iter().take(12).filter(|x| x.verdict != Verdict::NotRun) {
+            let _ = writeln!(s, "  * {} ({}): {}", x.id, x.verdict, x.ours);
+        }
+    }
+    s
 }
 
 /// Known causes of differences, from the model file's documented choices.
@@ -548,6 +475,8 @@ pub struct TruncationRow {
     pub residual_node8_n: f64,
     pub residual_mech_n: f64,
     pub residual_therm_w: f64,
+    /// RMS of the nonlinear force at node 8 (N), when the CSV has it.
+    pub nonlinear_force_node8_n: Option<f64>,
 }
 
 /// Parses the truncation study's CSV.
@@ -568,6 +497,7 @@ pub fn truncation_rows(csv: &str) -> Result<Vec<TruncationRow>, String> {
         col("residual_mech_rms_n")?,
         col("residual_therm_rms_w")?,
     );
+    let c_nl = col("nonlinear_force_node8_rms_n").ok();
     let mut rows = Vec::new();
     for (n, line) in lines.enumerate() {
         let f: Vec<&str> = line.split(',').collect();
@@ -587,6 +517,7 @@ pub fn truncation_rows(csv: &str) -> Result<Vec<TruncationRow>, String> {
             residual_node8_n: num(cr)?,
             residual_mech_n: num(cm)?,
             residual_therm_w: num(cth)?,
+            nonlinear_force_node8_n: c_nl.map(num).transpose()?,
         });
     }
     Ok(rows)
