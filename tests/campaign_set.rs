@@ -264,3 +264,31 @@ fn the_command_line_sets_values_and_takes_negative_numbers() {
         rec.run.settings
     );
 }
+
+#[test]
+fn an_edited_model_file_runs_again_on_resume() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("rotor.toml");
+    std::fs::write(&model, tmrotor::model::BUILTIN_TOML).expect("model");
+    let file = write(
+        dir.path(),
+        "output_dir = \"out\"\n[defaults]\nmodel = \"rotor.toml\"\norder = 1\n\
+         omega_start = 400.0\nomega_end = 401.0\nmax_points = 2\nstability = false\n\
+         [[runs]]\nname = \"a\"\n",
+    );
+    let quiet = |_: campaign::Event<'_>| {};
+    let m = campaign::run(&file, Some(1), None, None, &quiet).expect("campaign");
+    assert_eq!(m.runs[0].status, "completed");
+    assert_eq!(m.runs[0].model_sha256.len(), 64);
+    let skip = |file: &Path| campaign::plan(file, None).expect("plan").0[0].skip;
+    assert!(skip(&file), "unchanged: skipped");
+    // the same settings, another model text: run again
+    let edited =
+        tmrotor::model::BUILTIN_TOML.replace("damping_ratio = 0.0325", "damping_ratio = 0.04");
+    assert_ne!(edited, tmrotor::model::BUILTIN_TOML);
+    std::fs::write(&model, edited).expect("model");
+    assert!(!skip(&file), "edited model: runs again");
+    let again = campaign::run(&file, Some(1), None, None, &quiet).expect("campaign");
+    assert_ne!(again.runs[0].model_sha256, m.runs[0].model_sha256);
+    assert!(skip(&file));
+}

@@ -93,6 +93,9 @@ pub struct CampaignFile {
 pub struct CampaignRun {
     pub name: String,
     pub settings: StudySettings,
+    /// SHA-256 of the run's model text after `set` (filled when the runs are checked
+    /// before a campaign starts; empty from [`load`]).
+    pub model_sha256: String,
 }
 
 /// Errors of a campaign.
@@ -160,6 +163,11 @@ pub struct ManifestEntry {
     pub sha256: String,
     pub bifurcations: Vec<String>,
     pub settings: toml::Table,
+    /// SHA-256 of the model file the run used, after its `set` values (the text its
+    /// recording embeds): a run is complete only for this model; absent in older manifests,
+    /// whose runs are therefore run again.
+    #[serde(default)]
+    pub model_sha256: String,
 }
 
 /// The manifest file.
@@ -252,7 +260,11 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
                 settings.model = Some(base.join(m));
             }
         }
-        runs.push(CampaignRun { name, settings });
+        runs.push(CampaignRun {
+            name,
+            settings,
+            model_sha256: String::new(),
+        });
     }
     let out = match &spec.output_dir {
         Some(d) if d.is_relative() => base.join(d),
@@ -496,12 +508,14 @@ fn prepare(campaign_path: &Path, shard: Option<(usize, usize)>) -> Result<Prepar
         .filter(|(p, _)| shard.is_none_or(|(i, n)| p % n == i))
         .map(|(_, r)| r)
         .collect();
-    for r in &runs {
-        SweepProblem::new(&r.settings).map_err(|e| CampaignError::Invalid {
+    let mut runs = runs;
+    for r in &mut runs {
+        let problem = SweepProblem::new(&r.settings).map_err(|e| CampaignError::Invalid {
             file: campaign_path.display().to_string(),
             run: r.name.clone(),
             reason: e.to_string(),
         })?;
+        r.model_sha256 = crate::record::convert::sha256_hex(&problem.model.text);
     }
     Ok(Prepared {
         runs,
@@ -517,16 +531,19 @@ fn previous_entry<'m>(previous: &'m Manifest, name: &str) -> Option<&'m Manifest
 }
 
 /// The earlier entry `prev` when its run is complete and need not run again: status
-/// `completed`, the same `settings`, and its recording at `rec_path` unchanged (the
-/// checksum the manifest recorded).
+/// `completed`, the same `settings`, the same model text (`model_sha256`: an edited model
+/// file runs again), and its recording at `rec_path` unchanged (the checksum the manifest
+/// recorded).
 fn completed_before<'m>(
     prev: Option<&'m ManifestEntry>,
     settings: &toml::Table,
+    model_sha256: &str,
     rec_path: &Path,
 ) -> Option<&'m ManifestEntry> {
     let prev = prev?;
     (prev.status == "completed"
         && prev.settings == *settings
+        && prev.model_sha256 == model_sha256
         && sha256_file(rec_path).ok().as_deref() == Some(prev.sha256.as_str()))
     .then_some(prev)
 }
@@ -571,7 +588,7 @@ pub fn plan(
                 run: r.clone(),
                 position: shard.map_or(k, |(i, n)| i + k * n),
                 previous: prev.map(|e| e.status.clone()),
-                skip: completed_before(prev, &settings, &rec_path).is_some(),
+                skip: completed_before(prev, &settings, &r.model_sha256, &rec_path).is_some(),
             }
         })
         .collect();
@@ -639,7 +656,7 @@ pub fn run(
         let (rec_path, settings_table) = recording_and_settings(r, &out);
         // Resume: skip a completed run whose recording is unchanged.
         let prev = previous_entry(&previous, &r.name);
-        if let Some(prev) = completed_before(prev, &settings_table, &rec_path) {
+        if let Some(prev) = completed_before(prev, &settings_table, &r.model_sha256, &rec_path) {
             if let Ok(mut m) = manifest.lock() {
                 m.runs[k] = prev.clone();
             }
@@ -669,6 +686,7 @@ pub fn run(
         };
         let entry = ManifestEntry {
             settings: settings_table,
+            model_sha256: r.model_sha256.clone(),
             ..entry
         };
         if let Ok(mut m) = manifest.lock() {
