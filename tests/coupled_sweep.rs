@@ -231,8 +231,16 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
 fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
     use tmrotor::continuation::{Continuation, ContinuationOptions, RejectReason, StepOutcome};
     use tmrotor::stability::BifurcationKind;
+    // the literature values (folds at every flow rate; docs/calibration.md)
     let settings = StudySettings {
         flow_l_min: 5.0,
+        model: Some(
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/models/dual_rotor_literature.toml"
+            )
+            .into(),
+        ),
         ..StudySettings::default()
     };
     let p = SweepProblem::new(&settings).expect("problem");
@@ -301,6 +309,14 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
 /// needs a lead-in to reach its start.
 fn inside_the_nonlinear_range() -> StudySettings {
     StudySettings {
+        // the literature values (folds at every flow rate; docs/calibration.md)
+        model: Some(
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/models/dual_rotor_literature.toml"
+            )
+            .into(),
+        ),
         omega_start: 600.0,
         omega_end: 601.0,
         stability: false,
@@ -333,7 +349,8 @@ fn a_start_inside_the_nonlinear_range_is_reached_by_continuation() {
         omega_start: from,
         omega_end: 600.0,
         stability: false,
-        ..Default::default()
+        max_points: StudySettings::default().max_points,
+        ..inside_the_nonlinear_range()
     };
     let mut ref_sink = MemorySink::new();
     let ref_report = SweepProblem::new(&reference)

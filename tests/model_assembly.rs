@@ -35,7 +35,16 @@ fn builtin_has_paper_layout() {
         .map(|r| (r.num, r.den))
         .collect();
     assert_eq!(ratios, vec![(1, 1), (6, 5)]);
+    // ζ = 0.0325 at 300 and 700 rad/s: a0 = 2ζω1ω2/(ω1+ω2), a1 = 2ζ/(ω1+ω2)
     let (a0, a1) = model.rayleigh();
+    assert!(
+        (a0 - 13.65).abs() < 1e-12 && (a1 - 6.5e-5).abs() < 1e-18,
+        "{a0} {a1}"
+    );
+    // the literature values: ζ = 0.02 (SPEC §2.1: a0 ≈ 8.4 1/s, a1 ≈ 4e-5 s)
+    let (a0, a1) = tmrotor::model::Model::literature()
+        .expect("literature model")
+        .rayleigh();
     assert!((a0 - 8.4).abs() < 1e-12 && (a1 - 4e-5).abs() < 1e-18);
     assert_eq!(asm.bearings.len(), 4);
     assert_eq!(asm.unbalances.len(), 4);

@@ -250,8 +250,8 @@ fn bearing_geometry_and_roller_data() {
 fn damping_and_gravity_choices() {
     check(
         &edited(
-            "damping_ratio = 0.02\n",
-            "damping_ratio = 0.02\na0_1_s = 1.0\n",
+            "damping_ratio = 0.0325\n",
+            "damping_ratio = 0.0325\na0_1_s = 1.0\n",
         ),
         "damping",
         |k| matches!(k, InvalidKind::Conflict(_)),

@@ -105,10 +105,18 @@ fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
 
 #[test]
 fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
+    // the literature values: a fold pair near 582 rad/s at 10 L/min (docs/calibration.md)
     let settings = StudySettings {
         flow_l_min: 10.0,
         omega_start: 570.0,
         omega_end: 595.0,
+        model: Some(
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/models/dual_rotor_literature.toml"
+            )
+            .into(),
+        ),
         ..Default::default()
     };
     let problem = SweepProblem::new(&settings).expect("problem");
@@ -188,10 +196,18 @@ fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
     use tmrotor::record::Sink;
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().expect("tempdir");
+    // the literature values: a fold pair near 582 rad/s at 10 L/min (docs/calibration.md)
     let settings = StudySettings {
         flow_l_min: 10.0,
         omega_start: 570.0,
         omega_end: 595.0,
+        model: Some(
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/models/dual_rotor_literature.toml"
+            )
+            .into(),
+        ),
         ..Default::default()
     };
     let problem = SweepProblem::new(&settings).expect("problem");

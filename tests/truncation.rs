@@ -155,7 +155,15 @@ fn bad_command_line_input_names_the_option() {
 /// rad/s they stall.
 #[test]
 fn a_stalled_target_is_reported_at_the_nearest_converged_speed() {
+    // on the literature values (docs/calibration.md), where the stall was found
     let settings = StudySettings {
+        model: Some(
+            concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/models/dual_rotor_literature.toml"
+            )
+            .into(),
+        ),
         omega_start: 470.0,
         omega_end: 500.0,
         ..Default::default()

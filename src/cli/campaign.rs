@@ -225,7 +225,7 @@ fn dry_run(
         writeln!(
             out,
             "  #{:<3} {:<width$}  {:<what_width$}  flow {} L/min, cooling {} °C, ambient {} °C, \
-             order {}, ω {} → {} rad/s{}{}",
+             order {}, ω {} → {} rad/s{}{}{}",
             p.position,
             p.run.name,
             what(p),
@@ -237,6 +237,10 @@ fn dry_run(
             s.omega_end,
             if s.thermal { "" } else { ", no thermal" },
             if s.stability { "" } else { ", no stability" },
+            match s.set_summary() {
+                set if set.is_empty() => String::new(),
+                set => format!("; set {set}"),
+            },
         )?;
     }
     Ok(())

@@ -57,4 +57,6 @@ pub use assembly::{Assembly, LinearBearing, RotorGyro, Unbalance};
 pub use error::{InvalidKind, ModelError};
 pub use file::ModelFile;
 pub use set::ModelSet;
-pub use validate::{BUILTIN_NAME, BUILTIN_TOML, DOF_PER_NODE, Dir, Model, dof};
+pub use validate::{
+    BUILTIN_NAME, BUILTIN_TOML, DOF_PER_NODE, Dir, LITERATURE_NAME, LITERATURE_TOML, Model, dof,
+};

@@ -16,6 +16,11 @@ pub const BUILTIN_TOML: &str = include_str!("../../models/dual_rotor.toml");
 
 /// Name under which the built-in model reports errors.
 pub const BUILTIN_NAME: &str = "<built-in dual_rotor.toml>";
+/// The same dual rotor with every value the paper leaves open at its literature default,
+/// uncalibrated (`models/dual_rotor_literature.toml`; docs/calibration.md).
+pub const LITERATURE_TOML: &str = include_str!("../../models/dual_rotor_literature.toml");
+/// Name of [`LITERATURE_TOML`] in messages.
+pub const LITERATURE_NAME: &str = "<built-in dual_rotor_literature.toml>";
 
 /// Direction of a nodal DoF. See the module docs of [`crate::model`] for the ordering.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -53,6 +58,11 @@ impl Model {
     /// The built-in dual rotor of the paper.
     pub fn builtin() -> Result<Self, ModelError> {
         Self::from_str(BUILTIN_TOML, BUILTIN_NAME)
+    }
+
+    /// The dual rotor with the literature values of its open parameters (uncalibrated).
+    pub fn literature() -> Result<Self, ModelError> {
+        Self::from_str(LITERATURE_TOML, LITERATURE_NAME)
     }
 
     /// Reads and validates a model file.
