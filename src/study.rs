@@ -371,7 +371,7 @@ fn check_settings(s: &StudySettings) -> Result<(), StudyError> {
             "must be at least 8",
         );
     }
-    if s.stability_method == StabilityChoice::ExpSip && s.sip_intervals % 2 != 0 {
+    if s.stability_method == StabilityChoice::ExpSip && !s.sip_intervals.is_multiple_of(2) {
         return bad(
             "sip_intervals",
             s.sip_intervals.to_string(),
@@ -423,10 +423,10 @@ fn axial_positions(model: &Model) -> Vec<f64> {
         for b in &model.spec.bearings {
             if let Some(o) = b.outer_node {
                 for (mine, other) in [(o, b.inner_node), (b.inner_node, o)] {
-                    if let (Some(&lm), Some(io)) = (local.get(&mine), idx(other)) {
-                        if let Some(po) = pos[io] {
-                            offset = po - lm;
-                        }
+                    if let (Some(&lm), Some(io)) = (local.get(&mine), idx(other))
+                        && let Some(po) = pos[io]
+                    {
+                        offset = po - lm;
                     }
                 }
             }

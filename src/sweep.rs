@@ -354,10 +354,10 @@ impl GivingUp {
             });
         };
         let out = evaluate(inner.as_ref());
-        if let Err(e @ crate::stability::StabilityError::Setting { .. }) = &out {
-            if let Ok(mut g) = self.reason.lock() {
-                *g = Some(e.to_string());
-            }
+        if let Err(e @ crate::stability::StabilityError::Setting { .. }) = &out
+            && let Ok(mut g) = self.reason.lock()
+        {
+            *g = Some(e.to_string());
         }
         out
     }

@@ -62,7 +62,7 @@ fn stroboscopic_spread(
         n_record * steps,
         |_, y| {
             k += 1;
-            if k % steps == 0 {
+            if k.is_multiple_of(steps) {
                 lo = lo.min(y[0]);
                 hi = hi.max(y[0]);
             }

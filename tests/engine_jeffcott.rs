@@ -180,7 +180,10 @@ fn example_continuation_passes_the_fold_cluster_and_arrives_on_the_time_integrat
         .collect();
     eprintln!("{} points, turning points at {folds:?}", omegas.len());
     // super-harmonic resonances bent into fold pairs between 573.9 and 577.1 rad/s
-    assert!(folds.len() >= 6 && folds.len() % 2 == 0, "{folds:?}");
+    assert!(
+        folds.len() >= 6 && folds.len().is_multiple_of(2),
+        "{folds:?}"
+    );
     assert!(
         folds.iter().all(|w| (573.5..577.5).contains(w)),
         "{folds:?}"

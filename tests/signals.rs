@@ -21,9 +21,11 @@ fn stopped_by(signal: &str) {
         .stderr(Stdio::piped())
         .spawn()
         .expect("the sweep starts");
-    // the recording is created when the run begins; a few points later, the signal
+    // the recording is written as sweep.mcap.partial while the run goes on, renamed to
+    // sweep.mcap when it ends; a few points after it appears, the signal
+    let partial = dir.path().join("sweep.mcap.partial");
     let start = Instant::now();
-    while !out.exists() {
+    while !partial.exists() {
         assert!(start.elapsed() < Duration::from_secs(60), "no recording");
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -47,7 +49,8 @@ fn stopped_by(signal: &str) {
     );
     // stderr is a pipe: a plain line on what runs instead of a progress bar
     assert!(
-        stderr.starts_with("sweep: ω 300 → 700 rad/s, order 3, writing "),
+        stderr.starts_with("sweep: ω 300 → 700 rad/s, order 3, writing ")
+            && stderr.contains("sweep.mcap.partial until the run ends"),
         "{stderr}"
     );
     assert!(
@@ -55,6 +58,11 @@ fn stopped_by(signal: &str) {
         "terminal escapes in a pipe: {stderr}"
     );
     let rec = read_recording(&out).expect("a readable recording");
+    assert!(!partial.exists(), "renamed into place");
+    assert!(
+        !dir.path().join("sweep.mcap.lock").exists(),
+        "the lock is released"
+    );
     assert!(rec.complete, "{signal}: {:?}", rec.notes);
     assert_eq!(rec.status, Some(RunStatus::Interrupted));
     assert!(!rec.points.is_empty(), "{signal}: no point kept");

@@ -69,6 +69,9 @@ use crate::figure::FigureError;
 use crate::record::{McapOptions, McapSink, ReadError};
 use crate::sweep::{CurrentPool, Progress, StepPools, StudySettings, SweepProblem};
 
+/// The lock file of a campaign's output directory, held while a campaign runs there.
+pub const CAMPAIGN_LOCK: &str = "campaign.lock";
+
 /// A campaign file.
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -255,10 +258,10 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
         let mut settings: StudySettings = toml::Value::Table(merged)
             .try_into()
             .map_err(|e: toml::de::Error| error(&origin, e.to_string().trim_end().to_string()))?;
-        if let Some(m) = &settings.model {
-            if m.is_relative() {
-                settings.model = Some(base.join(m));
-            }
+        if let Some(m) = &settings.model
+            && m.is_relative()
+        {
+            settings.model = Some(base.join(m));
         }
         runs.push(CampaignRun {
             name,
@@ -613,6 +616,16 @@ pub fn run(
         path: out.display().to_string(),
         source,
     })?;
+    // one campaign per output directory at a time (the lock is released on return, or by
+    // the OS when the process dies)
+    let _lock = crate::record::output::lock(
+        &out.join(CAMPAIGN_LOCK),
+        &format!("campaign directory {}", out.display()),
+    )
+    .map_err(|e| CampaignError::File {
+        file: campaign_path.display().to_string(),
+        reason: e.to_string(),
+    })?;
     let names: Vec<String> = selected.iter().map(|r| r.name.clone()).collect();
     progress(Event::Plan { runs: &names });
     let manifest = Mutex::new(Manifest {
@@ -825,6 +838,25 @@ fn run_one(
                 .collect();
         }
         Err(e) => entry.status = format!("failed: {e}"),
+    }
+    // complete only once the recording reads back complete with every point
+    if entry.status == "completed" {
+        match crate::record::read_recording(rec_path) {
+            Ok(rec) if rec.complete && rec.points.len() == entry.points => {}
+            Ok(rec) => {
+                entry.status = format!(
+                    "failed: the recording read back holds {} of {} points{}",
+                    rec.points.len(),
+                    entry.points,
+                    if rec.complete {
+                        ""
+                    } else {
+                        " and is not complete"
+                    }
+                )
+            }
+            Err(e) => entry.status = format!("failed: the recording does not read back: {e}"),
+        }
     }
     entry.sha256 = sha256_file(rec_path).unwrap_or_default();
     entry

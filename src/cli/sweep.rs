@@ -194,6 +194,13 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     let settings = args.settings()?;
     let problem = SweepProblem::new(&settings)?;
     let mut sink = McapSink::create(&args.output, McapOptions::default())?;
+    if let Some(kept) = sink.stale_partial() {
+        eprintln!(
+            "note: an earlier run writing {} was killed; what it recorded was moved to {}",
+            args.output.display(),
+            kept.display()
+        );
+    }
     let interrupt = install_interrupt_flag().ok();
     let bar = if args.quiet {
         ProgressBar::hidden()
@@ -206,11 +213,12 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     let log = !args.quiet && !std::io::stderr().is_terminal();
     if log {
         eprintln!(
-            "sweep: ω {} → {} rad/s, order {}, writing {}",
+            "sweep: ω {} → {} rad/s, order {}, writing {} (as {} until the run ends)",
             settings.omega_start,
             settings.omega_end,
             settings.order,
-            args.output.display()
+            args.output.display(),
+            sink.path().display()
         );
     }
     let start = Instant::now();
@@ -229,10 +237,17 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     });
     bar.finish_and_clear();
     let report = report.with_context(|| {
-        format!(
-            "sweep failed; the points computed so far are in {}",
-            args.output.display()
-        )
+        if sink.committed() {
+            format!(
+                "sweep failed; the points computed so far are in {}",
+                args.output.display()
+            )
+        } else {
+            format!(
+                "sweep failed before its first point; the earlier recording {} is kept",
+                args.output.display()
+            )
+        }
     })?;
     writeln!(
         out,

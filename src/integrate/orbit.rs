@@ -52,7 +52,7 @@ impl SampledOrbit {
         let mut a = vec![0.0; (kmax + 1) * dim];
         let mut b = vec![0.0; (kmax + 1) * dim];
         for k in 0..=kmax {
-            let nyquist = nsamp % 2 == 0 && k == kmax;
+            let nyquist = nsamp.is_multiple_of(2) && k == kmax;
             let w = if k == 0 || nyquist { 1.0 } else { 2.0 } / nsamp as f64;
             for (j, y) in samples.iter().enumerate() {
                 // Reduce jk mod N first so the angle stays small and exact.

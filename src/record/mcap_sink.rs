@@ -90,9 +90,20 @@ impl Default for McapOptions {
     }
 }
 
-/// Writes a run into an MCAP file. See the module docs for the layout.
+/// Writes a run into an MCAP file. See the module docs for the layout, and
+/// [`super::output`] for the lock and the temporary name the file is written under.
 pub struct McapSink {
+    /// The `.partial` file being written.
     path: PathBuf,
+    /// Where the recording goes when the run ends.
+    target: PathBuf,
+    /// The writer lock of `target`, held until the recording is in place.
+    lock: Option<super::output::WriterLock>,
+    /// A `.partial` of a killed earlier writer, moved aside to this name.
+    stale: Option<PathBuf>,
+    /// Whether the finished recording replaced `target` (false until then, and when a run
+    /// without points left an earlier recording in place).
+    committed: bool,
     writer: Option<Writer<BufWriter<File>>>,
     options: McapOptions,
     checks: SinkChecks,
@@ -107,9 +118,18 @@ pub struct McapSink {
 }
 
 impl McapSink {
-    /// Creates (or truncates) the file at `path`.
-    pub fn create(path: impl AsRef<Path>, options: McapOptions) -> Result<Self, RecordError> {
-        let path = path.as_ref().to_path_buf();
+    /// Starts a recording for `target`: takes its writer lock (another writer of the same
+    /// target is [`RecordError::Locked`]), moves a `.partial` of a killed writer aside, and
+    /// writes `<target>.partial`, renamed to `target` when the run ends
+    /// ([`super::output`]).
+    pub fn create(target: impl AsRef<Path>, options: McapOptions) -> Result<Self, RecordError> {
+        let target = target.as_ref().to_path_buf();
+        let lock = super::output::lock(
+            &super::output::lock_path(&target),
+            &format!("recording {}", target.display()),
+        )?;
+        let stale = super::output::keep_stale_partial(&target)?;
+        let path = super::output::partial_path(&target);
         let file = File::create(&path).map_err(|source| RecordError::Create {
             path: path.clone(),
             source,
@@ -131,6 +151,10 @@ impl McapSink {
             })?;
         Ok(Self {
             path,
+            target,
+            lock: Some(lock),
+            stale,
+            committed: false,
             writer: Some(writer),
             options,
             checks: SinkChecks::default(),
@@ -143,9 +167,37 @@ impl McapSink {
         })
     }
 
-    /// The file being written.
+    /// The file being written (`<target>.partial` until the run ends).
     pub fn path(&self) -> &Path {
         &self.path
+    }
+
+    /// Stops writing as a killed process would: the `.partial` file keeps what was flushed,
+    /// without closing status or summary, and the writer lock is released. For tests of
+    /// readers and recovery; returns the `.partial` file.
+    pub fn abandon(mut self) -> PathBuf {
+        if let Some(w) = self.writer.take() {
+            // a dropped writer would finish the file: leak it, as a killed process does
+            std::mem::forget(w);
+        }
+        self.path.clone()
+    }
+
+    /// Where the recording goes when the run ends.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// A recording a killed earlier writer left, moved aside to this name when this one
+    /// started.
+    pub fn stale_partial(&self) -> Option<&Path> {
+        self.stale.as_deref()
+    }
+
+    /// Whether the finished recording is at [`Self::target`] (false before the end, and
+    /// when a run without points left an earlier recording in place).
+    pub fn committed(&self) -> bool {
+        self.committed
     }
 
     fn err(&self, source: mcap::McapError) -> RecordError {
@@ -257,11 +309,21 @@ impl McapSink {
         let mut writer = self.writer.take().ok_or(RecordError::Finished)?;
         let finished = writer.finish().map_err(|e| self.err(e));
         let mut inner = writer.into_inner();
-        let flushed = inner.flush().map_err(|source| RecordError::Mcap {
-            path: self.path.clone(),
-            source: source.into(),
-        });
-        logged.and(status_md).and(finished.map(|_| ())).and(flushed)
+        let flushed = inner
+            .flush()
+            .and_then(|()| inner.get_ref().sync_all())
+            .map_err(|source| RecordError::Mcap {
+                path: self.path.clone(),
+                source: source.into(),
+            });
+        drop(inner);
+        let written = logged.and(status_md).and(finished.map(|_| ())).and(flushed);
+        // into place (or, without points over an earlier recording, away), then unlock
+        let has_points = self.checks.last_index().is_some();
+        let committed = super::output::commit(&self.target, has_points);
+        self.lock = None;
+        self.committed = *committed.as_ref().unwrap_or(&false);
+        written.and(committed.map(|_| ()))
     }
 }
 

@@ -35,6 +35,7 @@
 
 pub mod convert;
 pub mod mcap_sink;
+pub mod output;
 pub mod pb;
 pub mod reader;
 pub mod schema;
@@ -84,4 +85,14 @@ pub enum RecordError {
     Finished,
     #[error("cannot install the Ctrl-C handler: {0}")]
     CtrlC(String),
+    /// Another process writes the same output.
+    #[error(
+        "{what} is being written by {holder}: its lock {lock} is held; wait for it to end, or \
+         write elsewhere"
+    )]
+    Locked {
+        what: String,
+        lock: PathBuf,
+        holder: String,
+    },
 }

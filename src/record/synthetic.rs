@@ -407,8 +407,13 @@ pub fn write_mcap(
     if finish {
         sink.finish(super::RunStatus::Completed)?;
     } else {
-        // Leave the file as a killed process would: everything flushed, nothing closed.
-        std::mem::forget(sink);
+        // Leave the file as a killed process would: everything flushed, nothing closed;
+        // then move it from `.partial` to `path`, where the caller looks for it.
+        let partial = sink.abandon();
+        std::fs::rename(&partial, path).map_err(|source| super::RecordError::Create {
+            path: path.to_path_buf(),
+            source,
+        })?;
     }
     Ok(data.points.len())
 }

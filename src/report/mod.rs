@@ -96,10 +96,11 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
     let amp = |p: &PointRecord| node.and_then(|i| p.amplitude_rms_m.get(i)).copied();
     let mut maxima: Vec<(f64, f64)> = Vec::new();
     for w in pts.windows(3) {
-        if let (Some(a0), Some(a1), Some(a2)) = (amp(&w[0]), amp(&w[1]), amp(&w[2])) {
-            if a1 > a0 && a1 >= a2 {
-                maxima.push((w[1].omega_rad_s, a1 * 1e6));
-            }
+        if let (Some(a0), Some(a1), Some(a2)) = (amp(&w[0]), amp(&w[1]), amp(&w[2]))
+            && a1 > a0
+            && a1 >= a2
+        {
+            maxima.push((w[1].omega_rad_s, a1 * 1e6));
         }
     }
     maxima.sort_by(|a, b| b.1.total_cmp(&a.1));

@@ -298,7 +298,7 @@ impl ExpSip {
                 reason: "need at least one interval",
             });
         }
-        if self.extrapolate && n_k % 2 != 0 {
+        if self.extrapolate && !n_k.is_multiple_of(2) {
             return Err(StabilityError::Setting {
                 field: "exp_sip.intervals",
                 value: n_k.to_string(),

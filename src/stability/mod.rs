@@ -396,10 +396,10 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
         return None;
     }
     let outside = if na > nb { after } else { before };
-    if before.slow_unstable_count() != after.slow_unstable_count() {
-        if let Some(l) = outside.decided_slow().min_by(|a, b| a.re.total_cmp(&b.re)) {
-            return Some(BifurcationKind::of_exponent(*l));
-        }
+    if before.slow_unstable_count() != after.slow_unstable_count()
+        && let Some(l) = outside.decided_slow().min_by(|a, b| a.re.total_cmp(&b.re))
+    {
+        return Some(BifurcationKind::of_exponent(*l));
     }
     if before.fold_parity_mismatch != after.fold_parity_mismatch {
         return Some(BifurcationKind::SaddleNode);
