@@ -210,6 +210,9 @@ impl StudySettings {
 /// measured errors, is on [`ExpSip::default`]).
 pub const DEFAULT_INTERVALS: usize = 512;
 
+/// Largest `sip_intervals` a study accepts (the explicit product's own automatic limit).
+pub const MAX_SIP_INTERVALS: usize = 200_000;
+
 /// Which Floquet method a sweep uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -362,6 +365,14 @@ fn check_settings(s: &StudySettings) -> Result<(), StudyError> {
             "reduction_cutoff_rad_s",
             s.reduction_cutoff_rad_s.to_string(),
             "must be 0 (full model) or a positive frequency in rad/s",
+        );
+    }
+    if s.sip_intervals > MAX_SIP_INTERVALS {
+        return bad(
+            "sip_intervals",
+            s.sip_intervals.to_string(),
+            "must be at most 200000 (the product keeps a state per interval; more would \
+             need gigabytes of memory, and 4096 already resolves the paper's rotor)",
         );
     }
     if s.sip_intervals < 8 {

@@ -181,6 +181,11 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
         .err()
         .expect("odd count refused");
     assert!(err.to_string().contains("sip_intervals"), "{err}");
+    // a count that would need gigabytes is refused before anything is allocated
+    let err = CoupledRederive::from_run_with_intervals(run, Some(10_000_000))
+        .err()
+        .expect("huge count refused");
+    assert!(err.to_string().contains("at most 200000"), "{err}");
 
     // The interval map is recorded; settings embedded before it was a setting (no
     // `interval_map` line) are re-derived with Strang's map, the one they were made with.

@@ -368,3 +368,56 @@ initial_clearance_m = 5e-6
         .to_string();
     assert!(err.contains("bore_diameter_m"), "{err}");
 }
+
+/// Values no engineering rotor has are refused with the range and its reason; the message
+/// writes a huge number in exponent form.
+#[test]
+fn implausible_values_name_their_range() {
+    let e = check(
+        &edited("youngs_modulus_pa = 210e9", "youngs_modulus_pa = 1e300"),
+        "materials[0].youngs_modulus_pa",
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
+    );
+    assert!(e.to_string().contains("1e300 is out of range"), "{e}");
+    check(
+        &edited("initial_clearance_m = 1e-6", "initial_clearance_m = 1.0"),
+        "bearings[0].initial_clearance_m",
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
+    );
+}
+
+/// The thermal network's speed ratios must be the rotors' (checked where the two tables
+/// meet, when the coupled system is built: what `model check` and a sweep both do).
+#[test]
+fn thermal_speed_ratios_must_be_the_rotors() {
+    use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
+    let build = |text: &str| {
+        let m = Model::from_str(text, FILE).expect("valid on its own");
+        CoupledRotor::new(&m, &StudyOverrides::default(), CouplingOptions::default())
+            .map(|_| ())
+            .expect_err("refused")
+            .to_string()
+    };
+    let msg = build(&BUILTIN_TOML.replace("speed_ratio = 1.2\n", "speed_ratio = 1.3\n"));
+    assert!(
+        msg.contains("thermal.shafts[") && msg.contains("rotor \"HP\" turns at 1.2"),
+        "{msg}"
+    );
+    let msg = build(&edited(
+        "inner_speed_ratio = 1.2\n",
+        "inner_speed_ratio = 1.0\n",
+    ));
+    assert!(
+        msg.contains("thermal.bearings[1].inner_speed_ratio")
+            && msg.contains("bearing \"2#\" sits on node 12"),
+        "{msg}"
+    );
+    let msg = build(&edited(
+        "outer_speed_ratio = 0.0\n",
+        "outer_speed_ratio = 1.0\n",
+    ));
+    assert!(
+        msg.contains("thermal.bearings[0].outer_speed_ratio") && msg.contains("held by the ground"),
+        "{msg}"
+    );
+}

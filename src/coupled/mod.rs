@@ -173,6 +173,67 @@ fn same_contact_laws(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledErr
     Ok(())
 }
 
+/// The thermal network's speed ratios against the rotors': every `[[thermal.shafts]]`
+/// segment of chain `c` turns with the rotor whose id is `c`, and every thermal bearing's
+/// inner (outer) ring with the rotor of its mechanical bearing's inner (outer) node, or not
+/// at all for an outer ring to ground. A mismatch would put the friction heat and the
+/// convection at the wrong speed while the dynamics use the right one.
+fn same_speed_ratios(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledError> {
+    let ratio_of_rotor = |id: &str| {
+        model
+            .spec
+            .rotors
+            .iter()
+            .position(|r| r.id == id)
+            .map(|r| model.speed_ratio(r).value())
+    };
+    let ratio_of_node = |node: u32| {
+        model
+            .node_index(node)
+            .map(|i| model.speed_ratio(model.rotor_of(i)).value())
+    };
+    let differs = |a: f64, b: f64| (a - b).abs() > 1e-9 * b.abs().max(1.0);
+    for (i, sh) in spec.shafts.iter().enumerate() {
+        if let Some(r) = ratio_of_rotor(&sh.chain)
+            && differs(sh.speed_ratio, r)
+        {
+            return Err(mismatch(
+                model,
+                &format!("thermal.shafts[{i}].speed_ratio"),
+                format!(
+                    "{} but the rotor {:?} turns at {r} times the reference speed",
+                    sh.speed_ratio, sh.chain
+                ),
+            ));
+        }
+    }
+    for (i, t) in spec.bearings.iter().enumerate() {
+        let Some(b) = model.spec.bearings.iter().find(|b| b.id == t.name) else {
+            continue;
+        };
+        let inner = ratio_of_node(b.inner_node);
+        let outer = b.outer_node.map_or(Some(0.0), ratio_of_node);
+        for (ring, given, want, node) in [
+            ("inner", t.inner_speed_ratio, inner, Some(b.inner_node)),
+            ("outer", t.outer_speed_ratio, outer, b.outer_node),
+        ] {
+            if let Some(want) = want
+                && differs(given, want)
+            {
+                let of = node.map_or("is held by the ground".to_string(), |n| {
+                    format!("sits on node {n}, which turns at {want} times the reference speed")
+                });
+                return Err(mismatch(
+                    model,
+                    &format!("thermal.bearings[{i}].{ring}_speed_ratio"),
+                    format!("{given} but the {ring} ring of bearing {:?} {of}", t.name),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 impl CoupledRotor {
     /// Builds the coupled system from a validated model, study overrides and coupling
     /// options.
@@ -187,6 +248,7 @@ impl CoupledRotor {
                 let mut spec = ThermalSpec::from_table(table, &model.source)?;
                 apply_overrides(&mut spec, study)?;
                 same_contact_laws(model, &spec)?;
+                same_speed_ratios(model, &spec)?;
                 Some(ThermalNetwork::new(&spec)?)
             }
             _ => None,

@@ -76,7 +76,7 @@ pub enum InvalidKind {
     #[error("must be non-negative and finite, got {0}")]
     Negative(f64),
     /// A value outside its physical range.
-    #[error("{value} is out of range: {reason}")]
+    #[error("{} is out of range: {reason}", short_number(*value))]
     OutOfRange { value: f64, reason: String },
     /// Inner diameter not smaller than outer diameter.
     #[error("inner diameter {inner_m} m must be smaller than outer diameter {outer_m} m")]
@@ -91,4 +91,14 @@ pub enum InvalidKind {
     /// Keys that cannot be combined, or a choice with nothing chosen.
     #[error("{0}")]
     Conflict(String),
+}
+
+/// A number as a person writes it: plain in the usual range, in exponent form outside
+/// (`1e300`, not three hundred digits).
+fn short_number(v: f64) -> String {
+    if v == 0.0 || (1e-4..1e9).contains(&v.abs()) {
+        v.to_string()
+    } else {
+        format!("{v:e}")
+    }
 }

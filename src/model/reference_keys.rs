@@ -186,7 +186,7 @@ pub const KEYS: &[Key] = &[
         unit: "Pa",
         need: Need::Required,
         default: "",
-        range: "> 0",
+        range: "1e6–1.5e12 (elastomers to diamond)",
         meaning: "Elastic modulus E (Table A.5), used by the shaft elements of Appendix B.",
     },
     Key {
@@ -614,7 +614,7 @@ pub const KEYS: &[Key] = &[
         unit: "m",
         need: Need::Required,
         default: "",
-        range: "≥ 0",
+        range: "0–1e-3",
         meaning: "Initial radial clearance δ0 (Table A.1/A.2); with a [thermal] table the effective clearance of Eq. 3 is δe = δ0 + δv(T), δv from Eqs. 1–2.",
     },
     Key {
@@ -1036,7 +1036,7 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Required,
         default: "",
-        range: "finite",
+        range: "the speed ratio of the rotor named by `chain`",
         meaning: "Rotor speed divided by the reference speed ω, for the convection to ambient air (Table 1).",
     },
     Key {
@@ -1309,7 +1309,7 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Required,
         default: "",
-        range: "",
+        range: "the speed ratio of the rotor of the mechanical bearing's inner node",
         meaning: "Inner-ring speed divided by the reference speed ω: with the outer one it sets the cage speed, the lubricant convection and the relative speed of the friction heat (Eqs. 11 and 13).",
     },
     Key {
@@ -1318,7 +1318,7 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Required,
         default: "",
-        range: "",
+        range: "the speed ratio of the rotor of the mechanical bearing's outer node; 0 when it is held by the ground",
         meaning: "Outer-ring speed divided by the reference speed ω (0 for a ring in a housing).",
     },
     Key {

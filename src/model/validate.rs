@@ -394,6 +394,17 @@ impl<'a> Validator<'a> {
         for (i, m) in spec.materials.iter().enumerate() {
             let p = |f: &str| format!("materials[{i}].{f}");
             self.positive(p("youngs_modulus_pa"), m.youngs_modulus_pa)?;
+            if !(1e6..=1.5e12).contains(&m.youngs_modulus_pa) {
+                return Err(self.err(
+                    p("youngs_modulus_pa"),
+                    InvalidKind::OutOfRange {
+                        value: m.youngs_modulus_pa,
+                        reason: "engineering solids lie between about 1e6 Pa (elastomers) and \
+                                 1.2e12 Pa (diamond); steel is 2.1e11"
+                            .into(),
+                    },
+                ));
+            }
             self.positive(p("density_kg_m3"), m.density_kg_m3)?;
             if !(m.poisson_ratio.is_finite() && (0.0..0.5).contains(&m.poisson_ratio)) {
                 return Err(self.err(
@@ -641,6 +652,17 @@ impl<'a> Validator<'a> {
                 ));
             }
             self.non_negative(p("initial_clearance_m"), b.initial_clearance_m)?;
+            if b.initial_clearance_m > 1e-3 {
+                return Err(self.err(
+                    p("initial_clearance_m"),
+                    InvalidKind::OutOfRange {
+                        value: b.initial_clearance_m,
+                        reason: "radial clearances of rolling bearings are micrometres to a few \
+                                 tenths of a millimetre (at most 1e-3 m here)"
+                            .into(),
+                    },
+                ));
+            }
             match (b.kind, b.roller_length_m) {
                 (ContactLaw::Roller, None) => {
                     return Err(self.err(
