@@ -166,3 +166,27 @@ fn two_sweeps_to_one_output_the_second_stops_at_once() {
     let rec = read_recording(&out).expect("first recording");
     assert!(rec.complete && !rec.points.is_empty());
 }
+
+/// A directory, a device or a FIFO is refused at once, not read until memory runs out.
+#[cfg(unix)]
+#[test]
+fn only_regular_files_are_read() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let msg = read_recording(dir.path())
+        .expect_err("a directory")
+        .to_string();
+    assert!(msg.contains("it is a directory"), "{msg}");
+    let msg = read_recording("/dev/zero")
+        .expect_err("a device")
+        .to_string();
+    assert!(msg.contains("not a regular file"), "{msg}");
+    let fifo = dir.path().join("pipe");
+    let made = std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .is_ok_and(|s| s.success());
+    if made {
+        let msg = read_recording(&fifo).expect_err("a FIFO").to_string();
+        assert!(msg.contains("not a regular file"), "{msg}");
+    }
+}

@@ -84,8 +84,26 @@ impl Recording {
 }
 
 /// Reads the recording at `path`.
+///
+/// Only regular files are read: a directory, a device (`/dev/zero`) or a FIFO is refused at
+/// once, before anything is read (such inputs would otherwise block or grow without end).
 pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording, ReadError> {
     let path = path.as_ref();
+    let meta = std::fs::metadata(path).map_err(|source| ReadError::Io {
+        file: path.to_path_buf(),
+        source,
+    })?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "a directory"
+        } else {
+            "not a regular file (a device, FIFO or socket)"
+        };
+        return Err(ReadError::NotMcap {
+            file: path.to_path_buf(),
+            reason: format!("it is {what}; a recording is a regular .mcap file"),
+        });
+    }
     let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
         file: path.to_path_buf(),
         source,
