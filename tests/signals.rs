@@ -156,3 +156,45 @@ fn a_finished_sweep_reports_its_time_and_cpu() {
         );
     }
 }
+
+/// A second interrupt right after the first stops at once, says so, and leaves every point
+/// already written readable in the in-progress file (or, when the first interrupt had already
+/// finished the recording, the complete one).
+#[test]
+fn a_second_interrupt_stops_at_once_and_keeps_the_points_written() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("sweep.mcap");
+    let partial = dir.path().join("sweep.mcap.partial");
+    let mut child = Command::new(BIN)
+        .args(["sweep", "-q", "--output"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the sweep starts");
+    let start = Instant::now();
+    while !partial.exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no recording");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_secs(4));
+    let pid = child.id();
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -INT {pid}; kill -INT {pid}")])
+        .status()
+        .expect("sh runs");
+    assert!(kill.success());
+    let output = child.wait_with_output().expect("the sweep ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    let rec = if partial.exists() {
+        assert!(
+            stderr.contains("second interrupt: stopping at once"),
+            "{stderr}"
+        );
+        read_recording(&partial).expect("the in-progress file reads")
+    } else {
+        read_recording(&out).expect("the recording reads")
+    };
+    assert!(!rec.points.is_empty(), "{stderr}");
+}

@@ -237,6 +237,12 @@ pub fn install_interrupt_flag() -> Result<Arc<AtomicBool>, RecordError> {
     let handler_flag = flag.clone();
     ctrlc::set_handler(move || {
         if handler_flag.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            // deliberate: a second interrupt stops at once, without waiting for the step
+            eprintln!(
+                "\nsecond interrupt: stopping at once; every point already written stays in \
+                 the in-progress recording (OUT.partial, without its closing status; replay \
+                 reads it, and the next sweep to the same output moves it aside)"
+            );
             std::process::exit(130);
         }
     })
