@@ -165,7 +165,7 @@ fn a_second_interrupt_stops_at_once_and_keeps_the_points_written() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("sweep.mcap");
     let partial = dir.path().join("sweep.mcap.partial");
-    let mut child = Command::new(BIN)
+    let child = Command::new(BIN)
         .args(["sweep", "-q", "--output"])
         .arg(&out)
         .stdout(Stdio::null())
