@@ -421,3 +421,29 @@ fn thermal_speed_ratios_must_be_the_rotors() {
         "{msg}"
     );
 }
+
+/// Under gravity, a rotor that nothing holds (no support or bearing leads from it to the
+/// ground) is named as such, not left to fail later as a static equilibrium that does not
+/// converge.
+#[test]
+fn a_rotor_held_by_nothing_is_named() {
+    let path = format!(
+        "{}/examples/rotors/jeffcott_midspan_disk.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    let text = std::fs::read_to_string(path).expect("example rotor");
+    let cut = text.find("[[supports]]").expect("the example has supports");
+    let free = &text[..cut];
+    // without gravity a free-free rotor is valid (its modes are a classic check)…
+    Model::from_str(free, FILE).expect("free-free without gravity");
+    // …under gravity it has no equilibrium
+    let with_gravity = free.replacen("[gravity]\nenabled = false", "[gravity]\nenabled = true", 1);
+    assert_ne!(with_gravity, free);
+    let e = reject(&with_gravity);
+    assert_eq!(e.path(), Some("rotors[0]"), "{e}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("is not held") && msg.contains("no static equilibrium"),
+        "{msg}"
+    );
+}

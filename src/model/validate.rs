@@ -712,6 +712,8 @@ impl<'a> Validator<'a> {
             }
         }
 
+        self.held_to_ground(&spec, &nodes)?;
+
         Ok(Model {
             source: self.file.to_string(),
             text: String::new(),
@@ -721,6 +723,70 @@ impl<'a> Validator<'a> {
             speed_ratios,
             rayleigh,
         })
+    }
+}
+
+impl Validator<'_> {
+    /// With gravity on, every node must be connected to the ground through shaft elements,
+    /// supports and bearings: a part that is not would fall freely as a rigid body (zero
+    /// stiffness), and no static equilibrium could be found for it. (A free-free rotor
+    /// without gravity is valid: its modes are a classic check.)
+    fn held_to_ground(&self, spec: &ModelFile, nodes: &[u32]) -> VResult<()> {
+        if !spec.gravity.enabled {
+            return Ok(());
+        }
+        let n = nodes.len();
+        let ground = n;
+        let mut parent: Vec<usize> = (0..=n).collect();
+        fn find(parent: &mut [usize], mut i: usize) -> usize {
+            while parent[i] != i {
+                parent[i] = parent[parent[i]];
+                i = parent[i];
+            }
+            i
+        }
+        let index = |id: u32| nodes.binary_search(&id).ok();
+        let mut join = |a: Option<usize>, b: Option<usize>| {
+            if let (Some(a), Some(b)) = (a, b) {
+                let (ra, rb) = (find(&mut parent, a), find(&mut parent, b));
+                parent[ra] = rb;
+            }
+        };
+        for sh in &spec.shafts {
+            for w in sh.nodes.windows(2) {
+                join(index(w[0]), index(w[1]));
+            }
+        }
+        for su in &spec.supports {
+            join(index(su.node), su.to_node.map_or(Some(ground), index));
+        }
+        for b in &spec.bearings {
+            join(
+                index(b.inner_node),
+                b.outer_node.map_or(Some(ground), index),
+            );
+        }
+        let g = find(&mut parent, ground);
+        for (i, &id) in nodes.iter().enumerate() {
+            if find(&mut parent, i) != g {
+                let rotor = spec
+                    .rotors
+                    .iter()
+                    .position(|r| r.nodes.contains(&id))
+                    .unwrap_or(0);
+                return Err(self.err(
+                    format!("rotors[{rotor}]"),
+                    InvalidKind::BadConnection(format!(
+                        "node {id} is not held: no chain of shaft elements, supports and \
+                         bearings leads from it to the ground, so under gravity it would fall \
+                         freely as a rigid body with no static equilibrium (add a support or \
+                         a bearing to ground, or, for a free-free rotor, set [gravity] \
+                         enabled = false)"
+                    )),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
