@@ -164,10 +164,7 @@ impl StudySettings {
     pub fn set_summary(&self) -> String {
         self.set
             .iter()
-            .map(|(path, value)| match value {
-                toml::Value::String(s) => format!("{path}={s}"),
-                other => format!("{path}={other}"),
-            })
+            .map(|(path, value)| format!("{path}={}", value_text(value)))
             .collect::<Vec<_>>()
             .join(", ")
     }
@@ -180,20 +177,10 @@ impl StudySettings {
             .unwrap_or_default()
             .into_iter()
             .filter(|(k, _)| k != "model" && k != "set")
-            .map(|(k, v)| {
-                let text = match v {
-                    toml::Value::String(s) => s,
-                    other => other.to_string(),
-                };
-                (k, text)
-            })
+            .map(|(k, v)| (k, value_text(&v)))
             .collect();
         for (path, value) in &self.set {
-            let text = match value {
-                toml::Value::String(s) => s.clone(),
-                other => other.to_string(),
-            };
-            kv.push((format!("set.{path}"), text));
+            kv.push((format!("set.{path}"), value_text(value)));
         }
         kv.push((
             "model".to_string(),
@@ -209,6 +196,14 @@ impl StudySettings {
 /// with 256 and refined up to 4096 intervals near the unit circle (the reason, with the
 /// measured errors, is on [`ExpSip::default`]).
 pub const DEFAULT_INTERVALS: usize = 512;
+
+/// A TOML value as a person reads it: a string without quotes, anything else as TOML.
+fn value_text(value: &toml::Value) -> String {
+    match value {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
 
 /// Largest `sip_intervals` a study accepts (the explicit product's own automatic limit).
 pub const MAX_SIP_INTERVALS: usize = 200_000;

@@ -103,10 +103,10 @@ fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
     );
 }
 
-#[test]
-fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
-    // the literature values: a fold pair near 582 rad/s at 10 L/min (docs/calibration.md)
-    let settings = StudySettings {
+/// 10 L/min over 570–595 rad/s on the literature values: a branch through a fold pair near
+/// 582 rad/s (docs/calibration.md).
+fn fold_pair_branch() -> StudySettings {
+    StudySettings {
         flow_l_min: 10.0,
         omega_start: 570.0,
         omega_end: 595.0,
@@ -118,7 +118,12 @@ fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
             .into(),
         ),
         ..Default::default()
-    };
+    }
+}
+
+#[test]
+fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
+    let settings = fold_pair_branch();
     let problem = SweepProblem::new(&settings).expect("problem");
     let mut sink = MemorySink::new();
     let report = problem.run(&mut sink, None, |_| {}).expect("sweep");
@@ -196,20 +201,7 @@ fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
     use tmrotor::record::Sink;
     let Some(python) = python() else { return };
     let dir = tempfile::tempdir().expect("tempdir");
-    // the literature values: a fold pair near 582 rad/s at 10 L/min (docs/calibration.md)
-    let settings = StudySettings {
-        flow_l_min: 10.0,
-        omega_start: 570.0,
-        omega_end: 595.0,
-        model: Some(
-            concat!(
-                env!("CARGO_MANIFEST_DIR"),
-                "/models/dual_rotor_literature.toml"
-            )
-            .into(),
-        ),
-        ..Default::default()
-    };
+    let settings = fold_pair_branch();
     let problem = SweepProblem::new(&settings).expect("problem");
     let mut memory = MemorySink::new();
     problem.run(&mut memory, None, |_| {}).expect("sweep");

@@ -17,6 +17,7 @@ use crate::stability::BifurcationKind;
 use crate::study::StudySettings;
 
 pub mod statements;
+use statements::count;
 pub use statements::{Statement, Verdict};
 
 /// Dynamic node the paper plots (3# inter-shaft bearing, LP node 8).
@@ -247,20 +248,9 @@ pub fn campaign_findings(dir: &Path) -> Result<Vec<RunFindings>, ReportError> {
     Ok(out)
 }
 
-fn count(r: &RunFindings, kind: BifurcationKind) -> usize {
-    r.bifurcations.iter().filter(|(k, _)| *k == kind).count()
-}
-
 /// Text for a markdown table cell (pipes escaped).
 fn cell(text: &str) -> String {
     text.replace('|', "\\|")
-}
-
-fn fmt_list(v: &[f64], prec: usize) -> String {
-    v.iter()
-        .map(|x| format!("{x:.prec$}"))
-        .collect::<Vec<_>>()
-        .join(" / ")
 }
 
 /// The report as markdown. `truncation` is the text of the truncation study, if any.
@@ -295,8 +285,8 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
             r.flow_l_min,
             r.cooling_c,
             r.points,
-            fmt_list(&r.peaks.iter().map(|p| p.0).collect::<Vec<_>>(), 1),
-            fmt_list(&r.peaks.iter().map(|p| p.1).collect::<Vec<_>>(), 2),
+            statements::list(&r.peaks.iter().map(|p| p.0).collect::<Vec<_>>(), 1),
+            statements::list(&r.peaks.iter().map(|p| p.1).collect::<Vec<_>>(), 2),
             r.turning_points.len(),
             r.assessed - r.unstable,
             r.assessed,

@@ -66,7 +66,8 @@ pub struct Statement {
     pub verdict: Verdict,
 }
 
-fn count(r: &RunFindings, kind: BifurcationKind) -> usize {
+/// Located bifurcations of `kind` in run `r`.
+pub(super) fn count(r: &RunFindings, kind: BifurcationKind) -> usize {
     r.bifurcations.iter().filter(|(k, _)| *k == kind).count()
 }
 
@@ -115,7 +116,8 @@ fn pairs_holding(values: &[f64], want: &[usize]) -> (usize, usize) {
     (ok, want.len().saturating_sub(1))
 }
 
-fn list(v: &[f64], prec: usize) -> String {
+/// Numbers joined by ` / `, `prec` decimals.
+pub(super) fn list(v: &[f64], prec: usize) -> String {
     v.iter()
         .map(|x| format!("{x:.prec$}"))
         .collect::<Vec<_>>()
