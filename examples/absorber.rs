@@ -30,6 +30,7 @@ fn main() -> anyhow::Result<()> {
         branch.rejected_steps,
         branch.finish
     );
+    eprintln!("{}", tmrotor::continuation::csv::COLUMNS_NOTE);
     print!("{}", branch_csv(&branch, 0)?);
     Ok(())
 }

@@ -78,6 +78,7 @@ fn main() -> anyhow::Result<()> {
     for b in &branch.bifurcations {
         eprintln!("  {:?} at {:.7}", b.bifurcation, b.solution.omega);
     }
+    eprintln!("{}", tmrotor::continuation::csv::COLUMNS_NOTE);
     print!("{}", branch_csv(&branch, 0)?);
     Ok(())
 }

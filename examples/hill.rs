@@ -112,13 +112,16 @@ pub fn rows() -> anyhow::Result<Vec<Row>> {
     Ok(rows)
 }
 
-/// The CSV text: comment lines, header, the exact row, then `rows`.
+/// What the columns of [`table_csv`] mean (printed on stderr, so stdout is a plain CSV).
+pub const COLUMNS_NOTE: &str = "\
+Floquet multipliers of x'' + (24 + 10 sin t) x' + 10 cos t x = 0, period 2pi; exact exponents 0 and -24
+exponent = ln|mu| / 2pi; sip exponent2 from ln|det| accumulated per factor; variational exponent2 not resolved (round-off)
+monodromy_error = max |Phi_ij - Phi_exact_ij|; order_* = log2(error(N/2) / error(N)) between consecutive sip rows";
+
+/// The CSV text: header, the exact row, then `rows`.
 pub fn table_csv(rows: &[Row]) -> String {
     let opt = |v: Option<f64>| v.map_or(String::new(), |v| format!("{v:e}"));
     let mut s = String::new();
-    s.push_str("# Floquet multipliers of x'' + (24 + 10 sin t) x' + 10 cos t x = 0, period 2pi; exact exponents 0 and -24\n");
-    s.push_str("# exponent = ln|mu| / 2pi; sip exponent2 from ln|det| accumulated per factor; variational exponent2 not resolved (round-off)\n");
-    s.push_str("# monodromy_error = max |Phi_ij - Phi_exact_ij|; order_* = log2(error(N/2) / error(N)) between consecutive sip rows\n");
     s.push_str("method,intervals,mu1_re,mu1_im,mu2_abs,exponent1,exponent2,mu1_error,exponent2_error,monodromy_error,order_mu1,order_monodromy\n");
     let [m1, m2] = exact_multipliers();
     let _ = writeln!(
@@ -158,6 +161,7 @@ pub fn table_csv(rows: &[Row]) -> String {
 }
 
 fn main() -> anyhow::Result<()> {
+    eprintln!("{COLUMNS_NOTE}");
     print!("{}", table_csv(&rows()?));
     Ok(())
 }

@@ -69,6 +69,7 @@ fn main() -> anyhow::Result<()> {
         branch.bifurcations.len(),
         branch.finish
     );
+    eprintln!("{}", tmrotor::continuation::csv::COLUMNS_NOTE);
     print!("{}", branch_csv(&branch, 0)?);
     Ok(())
 }

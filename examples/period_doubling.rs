@@ -86,6 +86,7 @@ fn main() -> anyhow::Result<()> {
             b.solution.omega
         );
     }
+    eprintln!("{}", tmrotor::continuation::csv::COLUMNS_NOTE);
     print!("{}", branch_csv_with_parameter(&branch, 0, "gamma")?);
     Ok(())
 }

@@ -583,7 +583,7 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
         head.push(format!("amplitude_node{id}_m"));
     }
     for id in &report.thermal_nodes {
-        head.push(format!("temp_t{id}_c"));
+        head.push(format!("temp_tnode{id}_c"));
     }
     for id in &opts.dynamic_nodes {
         head.push(format!("residual_node{id}_rms_n"));
@@ -591,8 +591,8 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
         head.push(format!("nonlinear_force_node{id}_rms_n"));
     }
     for id in &report.thermal_nodes {
-        head.push(format!("residual_t{id}_rms_w"));
-        head.push(format!("residual_t{id}_max_w"));
+        head.push(format!("residual_tnode{id}_rms_w"));
+        head.push(format!("residual_tnode{id}_max_w"));
     }
     for h in [
         "residual_mech_rms_n",

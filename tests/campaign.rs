@@ -899,3 +899,30 @@ fn a_dry_run_lists_what_would_run_and_writes_nothing() {
         .to_string();
     assert!(err.contains("run flow_l_min=-1"), "{err}");
 }
+
+/// `lean = true` in a campaign file writes recordings without /orbits and /scene; they
+/// read back with every point.
+#[test]
+fn a_lean_campaign_leaves_out_orbits_and_scene() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let file = write_campaign(dir.path());
+    let text = std::fs::read_to_string(&file).expect("read");
+    std::fs::write(&file, format!("lean = true\n{text}")).expect("write");
+    let quiet = |_: campaign::Event<'_>| {};
+    let m = campaign::run(&file, Some(2), None, None, &quiet).expect("campaign");
+    for r in &m.runs {
+        let rec = tmrotor::record::read_recording(dir.path().join("out").join(&r.recording))
+            .expect("recording");
+        assert!(rec.complete && rec.points.len() == r.points, "{r:?}");
+        let topics: Vec<&str> = rec.topics.iter().map(|t| t.topic.as_str()).collect();
+        assert!(
+            !topics.contains(&"/orbits") && !topics.contains(&"/scene"),
+            "{topics:?}"
+        );
+        assert!(
+            rec.points
+                .iter()
+                .all(|p| p.orbits.is_empty() && p.period_s > 0.0)
+        );
+    }
+}

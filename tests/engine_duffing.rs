@@ -203,7 +203,7 @@ fn stability_changes_exactly_at_the_folds_and_stable_amplitudes_match_time_integ
     assert!(n_unstable >= 3);
     // CSV carries the labels and flags
     let csv = branch_csv(&branch, 0).expect("csv");
-    assert_eq!(csv.matches("saddle-node").count(), 2);
+    assert_eq!(csv.matches("saddle_node").count(), 2);
     assert!(csv.contains(",false,"));
 
     // stable amplitudes vs RK4 from a 1 % perturbed start, 400 time units of transient

@@ -138,12 +138,6 @@ fn continuation_steps_finish_on_the_bound_and_csv_lists_every_point() {
     assert!(
         lines
             .next()
-            .expect("comment")
-            .starts_with("# amplitude = max |x(t)|")
-    );
-    assert!(
-        lines
-            .next()
             .expect("header")
             .starts_with("omega,amplitude,stable,bifurcation")
     );
@@ -151,9 +145,9 @@ fn continuation_steps_finish_on_the_bound_and_csv_lists_every_point() {
     // folds still come out as saddle-nodes (they need no multipliers)
     assert_eq!(branch.bifurcations.len(), 2);
     assert_eq!(lines.count(), accepted + 2);
-    assert_eq!(csv.matches(",saddle-node").count(), 2);
+    assert_eq!(csv.matches(",saddle_node").count(), 2);
     // no stability method: the stable column is empty, not guessed
-    for row in csv.lines().skip(2) {
+    for row in csv.lines().skip(1) {
         assert_eq!(row.split(',').nth(2), Some(""));
     }
 }

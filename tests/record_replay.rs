@@ -44,21 +44,116 @@ fn branch_csv_has_one_row_per_point_with_recorded_values() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(
         lines[0],
-        "index,omega,arc_length,amp_1_m,stable,bifurcation,residual_mech,residual_therm,newton_iterations,half_order_share"
+        "index,omega_rad_s,arc_length,stable,bifurcation,spectral_radius,unstable_count,\
+         real_above_one,residual_mech,residual_therm,newton_iterations,half_order_share,amp_rms_node1_m"
     );
     assert_eq!(lines.len(), rec.points.len() + 1);
     for (line, p) in lines[1..].iter().zip(&rec.points) {
         let cols: Vec<&str> = line.split(',').collect();
+        assert_eq!(cols[0].parse::<u64>().expect("index"), p.index);
         assert_eq!(cols[1].parse::<f64>().expect("omega"), p.omega_rad_s);
-        assert_eq!(cols[3].parse::<f64>().expect("amp"), p.amplitude_rms_m[0]);
-        assert_eq!(cols[4], if p.stable == Some(true) { "1" } else { "0" });
+        assert_eq!(cols[12].parse::<f64>().expect("amp"), p.amplitude_rms_m[0]);
         assert_eq!(
-            cols[5],
-            p.bifurcation.map_or("", |b| b.label()),
+            cols[3],
+            if p.stable == Some(true) {
+                "true"
+            } else {
+                "false"
+            }
+        );
+        assert_eq!(
+            cols[4],
+            p.bifurcation.map_or("", |b| b.key()),
             "bifurcation column"
         );
+        assert_eq!(cols[5].parse::<f64>().expect("radius"), p.spectral_radius());
     }
-    assert_eq!(out.matches("saddle-node").count(), 2);
+    assert_eq!(out.matches("saddle_node").count(), 2);
+}
+
+/// `replay export` writes every table with one row per point (per multiplier, per
+/// bifurcation, per entity), the values as recorded, and the embedded model text.
+#[test]
+fn export_writes_every_table_with_the_recorded_values() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = recording(dir.path(), true);
+    let rec = read_recording(&path).expect("read");
+    let out_dir = dir.path().join("tables");
+    let (res, out, _) = replay_in_process(&[
+        "export",
+        path.to_str().expect("utf-8"),
+        "--out",
+        out_dir.to_str().expect("utf-8"),
+    ]);
+    res.expect("export");
+    assert!(out.contains("branch.csv"), "{out}");
+    let read = |name: &str| -> Vec<Vec<String>> {
+        let text = std::fs::read_to_string(out_dir.join(name)).expect(name);
+        text.lines()
+            .map(|l| l.split(',').map(String::from).collect())
+            .collect()
+    };
+    let col = |table: &[Vec<String>], name: &str| -> usize {
+        table[0]
+            .iter()
+            .position(|h| h == name)
+            .unwrap_or_else(|| panic!("no column {name} in {:?}", table[0]))
+    };
+    let header_ok = |h: &str| {
+        h.chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+    };
+    let n = rec.points.len();
+    for name in [
+        "branch.csv",
+        "temperatures.csv",
+        "clearances.csv",
+        "bearing_loads.csv",
+        "thermal_forces.csv",
+    ] {
+        let t = read(name);
+        assert_eq!(t.len(), n + 1, "{name}: one row per point");
+        assert!(t[0].iter().all(|h| header_ok(h)), "{name}: {:?}", t[0]);
+        assert!(t.iter().all(|r| r.len() == t[0].len()), "{name}: ragged");
+    }
+    let temps = read("temperatures.csv");
+    let id = rec.run.thermal_nodes[0].id;
+    let c = col(&temps, &format!("tnode{id}_mean_c"));
+    for (row, p) in temps[1..].iter().zip(&rec.points) {
+        assert_eq!(row[c].parse::<f64>().expect("T"), p.temperatures[0].mean_c);
+    }
+    let bearing = &tmrotor::derive::table::bearing_keys(&rec.run.bearings)[0];
+    let cl = read("clearances.csv");
+    let c = col(&cl, &format!("{bearing}_delta_v_m"));
+    for (row, p) in cl[1..].iter().zip(&rec.points) {
+        assert_eq!(
+            row[c].parse::<f64>().expect("dv"),
+            p.clearances[0].delta_v_m
+        );
+    }
+    let loads = read("bearing_loads.csv");
+    let c = col(&loads, &format!("{bearing}_max_n"));
+    for (row, p) in loads[1..].iter().zip(&rec.points) {
+        let max = p.bearing_loads[0]
+            .radial_n
+            .iter()
+            .copied()
+            .fold(f64::MIN, f64::max);
+        assert_eq!(row[c].parse::<f64>().expect("load"), max);
+    }
+    let m = read("multipliers.csv");
+    let total: usize = rec.points.iter().map(|p| p.multipliers.len()).sum();
+    assert_eq!(m.len(), total + 1);
+    let b = read("bifurcations.csv");
+    assert_eq!(b.len(), rec.bifurcations.len() + 1);
+    assert!(b[1..].iter().all(|r| r[1] == "saddle_node"), "{b:?}");
+    let nodes = read("nodes.csv");
+    let expected = rec.run.nodes.len() + rec.run.thermal_nodes.len() + rec.run.bearings.len();
+    assert_eq!(nodes.len(), expected + 1);
+    assert_eq!(
+        std::fs::read_to_string(out_dir.join("model.toml")).expect("model"),
+        rec.run.model_text
+    );
 }
 
 #[test]
@@ -81,7 +176,7 @@ fn orbit_rederives_closed_form_histories_at_any_sampling() {
     res.expect("orbit");
     assert!(err.contains("cannot be re-derived"), "{err}");
     let lines: Vec<&str> = out.lines().collect();
-    assert_eq!(lines[0], "t_s,x_1_m,y_1_m,T_52_c");
+    assert_eq!(lines[0], "t_s,node1_x_m,node1_y_m,tnode52_c");
     assert_eq!(lines.len(), 38);
     // Independent reference: the synthetic closed form x = a cos(ωt − φ) + c cos(λωt),
     // recovered from the stored harmonic-1 coefficients (a cos φ, a sin φ).

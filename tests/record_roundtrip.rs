@@ -12,9 +12,17 @@ use tmrotor::record::{
 };
 
 fn write_both(options: &SyntheticOptions, path: &std::path::Path) -> MemorySink {
+    write_both_with(options, path, McapOptions::default())
+}
+
+fn write_both_with(
+    options: &SyntheticOptions,
+    path: &std::path::Path,
+    mcap: McapOptions,
+) -> MemorySink {
     let data = synthetic::generate(options);
     let mut mem = MemorySink::new();
-    let mut file = McapSink::create(path, McapOptions::default()).expect("create");
+    let mut file = McapSink::create(path, mcap).expect("create");
     for sink in [&mut mem as &mut dyn Sink, &mut file as &mut dyn Sink] {
         sink.begin_run(&data.run).expect("begin");
         let mut bifs = data.bifurcations.iter().peekable();
@@ -27,6 +35,67 @@ fn write_both(options: &SyntheticOptions, path: &std::path::Path) -> MemorySink 
         sink.finish(RunStatus::Completed).expect("finish");
     }
     mem
+}
+
+/// A lean recording leaves out /orbits and /scene and reads back with everything else
+/// equal; the orbits re-derived from its /harmonics equal the ones a full recording
+/// stores, and its period is the basis's.
+#[test]
+fn lean_recording_reads_back_and_rederives_the_orbits() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (full_path, lean_path) = (dir.path().join("full.mcap"), dir.path().join("lean.mcap"));
+    let options = SyntheticOptions::default();
+    write_both(&options, &full_path);
+    write_both_with(&options, &lean_path, McapOptions::lean());
+    let full = read_recording(&full_path).expect("full");
+    let lean = read_recording(&lean_path).expect("lean");
+    assert!(lean.complete, "notes: {:?}", lean.notes);
+    let topics: Vec<&str> = lean.topics.iter().map(|t| t.topic.as_str()).collect();
+    assert!(
+        !topics.contains(&"/orbits") && !topics.contains(&"/scene"),
+        "{topics:?}"
+    );
+    assert!(topics.contains(&"/harmonics"), "{topics:?}");
+    assert_eq!(lean.points.len(), full.points.len());
+    assert_eq!(lean.bifurcations, full.bifurcations);
+    for (l, f) in lean.points.iter().zip(&full.points) {
+        assert!(l.orbits.is_empty());
+        assert!((l.period_s - f.period_s).abs() <= 1e-15 * f.period_s);
+        let mut l = l.clone();
+        l.orbits.clone_from(&f.orbits);
+        l.period_s = f.period_s;
+        assert_eq!(&l, f);
+        let samples = f.orbits[0].x_m.len();
+        let orbits =
+            derive::orbits(&lean.run, &l.coeffs_mech, l.omega_rad_s, samples).expect("orbits");
+        // Relative to the orbit's size: near a zero crossing a sample is a difference of
+        // terms of the orbit's size.
+        for (got, want) in orbits.iter().zip(&f.orbits) {
+            let scale = want
+                .x_m
+                .iter()
+                .chain(&want.y_m)
+                .fold(0.0_f64, |m, v| m.max(v.abs()));
+            for (a, b) in got
+                .x_m
+                .iter()
+                .zip(&want.x_m)
+                .chain(got.y_m.iter().zip(&want.y_m))
+            {
+                assert!(
+                    (a - b).abs() <= 1e-12 * scale,
+                    "{a} vs {b} (orbit size {scale})"
+                );
+            }
+        }
+    }
+    let size = |p: &std::path::Path| std::fs::metadata(p).expect("size").len();
+    assert!(
+        size(&lean_path) < size(&full_path) / 2,
+        "{} vs {}",
+        size(&lean_path),
+        size(&full_path)
+    );
 }
 
 #[test]

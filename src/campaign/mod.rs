@@ -78,6 +78,10 @@ pub const CAMPAIGN_LOCK: &str = "campaign.lock";
 pub struct CampaignFile {
     /// Output directory, relative to the campaign file (default: `<file stem>-out`).
     pub output_dir: Option<PathBuf>,
+    /// Lean recordings: without `/orbits` and `/scene`, which replay re-derives from
+    /// `/harmonics` ([`McapOptions::lean`]). Default false.
+    #[serde(default)]
+    pub lean: bool,
     /// Settings shared by all runs (keys of [`StudySettings`]).
     #[serde(default)]
     pub defaults: toml::Table,
@@ -99,6 +103,8 @@ pub struct CampaignRun {
     /// SHA-256 of the run's model text after `set` (filled when the runs are checked
     /// before a campaign starts; empty from [`load`]).
     pub model_sha256: String,
+    /// Write a lean recording (the campaign file's `lean`).
+    pub lean: bool,
 }
 
 /// Errors of a campaign.
@@ -267,6 +273,7 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
             name,
             settings,
             model_sha256: String::new(),
+            lean: spec.lean,
         });
     }
     let out = match &spec.output_dir {
@@ -799,8 +806,12 @@ fn run_one(
     let result = SweepProblem::new(&r.settings)
         .map_err(|e| e.to_string())
         .and_then(|problem| {
-            let mut sink =
-                McapSink::create(rec_path, McapOptions::default()).map_err(|e| e.to_string())?;
+            let options = if r.lean {
+                McapOptions::lean()
+            } else {
+                McapOptions::default()
+            };
+            let mut sink = McapSink::create(rec_path, options).map_err(|e| e.to_string())?;
             problem
                 .run_in(
                     &mut sink,

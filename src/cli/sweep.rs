@@ -107,6 +107,11 @@ pub struct SweepArgs {
     /// Output recording.
     #[arg(short, long, default_value = "sweep.mcap")]
     pub output: PathBuf,
+    /// Lean recording: leave out /orbits and /scene, which replay and the Python package
+    /// re-derive from /harmonics (about a fifth of the size; a viewer's 3D panel then has
+    /// nothing to draw)
+    #[arg(long)]
+    pub lean: bool,
     /// No progress: no bar on a terminal, no progress lines when the output goes to a file.
     #[arg(long, short)]
     pub quiet: bool,
@@ -193,7 +198,12 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     let (cpu_start, steal_start) = (super::process_cpu_seconds(), super::steal_seconds());
     let settings = args.settings()?;
     let problem = SweepProblem::new(&settings)?;
-    let mut sink = McapSink::create(&args.output, McapOptions::default())?;
+    let options = if args.lean {
+        McapOptions::lean()
+    } else {
+        McapOptions::default()
+    };
+    let mut sink = McapSink::create(&args.output, options)?;
     if let Some(kept) = sink.stale_partial() {
         eprintln!(
             "note: an earlier run writing {} was killed; what it recorded was moved to {}",

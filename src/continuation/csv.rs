@@ -1,19 +1,27 @@
 //! The branch as CSV text, as the examples print it.
 //!
-//! Columns: `omega,amplitude,stable,bifurcation,rms_amplitude,arclength,newton_iterations,residual_mech,residual_therm`.
+//! One header row, no comment lines (the convention of every table: docs/user-guide.md,
+//! "CSV outputs"). Columns:
+//! `omega,amplitude,stable,bifurcation,rms_amplitude,arc_length,newton_iterations,residual_mech,residual_therm`.
 //! `amplitude` is `max_t |x_dof(t)|` over one period of the chosen mechanical DoF
 //! ([`HbSolution::max_abs`](crate::hb::HbSolution::max_abs)); `rms_amplitude` is paper
 //! Eq. 35 for the same DoF; `stable` is `true`/`false`, empty when no stability method ran
-//! (or it failed at that point); `bifurcation` is the label of a located bifurcation
-//! ([`BifurcationKind::label`](crate::stability::BifurcationKind::label)), empty
+//! (or it failed at that point); `bifurcation` is the type of a located bifurcation
+//! ([`BifurcationKind::key`](crate::stability::BifurcationKind::key)), empty
 //! otherwise. Rows are ordered by arclength; located bifurcations are rows of their own.
 
 use std::fmt::Write;
 
+/// What the columns of [`branch_csv`] mean, for a program to print beside the CSV (on
+/// stderr, so the CSV itself stays a plain table).
+pub const COLUMNS_NOTE: &str = "columns: amplitude = max |x(t)| over one period of the chosen DoF; \
+rms_amplitude = paper Eq. 35 of that DoF; stable empty = not computed; bifurcation = the type \
+of a located bifurcation row";
+
 use super::{Branch, BranchPoint, ContinuationError};
 
-/// CSV of `branch` with amplitudes of mechanical DoF `dof` (0-based); the first line is a
-/// `#` comment explaining the columns. Errors when `dof` is not a mechanical DoF.
+/// CSV of `branch` with amplitudes of mechanical DoF `dof` (0-based). Errors when `dof`
+/// is not a mechanical DoF.
 pub fn branch_csv(branch: &Branch, dof: usize) -> Result<String, ContinuationError> {
     branch_csv_with_parameter(branch, dof, "omega")
 }
@@ -39,20 +47,15 @@ pub fn branch_csv_with_parameter(
     let mut rows: Vec<&BranchPoint> = branch.points.iter().chain(&branch.bifurcations).collect();
     rows.sort_by(|a, b| a.arclength.total_cmp(&b.arclength));
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "# amplitude = max |x(t)| over one period of mechanical DoF {} (index {dof}); rms_amplitude = paper Eq. 35 of that DoF; stable empty = not computed",
-        dof + 1
-    );
     s.push_str(parameter);
-    s.push_str(",amplitude,stable,bifurcation,rms_amplitude,arclength,newton_iterations,residual_mech,residual_therm\n");
+    s.push_str(",amplitude,stable,bifurcation,rms_amplitude,arc_length,newton_iterations,residual_mech,residual_therm\n");
     for p in rows {
         let stable = match p.stable() {
             Some(true) => "true",
             Some(false) => "false",
             None => "",
         };
-        let label = p.bifurcation.map_or("", |k| k.label());
+        let label = p.bifurcation.map_or("", |k| k.key());
         let sol = &p.solution;
         let _ = writeln!(
             s,

@@ -252,7 +252,8 @@ pub fn validate_point(run: &RunInfo, p: &PointRecord) -> Result<(), String> {
         run.n_therm * nc,
         false,
     )?;
-    check("orbits", p.orbits.len(), run.nodes.len(), false)?;
+    // Empty in a point read from a lean recording (no /orbits).
+    check("orbits", p.orbits.len(), run.nodes.len(), true)?;
     for (i, o) in p.orbits.iter().enumerate() {
         check(&format!("orbits[{i}].y_m"), o.y_m.len(), o.x_m.len(), false)?;
     }
@@ -439,14 +440,21 @@ pub struct PointParts {
     pub floquet: Option<pb::Floquet>,
 }
 
-/// Assembles a point from its messages. `summary`, `harmonics` and `orbits` are required.
+/// Assembles a point from its messages. `summary` and `harmonics` are required; without
+/// `orbits` (a lean recording) the point's orbits are empty and its period is the basis's.
 pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, String> {
     let s = parts
         .summary
         .as_ref()
         .ok_or("no /summary message (the point was not written completely)")?;
     let h = parts.harmonics.as_ref().ok_or("no /harmonics message")?;
-    let o = parts.orbits.as_ref().ok_or("no /orbits message")?;
+    let period_s = match &parts.orbits {
+        Some(o) => o.period_s,
+        None => run
+            .basis()
+            .map_err(|e| format!("basis of /run_info: {e}"))?
+            .period(s.omega_rad_s),
+    };
     let point = PointRecord {
         index: s.index,
         omega_rad_s: s.omega_rad_s,
@@ -459,15 +467,16 @@ pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, S
         newton_iterations: s.newton_iterations,
         coeffs_mech: h.mech.clone(),
         coeffs_therm: h.therm.clone(),
-        period_s: o.period_s,
-        orbits: o
-            .nodes
-            .iter()
-            .map(|n| NodeOrbit {
-                x_m: n.x_m.clone(),
-                y_m: n.y_m.clone(),
-            })
-            .collect(),
+        period_s,
+        orbits: parts.orbits.as_ref().map_or_else(Vec::new, |o| {
+            o.nodes
+                .iter()
+                .map(|n| NodeOrbit {
+                    x_m: n.x_m.clone(),
+                    y_m: n.y_m.clone(),
+                })
+                .collect()
+        }),
         temperatures: parts
             .temperatures
             .as_ref()

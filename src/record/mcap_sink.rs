@@ -72,6 +72,9 @@ pub struct McapOptions {
     pub chunk_size: u64,
     /// zstd level; 0 is the library default (3).
     pub compression_level: u32,
+    /// Publish `/orbits` (whirl orbits sampled over a period). Default true; replay and the
+    /// Python package re-derive them from `/harmonics` when they are left out.
+    pub orbits: bool,
     /// Publish `/scene` (`foxglove.SceneUpdate` whirl orbits). Default true.
     pub scene: bool,
     /// Scene scale and frame.
@@ -84,8 +87,22 @@ impl Default for McapOptions {
             flush_every: 1,
             chunk_size: 1 << 20,
             compression_level: 0,
+            orbits: true,
             scene: true,
             scene_options: SceneOptions::default(),
+        }
+    }
+}
+
+impl McapOptions {
+    /// A lean recording: without `/orbits` and `/scene`, which replay re-derives from
+    /// `/harmonics` (about a fifth of the size of a full recording; the 3D view of a viewer
+    /// then has nothing to draw).
+    pub fn lean() -> Self {
+        Self {
+            orbits: false,
+            scene: false,
+            ..Self::default()
         }
     }
 }
@@ -387,7 +404,9 @@ impl Sink for McapSink {
         let t = point_time_ns(point.index);
         let m = point_to_pb(&run, point);
         self.publish(schema::TOPIC_HARMONICS, t, &m.harmonics)?;
-        self.publish(schema::TOPIC_ORBITS, t, &m.orbits)?;
+        if self.options.orbits {
+            self.publish(schema::TOPIC_ORBITS, t, &m.orbits)?;
+        }
         if let Some(msg) = &m.temperatures {
             self.publish(schema::TOPIC_TEMPERATURES, t, msg)?;
         }

@@ -271,12 +271,22 @@ pub enum BifurcationKind {
 }
 
 impl BifurcationKind {
-    /// Short lower-case label used in CSV output and recordings.
+    /// Short lower-case label used in text: messages, logs, the report.
     pub fn label(self) -> &'static str {
         match self {
             Self::SaddleNode => "saddle-node",
             Self::PeriodDoubling => "period-doubling",
             Self::NeimarkSacker => "neimark-sacker",
+        }
+    }
+
+    /// Identifier used in tables (CSV, DataFrames): `saddle_node`, `period_doubling`,
+    /// `neimark_sacker`.
+    pub fn key(self) -> &'static str {
+        match self {
+            Self::SaddleNode => "saddle_node",
+            Self::PeriodDoubling => "period_doubling",
+            Self::NeimarkSacker => "neimark_sacker",
         }
     }
 

@@ -53,6 +53,12 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
         })
         .collect();
     writeln!(out, "runs:        1")?;
+    if !rec.points.is_empty() && !rec.topics.iter().any(|t| t.topic == "/orbits") {
+        writeln!(
+            out,
+            "form:        lean (no /orbits or /scene; replay re-derives orbits from /harmonics)"
+        )?;
+    }
     writeln!(
         out,
         "basis:       {} harmonics: {}; λ = {}/{}",

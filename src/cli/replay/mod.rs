@@ -7,7 +7,8 @@
 //! | subcommand | output |
 //! |---|---|
 //! | `info FILE` | runs, topics, counts, ω range, bifurcations, settings, completeness |
-//! | `branch FILE --csv` | one row per point: ω, amplitude per node, stable, bifurcation, residuals |
+//! | `branch FILE --csv` | one row per point: ω, stability, bifurcation, residuals, amplitude per node |
+//! | `export FILE --out DIR` | every per-point quantity as CSV tables, the model and the settings |
 //! | `orbit FILE --point N [--node K] [--samples S]` | time histories re-derived from the coefficients |
 //! | `stability FILE [--sip-intervals N]` | Floquet multipliers recomputed (optionally with a finer product) and compared with the stored ones |
 //! | `plot FILE [--out DIR]` | PNG amplitude–frequency curves, RC variations, temperatures |
@@ -16,6 +17,7 @@
 //! has nothing for the recording's model, replay says so instead of guessing.
 
 pub mod branch;
+pub mod export;
 pub mod info;
 pub mod orbit;
 pub mod plot;
@@ -48,6 +50,15 @@ pub enum Command {
         /// Comma-separated values with a header row (default: aligned text).
         #[arg(long)]
         csv: bool,
+    },
+    /// Every per-point quantity as CSV files (branch, temperatures, clearances, bearing
+    /// loads, thermal forces, multipliers, slow exponents, bifurcations, nodes), with the
+    /// embedded model and settings.
+    Export {
+        file: PathBuf,
+        /// Output directory (created if missing).
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Time histories of one point re-derived from its harmonic coefficients, as CSV.
     Orbit {
@@ -114,6 +125,7 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result
     match cli.command {
         Command::Info { file } => info::run(&open(&file, err)?, out),
         Command::Branch { file, csv } => branch::run(&open(&file, err)?, csv, out),
+        Command::Export { file, out: dir } => export::run(&open(&file, err)?, &dir, out),
         Command::Orbit {
             file,
             point,

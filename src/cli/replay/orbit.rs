@@ -4,7 +4,7 @@ use std::io::Write;
 
 use anyhow::{Context, bail};
 
-use crate::derive::{self, rederivers_for};
+use crate::derive::{self, rederivers_for, table};
 use crate::record::reader::Recording;
 
 /// Writes CSV time histories of one point at `samples` points per period, re-derived
@@ -69,13 +69,17 @@ pub fn run(
     let mut header = vec!["t_s".to_string()];
     for &i in &selected {
         let id = run.nodes[i].id;
-        header.push(format!("x_{id}_m"));
-        header.push(format!("y_{id}_m"));
+        header.push(format!("{}_x_m", table::node_key(id)));
+        header.push(format!("{}_y_m", table::node_key(id)));
     }
-    header.extend(run.thermal_nodes.iter().map(|n| format!("T_{}_c", n.id)));
+    header.extend(
+        run.thermal_nodes
+            .iter()
+            .map(|n| format!("{}_c", table::thermal_node_key(n.id))),
+    );
     if let Some(b) = &bearings {
-        for (info, _) in run.bearings.iter().zip(&b.loads) {
-            header.push(format!("load_{}_n", info.name));
+        for (key, _) in table::bearing_keys(&run.bearings).iter().zip(&b.loads) {
+            header.push(format!("{key}_load_n"));
         }
     }
     writeln!(out, "{}", header.join(","))?;
@@ -85,7 +89,7 @@ pub fn run(
             row.push(format!("{:e}", orbits[i].x_m[k]));
             row.push(format!("{:e}", orbits[i].y_m[k]));
         }
-        row.extend(temps.iter().map(|h| format!("{}", h[k])));
+        row.extend(temps.iter().map(|h| table::number(h[k])));
         if let Some(b) = &bearings {
             row.extend(b.loads.iter().map(|l| {
                 l.radial_n
