@@ -76,6 +76,23 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
         r.thermal_nodes.len(),
         r.bearings.len()
     )?;
+    // The index a viewer's message path uses (`/summary.amplitude_rms_m[7]`).
+    let nodes: Vec<String> = r
+        .nodes
+        .iter()
+        .enumerate()
+        .map(|(i, n)| format!("[{i}] {}", n.name))
+        .collect();
+    writeln!(out, "node index:  {}", nodes.join(", "))?;
+    let bearings: Vec<String> = r
+        .bearings
+        .iter()
+        .enumerate()
+        .map(|(i, b)| format!("[{i}] {}", b.name))
+        .collect();
+    if !bearings.is_empty() {
+        writeln!(out, "bearing index: {}", bearings.join(", "))?;
+    }
     writeln!(out, "points:      {}", rec.points.len())?;
     if let Some((lo, hi)) = rec.omega_range() {
         writeln!(out, "ω range:     {lo:.4} … {hi:.4} rad/s")?;
