@@ -178,6 +178,14 @@ fn orbit_rederives_closed_form_histories_at_any_sampling() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(lines[0], "t_s,node1_x_m,node1_y_m,tnode52_c");
     assert_eq!(lines.len(), 38);
+    // A sampling that would not fit in memory is refused before anything is allocated.
+    let (res, _, _) =
+        replay_in_process(&["orbit", file, "--point", "5", "--samples", "100000000000"]);
+    let e = res.expect_err("too many samples").to_string();
+    assert!(
+        e.contains("--samples 100000000000") && e.contains("MB"),
+        "{e}"
+    );
     // Independent reference: the synthetic closed form x = a cos(ωt − φ) + c cos(λωt),
     // recovered from the stored harmonic-1 coefficients (a cos φ, a sin φ).
     let nc = rec.run.n_coeffs();

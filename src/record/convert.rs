@@ -440,6 +440,23 @@ pub struct PointParts {
     pub floquet: Option<pb::Floquet>,
 }
 
+/// Which of the optional messages of a point are there, by topic.
+pub type Presence = [(&'static str, bool); 6];
+
+impl PointParts {
+    /// Which of the optional messages the point has, by topic.
+    pub fn present(&self) -> Presence {
+        [
+            ("/orbits", self.orbits.is_some()),
+            ("/temperatures", self.temperatures.is_some()),
+            ("/clearance", self.clearances.is_some()),
+            ("/bearing_loads", self.bearing_loads.is_some()),
+            ("/thermal_forces", self.thermal_forces.is_some()),
+            ("/floquet", self.floquet.is_some()),
+        ]
+    }
+}
+
 /// Assembles a point from its messages. `summary` and `harmonics` are required; without
 /// `orbits` (a lean recording) the point's orbits are empty and its period is the basis's.
 pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, String> {

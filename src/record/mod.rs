@@ -38,6 +38,7 @@ pub mod mcap_sink;
 pub mod output;
 pub mod pb;
 pub mod reader;
+pub mod scan;
 pub mod schema;
 pub mod sink;
 pub mod synthetic;
@@ -48,7 +49,7 @@ use std::path::PathBuf;
 use thiserror::Error;
 
 pub use mcap_sink::{McapOptions, McapSink};
-pub use reader::{ReadError, Recording, read_recording};
+pub use reader::{ReadError, ReadOptions, Recording, read_recording, read_recording_with};
 pub use sink::{MemorySink, Sink, install_interrupt_flag, record_run};
 pub use types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
 

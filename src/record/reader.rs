@@ -1,21 +1,26 @@
 //! Reads a recording back into domain types.
 //!
-//! The file is scanned front to back (not through the summary section), so a file cut
-//! short — a killed process, a full disk — yields every point that was completely written;
-//! [`Recording::complete`] is then false and [`Recording::notes`] says what was missing.
-//! A file that is not MCAP, is damaged (bad CRC, undecodable chunk or message), or is an
-//! MCAP file from another program gets a [`ReadError`] naming the file and the reason.
+//! The file is streamed front to back by [`super::scan`] (not through the summary
+//! section), with memory bounded by its largest record: a file cut short — a killed
+//! process, a full disk — yields every point that was completely written, and a damaged
+//! file every point whose chunk is intact (one point per chunk). [`Recording::complete`]
+//! is then false, [`Recording::missing`] names the lost point indices and
+//! [`Recording::notes`] says what was wrong, including counts of the summary section that
+//! disagree with what was read. A file that is not MCAP, has no readable run description,
+//! or is an MCAP file from another program gets a [`ReadError`] naming the file and the
+//! reason.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use mcap::read::{ChunkFlattener, Options};
-use mcap::records::Record;
 use prost::Message;
 use thiserror::Error;
 
-use super::convert::{PointParts, bifurcation_record_from_pb, point_from_pb, run_info_from_pb};
+use super::convert::{
+    PointParts, Presence, bifurcation_record_from_pb, point_from_pb, run_info_from_pb,
+};
 use super::pb::tmrotor::v1 as pb;
+use super::scan;
 use super::schema::{self, names};
 use super::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
 
@@ -54,8 +59,11 @@ pub struct Recording {
     pub bifurcations: Vec<BifurcationRecord>,
     /// Status written by `finish`; `None` when the file was cut before it.
     pub status: Option<RunStatus>,
-    /// True when the file ends properly (data end, footer, end magic) and has a status.
+    /// True when the file ends properly (data end, footer, end magic), has a status, and
+    /// nothing in it was damaged, missing or disagreed with its summary's counts.
     pub complete: bool,
+    /// Indices of points lost before the last one read (in damaged or missing chunks).
+    pub missing: Vec<u64>,
     /// What was missing or skipped, for the user.
     pub notes: Vec<String>,
     /// The sweep's warnings about the branch (`/log` entries written by
@@ -83,11 +91,34 @@ impl Recording {
     }
 }
 
+/// What to keep of a recording in memory.
+#[derive(Clone, Copy, Debug)]
+pub struct ReadOptions {
+    /// Keep the stored `/orbits` samples (default true). Without them a point's `orbits`
+    /// are empty (as from a lean recording) and `derive::orbits` re-derives them:
+    /// replay reads this way, which keeps its memory well below the file's size.
+    pub orbits: bool,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        Self { orbits: true }
+    }
+}
+
+/// Reads the recording at `path`, keeping everything ([`read_recording_with`]).
+pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording, ReadError> {
+    read_recording_with(path, ReadOptions::default())
+}
+
 /// Reads the recording at `path`.
 ///
 /// Only regular files are read: a directory, a device (`/dev/zero`) or a FIFO is refused at
 /// once, before anything is read (such inputs would otherwise block or grow without end).
-pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording, ReadError> {
+pub fn read_recording_with(
+    path: impl AsRef<Path>,
+    options: ReadOptions,
+) -> Result<Recording, ReadError> {
     let path = path.as_ref();
     let meta = std::fs::metadata(path).map_err(|source| ReadError::Io {
         file: path.to_path_buf(),
@@ -104,11 +135,11 @@ pub fn read_recording(path: impl AsRef<Path>) -> Result<Recording, ReadError> {
             reason: format!("it is {what}; a recording is a regular .mcap file"),
         });
     }
-    let bytes = std::fs::read(path).map_err(|source| ReadError::Io {
+    let file = std::fs::File::open(path).map_err(|source| ReadError::Io {
         file: path.to_path_buf(),
         source,
     })?;
-    read_recording_bytes(&bytes, path)
+    read_from(std::io::BufReader::new(file), meta.len(), path, options)
 }
 
 #[derive(Default)]
@@ -121,11 +152,143 @@ struct Channel {
 
 /// Reads a recording held in memory; `file` is only used in messages.
 pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, ReadError> {
+    read_from(
+        std::io::Cursor::new(bytes),
+        bytes.len() as u64,
+        file,
+        ReadOptions::default(),
+    )
+}
+
+/// What the scan collects before the run is rebuilt.
+#[derive(Default)]
+struct Collected {
+    schemas: BTreeMap<u16, String>,
+    channels: BTreeMap<u16, Channel>,
+    /// Messages of channels not (yet) defined: their definition may come later (the
+    /// summary section repeats every channel) when the chunk that held it is damaged.
+    pending: Vec<(u16, Vec<u8>)>,
+    metadata: BTreeMap<String, BTreeMap<String, String>>,
+    attachments: Vec<(String, Vec<u8>)>,
+    run: Option<pb::RunInfo>,
+    parts: BTreeMap<u64, PointParts>,
+    bifs: Vec<pb::Bifurcation>,
+    warnings: Vec<String>,
+    /// Messages that did not decode: topic and reason.
+    undecodable: Vec<String>,
+    statistics: Option<(u32, BTreeMap<u16, u64>)>,
+    saw_data_end: bool,
+    saw_footer: bool,
+    /// Count `/orbits` messages without decoding them ([`ReadOptions::orbits`]).
+    skip_orbits: bool,
+    /// The run description as soon as it is read (without the model text), so that each
+    /// point is built when its `/summary` arrives and its messages are freed: memory then
+    /// holds the points, not every message of the file.
+    run_early: Option<RunInfo>,
+    /// Points built as their `/summary` arrived, with which optional messages they had.
+    built: BTreeMap<u64, (PointRecord, Presence)>,
+}
+
+impl Collected {
+    fn message(&mut self, channel_id: u16, data: &[u8]) {
+        let Some(ch) = self.channels.get_mut(&channel_id) else {
+            self.pending.push((channel_id, data.to_vec()));
+            return;
+        };
+        ch.count += 1;
+        if ch.encoding != "protobuf" || (self.skip_orbits && ch.topic == schema::TOPIC_ORBITS.name)
+        {
+            return;
+        }
+        let topic = ch.topic.clone();
+        if let Err(reason) = decode_message(
+            &topic,
+            data,
+            &mut self.run,
+            &mut self.parts,
+            &mut self.bifs,
+            &mut self.warnings,
+        ) {
+            self.undecodable.push(format!("{topic}: {reason}"));
+            return;
+        }
+        if topic == schema::TOPIC_SUMMARY.name
+            && let Ok(m) = pb::PointSummary::decode(data)
+        {
+            self.build(m.index);
+        }
+    }
+
+    /// Builds point `index` from its messages (the `/summary` is written last), unless the
+    /// run description is not known yet; then it is built at the end.
+    fn build(&mut self, index: u64) {
+        if self.run_early.is_none() {
+            self.run_early = self
+                .run
+                .as_ref()
+                .and_then(|m| run_info_from_pb(m, String::new()).ok());
+        }
+        let Some(run) = &self.run_early else {
+            return;
+        };
+        let Some(parts) = self.parts.remove(&index) else {
+            return;
+        };
+        match point_from_pb(run, &parts) {
+            Ok(point) => {
+                self.built.insert(index, (point, parts.present()));
+            }
+            Err(_) => {
+                // Said at the end, with the other points that cannot be built.
+                self.parts.insert(index, parts);
+            }
+        }
+    }
+
+    fn item(&mut self, item: scan::Item<'_>) {
+        match item {
+            scan::Item::Schema { id, name, .. } => {
+                self.schemas.insert(id, name);
+            }
+            scan::Item::Channel {
+                id,
+                schema_id,
+                topic,
+                encoding,
+            } => {
+                let schema = self.schemas.get(&schema_id).cloned().unwrap_or_default();
+                self.channels.entry(id).or_insert(Channel {
+                    topic,
+                    schema,
+                    encoding,
+                    count: 0,
+                });
+            }
+            scan::Item::Message { channel_id, data } => self.message(channel_id, data),
+            scan::Item::Attachment { name, data } => self.attachments.push((name, data.to_vec())),
+            scan::Item::Metadata { name, map } => {
+                self.metadata.insert(name, map);
+            }
+            scan::Item::Statistics {
+                chunk_count,
+                channel_message_counts,
+            } => self.statistics = Some((chunk_count, channel_message_counts)),
+            scan::Item::DataEnd => self.saw_data_end = true,
+            scan::Item::Footer => self.saw_footer = true,
+        }
+    }
+}
+
+/// Reads a recording from `r` (`size` bytes): every intact point, past damaged or missing
+/// chunks (see [`super::scan`]); what was lost is said in the notes, and such a file is
+/// never complete.
+fn read_from<R: std::io::Read + std::io::Seek>(
+    r: R,
+    size: u64,
+    file: &Path,
+    options: ReadOptions,
+) -> Result<Recording, ReadError> {
     let file_buf = file.to_path_buf();
-    let not_mcap = |reason: String| ReadError::NotMcap {
-        file: file_buf.clone(),
-        reason,
-    };
     let corrupt = |reason: String| ReadError::Corrupt {
         file: file_buf.clone(),
         reason,
@@ -134,94 +297,51 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
         file: file_buf.clone(),
         reason,
     };
-    if bytes.len() < mcap::MAGIC.len() || !bytes.starts_with(mcap::MAGIC) {
-        return Err(not_mcap(format!(
-            "it does not start with the MCAP magic bytes ({} bytes long)",
-            bytes.len()
-        )));
-    }
-
-    let reader = ChunkFlattener::new_with_options(
-        bytes,
-        Options::IgnoreEndMagic | Options::ValidateChunkCrcs,
-    )
-    .map_err(|e| corrupt(e.to_string()))?;
-
-    let mut schemas: BTreeMap<u16, (String, String)> = BTreeMap::new();
-    let mut channels: BTreeMap<u16, Channel> = BTreeMap::new();
-    let mut metadata = BTreeMap::new();
-    let mut attachments: Vec<(String, Vec<u8>)> = Vec::new();
-    let mut run_msg: Option<pb::RunInfo> = None;
-    let mut parts: BTreeMap<u64, PointParts> = BTreeMap::new();
-    let mut bif_msgs: Vec<pb::Bifurcation> = Vec::new();
-    let mut warnings: Vec<String> = Vec::new();
-    let mut notes = Vec::new();
-    let (mut saw_data_end, mut saw_footer, mut cut_short) = (false, false, false);
-
-    for record in reader {
-        let record = match record {
-            Ok(r) => r,
-            Err(mcap::McapError::UnexpectedEof) => {
-                cut_short = true;
-                break;
-            }
-            Err(e) => {
-                return Err(corrupt(match e {
-                    mcap::McapError::BadChunkCrc { .. } => format!("{e} (a chunk was altered)"),
-                    other => other.to_string(),
-                }));
-            }
-        };
-        match record {
-            Record::Schema { header, .. } => {
-                schemas.insert(header.id, (header.name.clone(), header.encoding.clone()));
-            }
-            Record::Channel(c) => {
-                let (schema, _) = schemas.get(&c.schema_id).cloned().unwrap_or_default();
-                channels.entry(c.id).or_insert(Channel {
-                    topic: c.topic.clone(),
-                    schema,
-                    encoding: c.message_encoding.clone(),
-                    count: 0,
-                });
-            }
-            Record::Message { header, data } => {
-                let Some(ch) = channels.get_mut(&header.channel_id) else {
-                    return Err(corrupt(format!(
-                        "message {} refers to unknown channel {}",
-                        header.sequence, header.channel_id
-                    )));
-                };
-                ch.count += 1;
-                if ch.encoding != "protobuf" {
-                    continue;
-                }
-                let topic = ch.topic.clone();
-                decode_message(
-                    &topic,
-                    &data,
-                    &mut run_msg,
-                    &mut parts,
-                    &mut bif_msgs,
-                    &mut warnings,
-                )
-                .map_err(|reason| corrupt(format!("{topic}: {reason}")))?;
-            }
-            Record::Attachment { header, data, .. } => {
-                attachments.push((header.name.clone(), data.into_owned()));
-            }
-            Record::Metadata(m) => {
-                metadata.insert(m.name.clone(), m.metadata.clone());
-            }
-            Record::DataEnd(_) => saw_data_end = true,
-            Record::Footer(_) => saw_footer = true,
-            _ => {}
+    let mut c = Collected {
+        skip_orbits: !options.orbits,
+        ..Collected::default()
+    };
+    let report = match scan::scan(r, size, |item| {
+        c.item(item);
+        Ok::<(), std::convert::Infallible>(())
+    }) {
+        Ok(Ok(report)) => report,
+        Ok(Err(never)) => match never {},
+        Err(scan::ScanError::NotMcap(reason)) => {
+            return Err(ReadError::NotMcap {
+                file: file_buf.clone(),
+                reason,
+            });
+        }
+        Err(scan::ScanError::Io(source)) => {
+            return Err(ReadError::Io {
+                file: file_buf.clone(),
+                source,
+            });
+        }
+    };
+    // Messages whose channel was defined only later (or in the summary section).
+    for (id, data) in std::mem::take(&mut c.pending) {
+        if c.channels.contains_key(&id) {
+            c.message(id, &data);
+        } else {
+            c.undecodable.push(format!(
+                "a message of channel {id}, which no intact record defines"
+            ));
         }
     }
+    let mut notes = Vec::new();
+    let damaged = !report.damage.is_empty() || !c.undecodable.is_empty();
+    notes.extend(report.damage.iter().map(|d| format!("damaged: {d}")));
+    notes.extend(
+        c.undecodable
+            .iter()
+            .map(|d| format!("undecodable message: {d}")),
+    );
 
-    let run_msg = run_msg.ok_or_else(|| {
-        let topics: Vec<String> = channels.values().map(|c| c.topic.clone()).collect();
-        foreign(if topics.is_empty() {
+    let run_msg = c.run.take().ok_or_else(|| {
+        let topics: Vec<String> = c.channels.values().map(|c| c.topic.clone()).collect();
+        let what = if topics.is_empty() {
             "it holds no channels (no /run_info message)".to_string()
         } else {
             format!(
@@ -229,9 +349,14 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
                 schema::RUN_INFO.name,
                 topics.join(", ")
             )
-        })
+        };
+        if damaged {
+            corrupt(format!("{what}; {}", notes.join("; ")))
+        } else {
+            foreign(what)
+        }
     })?;
-    let model_text = match attachments.iter().find(|(n, _)| *n == run_msg.model_name) {
+    let model_text = match c.attachments.iter().find(|(n, _)| *n == run_msg.model_name) {
         Some((_, data)) => String::from_utf8_lossy(data).into_owned(),
         None => {
             notes.push(format!(
@@ -244,40 +369,151 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
     let run = run_info_from_pb(&run_msg, model_text)
         .map_err(|reason| corrupt(format!("/run_info: {reason}")))?;
 
-    let mut points = Vec::with_capacity(parts.len());
-    for (index, p) in &parts {
-        match point_from_pb(&run, p) {
+    // Messages of a point that arrive after its /summary (which is written last) come from
+    // a damaged stretch.
+    let late: Vec<u64> = c
+        .parts
+        .keys()
+        .filter(|i| c.built.contains_key(i))
+        .copied()
+        .collect();
+    for index in &late {
+        c.parts.remove(index);
+        notes.push(format!(
+            "damaged: a message of point {index} after its /summary was ignored"
+        ));
+    }
+    let damaged = damaged || !late.is_empty();
+    // In a damaged file, a point without a message that other points have lost it (its
+    // channel's definition, or the message itself, was in a damaged stretch).
+    let mut usual: BTreeMap<&str, usize> = BTreeMap::new();
+    if damaged {
+        let present = c
+            .parts
+            .values()
+            .filter(|p| p.summary.is_some())
+            .map(|p| p.present())
+            .chain(c.built.values().map(|(_, present)| *present));
+        for flags in present {
+            for (topic, has) in flags {
+                *usual.entry(topic).or_default() += usize::from(has);
+            }
+        }
+    }
+    let absent_in = |present: &[(&'static str, bool)]| -> Vec<&'static str> {
+        present
+            .iter()
+            .filter(|(topic, has)| !has && usual.get(topic).is_some_and(|&n| n > 0))
+            .map(|(topic, _)| *topic)
+            .collect()
+    };
+    let mut points = Vec::with_capacity(c.parts.len() + c.built.len());
+    let mut lost = Vec::new();
+    for (index, (point, present)) in std::mem::take(&mut c.built) {
+        let absent = absent_in(&present);
+        if absent.is_empty() {
+            points.push(point);
+        } else {
+            notes.push(format!(
+                "point {index} lost: its {} message is missing",
+                absent.join(", ")
+            ));
+            lost.push(index);
+        }
+    }
+    // Consumed as the points are built: the messages and the points are not held twice.
+    for (index, p) in std::mem::take(&mut c.parts) {
+        let absent = absent_in(&p.present());
+        if p.summary.is_some() && !absent.is_empty() {
+            notes.push(format!(
+                "point {index} lost: its {} message is missing",
+                absent.join(", ")
+            ));
+            lost.push(index);
+            continue;
+        }
+        match point_from_pb(&run, &p) {
             Ok(point) => points.push(point),
             Err(reason) if p.summary.is_none() => {
                 notes.push(format!("point {index} skipped: {reason}"));
             }
+            Err(reason) if damaged => {
+                notes.push(format!("point {index} lost: {reason}"));
+                lost.push(index);
+            }
             Err(reason) => return Err(corrupt(format!("point {index}: {reason}"))),
         }
     }
-    let bifurcations = bif_msgs
-        .iter()
-        .map(bifurcation_record_from_pb)
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(|reason| corrupt(format!("/bifurcations: {reason}")))?;
+    points.sort_by_key(|p| p.index);
+    let mut bifurcations = Vec::with_capacity(c.bifs.len());
+    for b in &c.bifs {
+        match bifurcation_record_from_pb(b) {
+            Ok(b) => bifurcations.push(b),
+            Err(reason) => notes.push(format!("a /bifurcations message is unreadable: {reason}")),
+        }
+    }
 
-    let status = metadata
+    // Points are numbered 0, 1, … along the branch: a gap is a lost point.
+    let present: std::collections::BTreeSet<u64> = points.iter().map(|p| p.index).collect();
+    let last = present.iter().next_back().copied();
+    let missing: Vec<u64> = match last {
+        Some(last) => (0..last).filter(|i| !present.contains(i)).collect(),
+        None => Vec::new(),
+    };
+    if !missing.is_empty() {
+        notes.push(format!("points missing: {}", index_ranges(&missing)));
+    }
+    // The summary section's counts against what was read.
+    let mut count_mismatch = false;
+    if let Some((chunk_count, counts)) = &c.statistics {
+        let read_chunks = report.chunks as u64;
+        if u64::from(*chunk_count) != read_chunks {
+            count_mismatch = true;
+            notes.push(format!(
+                "the summary counts {chunk_count} chunks, {read_chunks} were read whole"
+            ));
+        }
+        for (id, want) in counts {
+            if let Some(ch) = c.channels.get(id)
+                && ch.count != *want
+            {
+                count_mismatch = true;
+                notes.push(format!(
+                    "the summary counts {want} {} messages, {} were read",
+                    ch.topic, ch.count
+                ));
+            }
+        }
+    }
+
+    let status = c
+        .metadata
         .get(names::METADATA_STATUS)
         .and_then(|m| m.get("status"))
         .map(|s| RunStatus::from_label(s));
-    if cut_short {
-        notes.push("the file ends in the middle of a record (cut short)".into());
+    if let Some(cut) = &report.cut {
+        notes.push(format!(
+            "the file ends in the middle of a record (cut short at {cut})"
+        ));
     }
-    let end_magic = bytes.len() >= 2 * mcap::MAGIC.len() && bytes.ends_with(mcap::MAGIC);
-    if !end_magic {
+    if !report.end_magic {
         notes.push("the file does not end with the MCAP magic bytes".into());
     }
-    if !saw_data_end || !saw_footer {
+    if !c.saw_data_end || !c.saw_footer {
         notes.push("the file has no summary/footer: it was not finished".into());
     }
     if status.is_none() {
         notes.push("no run status: the run did not finish writing".into());
     }
-    let complete = !cut_short && end_magic && saw_data_end && saw_footer && status.is_some();
+    let complete = report.cut.is_none()
+        && !damaged
+        && missing.is_empty()
+        && lost.is_empty()
+        && !count_mismatch
+        && report.end_magic
+        && c.saw_data_end
+        && c.saw_footer
+        && status.is_some();
 
     Ok(Recording {
         file: file.to_path_buf(),
@@ -286,9 +522,11 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
         bifurcations,
         status,
         complete,
+        missing,
         notes,
-        warnings,
-        topics: channels
+        warnings: c.warnings,
+        topics: c
+            .channels
             .into_values()
             .map(|c| TopicCount {
                 topic: c.topic,
@@ -296,9 +534,28 @@ pub fn read_recording_bytes(bytes: &[u8], file: &Path) -> Result<Recording, Read
                 messages: c.count,
             })
             .collect(),
-        metadata,
-        attachments: attachments.into_iter().map(|(n, _)| n).collect(),
+        metadata: c.metadata,
+        attachments: c.attachments.into_iter().map(|(n, _)| n).collect(),
     })
+}
+
+/// `0–3, 7, 9–10` for `[0, 1, 2, 3, 7, 9, 10]`.
+pub fn index_ranges(indices: &[u64]) -> String {
+    let mut parts = Vec::new();
+    let mut i = 0;
+    while i < indices.len() {
+        let mut j = i;
+        while j + 1 < indices.len() && indices[j + 1] == indices[j] + 1 {
+            j += 1;
+        }
+        parts.push(if j == i {
+            indices[i].to_string()
+        } else {
+            format!("{}–{}", indices[i], indices[j])
+        });
+        i = j + 1;
+    }
+    parts.join(", ")
 }
 
 fn decode<M: Message + Default>(data: &[u8]) -> Result<M, String> {

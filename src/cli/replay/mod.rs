@@ -11,6 +11,7 @@
 //! | `export FILE --out DIR` | every per-point quantity as CSV tables, the model and the settings |
 //! | `orbit FILE --point N [--node K] [--samples S]` | time histories re-derived from the coefficients |
 //! | `stability FILE [--sip-intervals N]` | Floquet multipliers recomputed (optionally with a finer product) and compared with the stored ones |
+//! | `recover IN OUT` | a clean recording of every intact point of a damaged or cut file |
 //! | `plot FILE [--out DIR]` | PNG amplitude–frequency curves, RC variations, temperatures |
 //!
 //! Model-dependent re-derivations go through [`crate::derive::rederivers_for`]; where it
@@ -21,6 +22,7 @@ pub mod export;
 pub mod info;
 pub mod orbit;
 pub mod plot;
+pub mod recover;
 pub mod stability;
 
 use std::io::Write;
@@ -30,7 +32,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 pub use super::NotAvailable;
-use crate::record::reader::{Recording, read_recording};
+use crate::record::reader::{ReadOptions, Recording, read_recording_with};
 
 /// Inspect, export and re-derive tmrotor recordings (MCAP) without rerunning anything.
 #[derive(Debug, Parser)]
@@ -89,6 +91,9 @@ pub enum Command {
         #[arg(long, default_value = ".")]
         out: PathBuf,
     },
+    /// Write a clean recording of every intact point of a damaged or cut one (OUT must not
+    /// exist); what was lost is logged in it and printed.
+    Recover { file: PathBuf, out: PathBuf },
     /// Write a synthetic recording (closed-form 2-DoF rotor) for trying the tools.
     #[command(hide = true)]
     Synthetic {
@@ -105,9 +110,20 @@ pub enum Command {
     },
 }
 
-/// Reads a recording and reports on stderr when it is incomplete.
+/// Reads a recording (without the stored orbits, which every subcommand re-derives from
+/// the coefficients: memory stays well below the file's size) and reports on stderr when
+/// it is incomplete.
 pub fn open(file: &PathBuf, err: &mut dyn Write) -> anyhow::Result<Recording> {
-    let rec = read_recording(file)?;
+    open_with(file, ReadOptions { orbits: false }, err)
+}
+
+/// As [`open`], keeping what `options` says.
+pub fn open_with(
+    file: &PathBuf,
+    options: ReadOptions,
+    err: &mut dyn Write,
+) -> anyhow::Result<Recording> {
+    let rec = read_recording_with(file, options)?;
     if !rec.complete {
         writeln!(
             err,
@@ -136,6 +152,11 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result
             file,
             sip_intervals,
         } => stability::run(&open(&file, err)?, None, sip_intervals, out),
+        Command::Recover { file, out: target } => {
+            // Everything, stored orbits included: the recovered file keeps the original form.
+            let rec = open_with(&file, ReadOptions::default(), err)?;
+            recover::run(&rec, &target, out)
+        }
         Command::Plot { file, out: dir } => plot::run(&open(&file, err)?, &dir, out, err),
         Command::Synthetic {
             file,

@@ -7,6 +7,9 @@ use anyhow::{Context, bail};
 use crate::derive::{self, rederivers_for, table};
 use crate::record::reader::Recording;
 
+/// Memory `replay orbit` may use for its time histories: 2 GB.
+const MAX_ORBIT_BYTES: u128 = 2_000_000_000;
+
 /// Writes CSV time histories of one point at `samples` points per period, re-derived
 /// from the stored coefficients: `t_s`, `x_<id>_m`, `y_<id>_m` per dynamic node (or only
 /// node `node`), `T_<id>_c` per thermal node; bearing loads, clearances and thermal forces
@@ -33,6 +36,18 @@ pub fn run(
     })?;
     if samples == 0 {
         bail!("--samples must be at least 1");
+    }
+    // Every series is held in memory at `samples` values (8 bytes each) before it is
+    // written: refuse what would not fit comfortably, before allocating.
+    let series = 2 * run.nodes.len() + run.thermal_nodes.len() + run.bearings.len() + 1;
+    let bytes = (samples as u128) * (series as u128) * 8;
+    if bytes > MAX_ORBIT_BYTES {
+        bail!(
+            "--samples {samples}: {series} series of {samples} samples would need about {} MB \
+             (at most {} MB); a period is resolved by a few hundred samples",
+            bytes / 1_000_000,
+            MAX_ORBIT_BYTES / 1_000_000
+        );
     }
     let selected: Vec<usize> = match node {
         None => (0..run.nodes.len()).collect(),
