@@ -1,17 +1,21 @@
 //! Figures of a campaign: the runs of an output directory overlaid on common axes, like the
 //! paper's figures (`tmrotor campaign plot DIR`, and at the end of `tmrotor campaign FILE`).
 //!
-//! [`plot_campaign`] reads `DIR/manifest.toml` and every run's recording and writes:
+//! [`plot_campaign`] reads `DIR/manifest.toml` and every run's recording and writes, each
+//! in the formats of [`FigureOptions::output`] (PNG and SVG by default, no title):
 //!
 //! | file | what | paper |
 //! |---|---|---|
-//! | `amplitude_node8.png` | RMS amplitude (Eq. 35) of dynamic node 8 against ω, one colour per run; period-doubled points (`ω/2` share ≥ 5 %) dotted | Figs. 8a, 9a, 10a, 21a |
-//! | `clearance_variation.png` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
-//! | `effective_clearance.png` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
-//! | `rolling_element_temperatures.png` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
-//! | `node_temperatures.png` | mean temperature of every thermal node against ω, a panel per run | Figs. 14a, 14b |
-//! | `temperature_extremes.png` | highest and lowest mean node temperature against ω | Figs. 14a, 14b, 22a |
-//! | `bearing_temperatures_omega620.png` | rolling elements, rings, lubricant and housing of each bearing at the recorded point nearest to ω = 620 rad/s | Figs. 14d, 14e |
+//! | `amplitude_node8` | RMS amplitude of dynamic node 8 against ω, one colour per run; period-doubled points (`ω/2` share ≥ 5 %) dotted | Figs. 8a, 9a, 10a, 21a |
+//! | `amplitude_node8_per_run` | the same, a panel per run on shared axes ([`FigureOptions::per_run`]) | |
+//! | `clearance_variation` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
+//! | `effective_clearance` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
+//! | `bearing_loads_mean` | mean radial load of each bearing against ω, a panel per bearing | Fig. 16 (averages) |
+//! | `rolling_element_temperatures` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
+//! | `temperature_node58` (and `_per_run`) | mean temperature of one thermal node against ω, bifurcations circled | Fig. 15 |
+//! | `node_temperatures_<run>` | mean temperature of every thermal node against ω, a panel per bearing and one of the shafts and disks ([`figure::thermal_groups`]) | Figs. 14a, 14b |
+//! | `temperature_extremes` | highest and lowest mean node temperature against ω | Figs. 14a, 14b, 22a |
+//! | `bearing_temperatures_omega620` | rolling elements, rings, lubricant and housing of each bearing at the recorded point nearest to ω = 620 rad/s | Figs. 14d, 14e |
 //!
 //! On every curve, parts recorded as unstable are dashed and lighter; stable and
 //! not-assessed parts are solid (the legend says which applies). Bifurcations are circled
