@@ -1,17 +1,26 @@
-//! PNG figures: plotters draws into an RGB buffer, `png` encodes it. The drawing helpers
-//! shared by `replay plot` (one recording) and `tmrotor campaign plot` (several runs).
+//! Figures as PNG and SVG: the drawing helpers shared by `replay plot` (one recording) and
+//! `tmrotor campaign plot` (several runs).
 //!
 //! * [`Chart`] is one set of axes: polylines ([`Series`], solid, dashed or as points),
 //!   labelled [`Marker`]s, optional reference lines, optional category labels on the
-//!   x-axis, optional in-chart legend; [`draw_chart`] draws it on any drawing area;
-//! * [`draw_legend`] lays out a legend in its own strip (for figures with several panels
-//!   sharing one legend), [`legend_height`] says how tall that strip must be;
-//! * [`render_png`] gives a drawing function a white canvas and writes the PNG.
+//!   x-axis, optionally equal scales on both axes (orbits, the unit circle);
+//! * [`Figure`] is what a file holds: panels on a grid, one legend outside the axes (to the
+//!   right or below, [`LegendAt`]) and a title drawn only on request ([`Output::title`]);
+//! * [`write_figure`] draws a figure once per requested [`Format`] (PNG through an RGB
+//!   buffer and `png`, SVG through plotters' SVG backend) and returns the files;
+//! * [`layout`] draws a figure into memory and returns where its plot areas, marker labels
+//!   and legend went, so that tests check the placement on geometry.
+//!
+//! Marker labels (bifurcations) are placed by [`place_labels`]: the first of a ring of
+//! candidate places around the circle that stays inside the plot area and covers no label
+//! placed before, no other circle and no drawn data; a label set off from its circle gets
+//! a thin leader line. A label with no free place is left out (its circle stays).
 //!
 //! Text needs a TrueType font, found at run time (no system font library is used): the
 //! file named by `TMROTOR_FONT`, else DejaVu Sans or Liberation Sans at their usual
 //! Debian/Fedora paths ([`font`]). Without one (or with `TMROTOR_FONT=none`) figures are
-//! drawn without any text; callers tell the user.
+//! drawn without any text; callers tell the user. SVG files name the font family
+//! (`sans-serif`) instead of embedding glyphs, so their text stays text.
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -74,11 +83,75 @@ pub enum FigureError {
 }
 
 /// What drawing functions return: any plotters error, turned into
-/// [`FigureError::Draw`] by [`render_png`].
-pub type DrawResult = Result<(), Box<dyn std::error::Error>>;
+/// [`FigureError::Draw`] by [`write_figure`].
+pub type DrawResult<T = ()> = Result<T, Box<dyn std::error::Error>>;
 
-/// A drawing area of the in-memory bitmap.
-pub type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+/// A file format of the figures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Raster, for a quick look and for web pages.
+    Png,
+    /// Vector, for print: lines stay lines and text stays text.
+    Svg,
+}
+
+impl Format {
+    /// The file extension.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Self::Png => "png",
+            Self::Svg => "svg",
+        }
+    }
+}
+
+/// Parses a comma-separated list of formats (`png`, `svg`, `png,svg`); the error says what
+/// is accepted. PDF is not offered: plotters has no PDF backend (convert the SVG, e.g.
+/// with `rsvg-convert -f pdf`).
+pub fn parse_formats(s: &str) -> Result<Vec<Format>, String> {
+    let mut out = Vec::new();
+    for word in s.split(',').map(str::trim).filter(|w| !w.is_empty()) {
+        let f = match word.to_ascii_lowercase().as_str() {
+            "png" => Format::Png,
+            "svg" => Format::Svg,
+            "pdf" => {
+                return Err(
+                    "pdf is not written (no PDF backend): write svg and convert it, \
+                     e.g. `rsvg-convert -f pdf -o fig.pdf fig.svg`"
+                        .into(),
+                );
+            }
+            other => return Err(format!("unknown figure format {other:?} (png, svg)")),
+        };
+        if !out.contains(&f) {
+            out.push(f);
+        }
+    }
+    if out.is_empty() {
+        return Err("no figure format given (png, svg)".into());
+    }
+    Ok(out)
+}
+
+/// How figures are written.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Output {
+    /// The formats, one file each (default PNG and SVG: the PNG to look at, the SVG for a
+    /// paper; the SVG costs milliseconds).
+    pub formats: Vec<Format>,
+    /// Draw the figure's title above the panels (default false: the caption of a paper
+    /// says what a figure shows).
+    pub title: bool,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Self {
+            formats: vec![Format::Png, Format::Svg],
+            title: false,
+        }
+    }
+}
 
 /// Ten distinguishable colours (the "tab10" palette), for runs or bearings.
 pub const PALETTE: [RGBColor; 10] = [
@@ -93,6 +166,38 @@ pub const PALETTE: [RGBColor; 10] = [
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
 ];
+
+/// Lighter companions of [`PALETTE`]'s colours (the second half of the "tab20" set; for its
+/// light grey, too close to the grid lines, an indigo).
+pub const PALETTE_LIGHT: [RGBColor; 10] = [
+    RGBColor(174, 199, 232),
+    RGBColor(255, 187, 120),
+    RGBColor(152, 223, 138),
+    RGBColor(255, 152, 150),
+    RGBColor(197, 176, 213),
+    RGBColor(196, 156, 148),
+    RGBColor(247, 182, 210),
+    RGBColor(82, 84, 163),
+    RGBColor(219, 219, 141),
+    RGBColor(158, 218, 229),
+];
+
+/// Colour number `k`: the ten colours of [`PALETTE`], then the ten of [`PALETTE_LIGHT`],
+/// then again.
+pub fn colour(k: usize) -> RGBColor {
+    let n = PALETTE.len() + PALETTE_LIGHT.len();
+    match k % n {
+        i if i < PALETTE.len() => PALETTE[i],
+        i => PALETTE_LIGHT[i - PALETTE.len()],
+    }
+}
+
+/// Stable parts of a branch drawn in one colour per stability (`replay plot`).
+pub const STABLE: RGBColor = RGBColor(31, 119, 180);
+/// Unstable parts.
+pub const UNSTABLE: RGBColor = RGBColor(214, 39, 40);
+/// Parts whose stability was not assessed.
+pub const NOT_ASSESSED: RGBColor = RGBColor(127, 127, 127);
 
 /// Dark grey of reference lines.
 pub const REFERENCE: RGBColor = RGBColor(70, 70, 70);
@@ -120,7 +225,7 @@ pub struct Series {
     pub line: LineStyle,
     /// Line width, or circle radius for [`LineStyle::Points`], pixels.
     pub width: u32,
-    /// Entry of the in-chart legend ([`Chart::legend`]).
+    /// Its entry in the figure's legend ([`Figure::legend_from_series`]).
     pub label: Option<String>,
 }
 
@@ -137,38 +242,224 @@ impl Series {
     }
 }
 
-/// A marker label's extent on the canvas, pixels (`x0 ≤ x1`, `y0 ≤ y1`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct LabelBox {
-    x0: i32,
-    y0: i32,
-    x1: i32,
-    y1: i32,
+/// How [`branch_series`] shows stability.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BranchStyle {
+    /// [`STABLE`], [`UNSTABLE`], [`NOT_ASSESSED`], each named once in the legend (one
+    /// branch per figure).
+    Colours,
+    /// One colour, solid where stable or not assessed, dashed and lighter where unstable
+    /// (several branches or quantities in a figure).
+    Dashes(RGBColor),
 }
 
-impl LabelBox {
-    fn overlaps(&self, o: &Self) -> bool {
+/// The unstable colour of [`BranchStyle::Dashes`].
+pub fn unstable_of(colour: RGBColor) -> RGBColor {
+    lighter(colour, 0.35)
+}
+
+/// A branch as polylines: `points` are (x, y, stable) in branch order; a point with no y
+/// (or a y that is not finite) breaks the line. Neighbouring pieces of different stability
+/// share their boundary point so that the curve stays connected.
+pub fn branch_series(
+    points: impl IntoIterator<Item = (f64, Option<f64>, Option<bool>)>,
+    style: BranchStyle,
+) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    let mut previous: Option<((f64, f64), Option<bool>)> = None;
+    let kind = |s: Option<bool>| match style {
+        BranchStyle::Colours => s,
+        // stable and not assessed look alike
+        BranchStyle::Dashes(_) => Some(s != Some(false)),
+    };
+    for (x, y, stable) in points {
+        let Some(y) = y.filter(|v| v.is_finite()) else {
+            previous = None;
+            continue;
+        };
+        let pt = (x, y);
+        match previous {
+            Some((_, k)) if k == kind(stable) => {
+                if let Some(s) = out.last_mut() {
+                    s.points.push(pt);
+                }
+            }
+            _ => {
+                let mut points: Vec<(f64, f64)> = previous.map(|(q, _)| q).into_iter().collect();
+                points.push(pt);
+                out.push(match style {
+                    BranchStyle::Colours => Series::new(
+                        points,
+                        match stable {
+                            Some(true) => STABLE,
+                            Some(false) => UNSTABLE,
+                            None => NOT_ASSESSED,
+                        },
+                    ),
+                    BranchStyle::Dashes(c) if stable == Some(false) => Series {
+                        line: LineStyle::Dashed,
+                        ..Series::new(points, unstable_of(c))
+                    },
+                    BranchStyle::Dashes(c) => Series::new(points, c),
+                });
+            }
+        }
+        previous = Some((pt, kind(stable)));
+    }
+    if style == BranchStyle::Colours {
+        for (c, name) in [
+            (STABLE, "stable"),
+            (UNSTABLE, "unstable"),
+            (NOT_ASSESSED, "stability not assessed"),
+        ] {
+            if let Some(s) = out.iter_mut().find(|s| s.colour == c) {
+                s.label = Some(name.into());
+            }
+        }
+    }
+    out
+}
+
+/// A rectangle on the canvas, pixels (`x0 ≤ x1`, `y0 ≤ y1`, y downwards).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct PixelBox {
+    pub x0: i32,
+    pub y0: i32,
+    pub x1: i32,
+    pub y1: i32,
+}
+
+impl PixelBox {
+    /// The interiors intersect (touching edges do not count).
+    pub fn overlaps(&self, o: &Self) -> bool {
         self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+
+    /// `o` lies inside this box (edges included).
+    pub fn contains(&self, o: &Self) -> bool {
+        o.x0 >= self.x0 && o.x1 <= self.x1 && o.y0 >= self.y0 && o.y1 <= self.y1
+    }
+
+    fn grown(&self, d: i32) -> Self {
+        Self {
+            x0: self.x0 - d,
+            y0: self.y0 - d,
+            x1: self.x1 + d,
+            y1: self.y1 + d,
+        }
+    }
+
+    /// The segment `a`–`b` crosses or touches the box (Liang–Barsky clipping).
+    pub fn hit_by_segment(&self, a: (i32, i32), b: (i32, i32)) -> bool {
+        let (x0, y0) = (f64::from(a.0), f64::from(a.1));
+        let (dx, dy) = (f64::from(b.0 - a.0), f64::from(b.1 - a.1));
+        let (mut t0, mut t1) = (0.0_f64, 1.0_f64);
+        for (p, q) in [
+            (-dx, x0 - f64::from(self.x0)),
+            (dx, f64::from(self.x1) - x0),
+            (-dy, y0 - f64::from(self.y0)),
+            (dy, f64::from(self.y1) - y0),
+        ] {
+            if p == 0.0 {
+                if q < 0.0 {
+                    return false;
+                }
+            } else {
+                let r = q / p;
+                if p < 0.0 {
+                    t0 = t0.max(r);
+                } else {
+                    t1 = t1.min(r);
+                }
+                if t0 > t1 {
+                    return false;
+                }
+            }
+        }
+        true
     }
 }
 
+/// What a label must keep clear of: boxes (circles, points, other text) and polylines.
+#[derive(Clone, Debug, Default)]
+pub struct Obstacles {
+    pub boxes: Vec<PixelBox>,
+    /// Drawn polylines, pixels.
+    pub lines: Vec<Vec<(i32, i32)>>,
+}
+
+impl Obstacles {
+    fn hit(&self, b: &PixelBox) -> bool {
+        let g = b.grown(2);
+        self.boxes.iter().any(|o| o.overlaps(&g))
+            || self.lines.iter().any(|line| {
+                line.windows(2).any(|w| {
+                    let (a, c) = (w[0], w[1]);
+                    // cheap bounding-box test first
+                    a.0.max(c.0) >= g.x0
+                        && a.0.min(c.0) <= g.x1
+                        && a.1.max(c.1) >= g.y0
+                        && a.1.min(c.1) <= g.y1
+                        && g.hit_by_segment(a, c)
+                }) || (line.len() == 1
+                    && g.contains(&PixelBox {
+                        x0: line[0].0,
+                        y0: line[0].1,
+                        x1: line[0].0,
+                        y1: line[0].1,
+                    }))
+            })
+    }
+}
+
+/// Pixels kept free between two labels.
+pub const LABEL_GAP: i32 = 3;
+
 /// Where each label goes, in order: the index of the first of its candidate boxes that
-/// overlaps neither a label placed before it nor an obstacle (the markers' circles), or
-/// `None` (left out: where bifurcations crowd, every circle is drawn but not every label).
-fn place_labels(candidates: &[Vec<LabelBox>], obstacles: &[LabelBox]) -> Vec<Option<usize>> {
-    let mut kept: Vec<LabelBox> = Vec::new();
+/// lies inside `bounds` and overlaps neither a label placed before it nor an obstacle
+/// (circles, data), or `None` (left out: where bifurcations crowd, every circle is drawn
+/// but not every label).
+pub fn place_labels(
+    candidates: &[Vec<PixelBox>],
+    obstacles: &Obstacles,
+    bounds: PixelBox,
+) -> Vec<Option<usize>> {
+    let mut kept: Vec<PixelBox> = Vec::new();
     candidates
         .iter()
         .map(|boxes| {
-            let free = boxes
-                .iter()
-                .position(|b| kept.iter().chain(obstacles).all(|k| !k.overlaps(b)));
+            let free = boxes.iter().position(|b| {
+                // labels keep a gap of a few pixels between them
+                bounds.contains(b)
+                    && kept.iter().all(|k| !k.overlaps(&b.grown(LABEL_GAP)))
+                    && !obstacles.hit(b)
+            });
             if let Some(i) = free {
                 kept.push(boxes[i]);
             }
             free
         })
         .collect()
+}
+
+/// Offsets (top left corner relative to the marker's centre) of the candidate places of a
+/// `w × h` label, nearest first: beside the circle above and below on either side, then
+/// rings further out in eight directions.
+fn label_offsets(w: i32, h: i32) -> Vec<(i32, i32)> {
+    let mut out = vec![(9, -h - 2), (9, 3), (-9 - w, -h - 2), (-9 - w, 3)];
+    for d in [16, 28, 44, 64, 90, 120] {
+        out.extend([
+            (d, -d - h),
+            (d, d),
+            (-d - w, -d - h),
+            (-d - w, d),
+            (-w / 2, -d - h - 4),
+            (-w / 2, d + 4),
+            (d + 6, -h / 2),
+            (-d - 6 - w, -h / 2),
+        ]);
+    }
+    out
 }
 
 /// A labelled circle, e.g. a bifurcation point.
@@ -183,7 +474,7 @@ pub struct Marker {
 /// One set of axes and what is drawn on them.
 #[derive(Clone, Debug)]
 pub struct Chart {
-    /// Caption above the axes (empty: none).
+    /// Panel caption above the axes, outside the plot area (empty: none).
     pub title: String,
     pub x_desc: String,
     pub y_desc: String,
@@ -194,11 +485,12 @@ pub struct Chart {
     /// Axis ranges; `None`: the data's range plus 5 %.
     pub x_range: Option<(f64, f64)>,
     pub y_range: Option<(f64, f64)>,
+    /// One unit on the x axis as long as one on the y axis (orbits, the unit circle): the
+    /// shorter range is widened about its centre.
+    pub equal_aspect: bool,
     /// Names of categories at x = 0, 1, 2, … drawn instead of numeric x labels (each
     /// name may have several lines separated by `\n`).
     pub x_categories: Vec<String>,
-    /// Draw an in-chart legend of the labelled series (upper right).
-    pub legend: bool,
     /// Caption size, pixels.
     pub title_px: u32,
     /// Tick and axis label size, pixels.
@@ -216,10 +508,71 @@ impl Default for Chart {
             hlines: Vec::new(),
             x_range: None,
             y_range: None,
+            equal_aspect: false,
             x_categories: Vec::new(),
-            legend: false,
-            title_px: 24,
+            title_px: 18,
             font_px: 16,
+        }
+    }
+}
+
+impl Chart {
+    /// The x range drawn without [`Self::equal_aspect`]: the given one, else the data's.
+    pub fn x_extent(&self) -> (f64, f64) {
+        self.x_range.unwrap_or_else(|| {
+            data_range(
+                self.series
+                    .iter()
+                    .flat_map(|s| s.points.iter().map(|p| p.0))
+                    .chain(self.markers.iter().map(|m| m.x)),
+            )
+        })
+    }
+
+    /// The y range drawn without [`Self::equal_aspect`].
+    pub fn y_extent(&self) -> (f64, f64) {
+        self.y_range.unwrap_or_else(|| {
+            data_range(
+                self.series
+                    .iter()
+                    .flat_map(|s| s.points.iter().map(|p| p.1))
+                    .chain(self.markers.iter().map(|m| m.y))
+                    .chain(self.hlines.iter().copied()),
+            )
+        })
+    }
+}
+
+/// One x range and one y range for all `panels` (small multiples compare directly).
+pub fn share_axes(panels: &mut [Chart], x: bool, y: bool) {
+    let fold = |r: Vec<(f64, f64)>| {
+        r.into_iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), (c, d)| {
+                (a.min(c), b.max(d))
+            })
+    };
+    let has_data =
+        |c: &Chart| c.series.iter().any(|s| !s.points.is_empty()) || !c.markers.is_empty();
+    let xr = fold(
+        panels
+            .iter()
+            .filter(|c| has_data(c))
+            .map(Chart::x_extent)
+            .collect(),
+    );
+    let yr = fold(
+        panels
+            .iter()
+            .filter(|c| has_data(c))
+            .map(Chart::y_extent)
+            .collect(),
+    );
+    for c in panels {
+        if x && xr.0 < xr.1 {
+            c.x_range = Some(xr);
+        }
+        if y && yr.0 < yr.1 {
+            c.y_range = Some(yr);
         }
     }
 }
@@ -253,51 +606,89 @@ pub fn tick(v: &f64) -> String {
     if s == "-0" { "0".into() } else { s.into() }
 }
 
-/// Draws `chart` on `area`. With `text` false nothing textual is drawn (no font).
-pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
-    let (x0, x1) = chart.x_range.unwrap_or_else(|| {
-        data_range(
-            chart
-                .series
-                .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.0))
-                .chain(chart.markers.iter().map(|m| m.x)),
-        )
-    });
-    let (y0, y1) = chart.y_range.unwrap_or_else(|| {
-        data_range(
-            chart
-                .series
-                .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.1))
-                .chain(chart.markers.iter().map(|m| m.y))
-                .chain(chart.hlines.iter().copied()),
-        )
-    });
-    let categories = !chart.x_categories.is_empty();
-    let lines = chart
-        .x_categories
-        .iter()
-        .map(|c| c.lines().count())
-        .max()
-        .unwrap_or(1) as u32;
-    let mut builder = ChartBuilder::on(area);
-    builder.margin(chart.font_px.max(10));
-    if text {
-        if !chart.title.is_empty() {
-            builder.caption(&chart.title, (FONT, chart.title_px));
-        }
-        let x_area = if categories {
-            (lines + 1) * (chart.font_px + 4) + 4
-        } else {
-            2 * chart.font_px + 14
-        };
-        builder
-            .x_label_area_size(x_area)
-            .y_label_area_size(4 * chart.font_px + 16);
-    } else {
-        builder.x_label_area_size(10).y_label_area_size(10);
+/// Where a chart's parts went on the canvas.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ChartLayout {
+    /// The plot area (inside the axes).
+    pub plot: PixelBox,
+    /// Each marker's label box, `None` when left out (or drawn without text).
+    pub labels: Vec<Option<PixelBox>>,
+}
+
+fn x_label_area(chart: &Chart, text: bool) -> u32 {
+    if !text {
+        return 10;
     }
+    if chart.x_categories.is_empty() {
+        2 * chart.font_px + 14
+    } else {
+        let lines = chart
+            .x_categories
+            .iter()
+            .map(|c| c.lines().count())
+            .max()
+            .unwrap_or(1) as u32;
+        (lines + 1) * (chart.font_px + 4) + 4
+    }
+}
+
+fn y_label_area(chart: &Chart, text: bool) -> u32 {
+    if text { 4 * chart.font_px + 16 } else { 10 }
+}
+
+/// Widens the shorter of two ranges about its centre so that a unit is as long on both
+/// axes of a `w × h` pixel plot area.
+fn equalise(
+    (x0, x1): (f64, f64),
+    (y0, y1): (f64, f64),
+    w: f64,
+    h: f64,
+) -> ((f64, f64), (f64, f64)) {
+    if w <= 0.0 || h <= 0.0 {
+        return ((x0, x1), (y0, y1));
+    }
+    let (sx, sy) = ((x1 - x0) / w, (y1 - y0) / h);
+    if sx > sy {
+        let (c, half) = (0.5 * (y0 + y1), 0.5 * sx * h);
+        ((x0, x1), (c - half, c + half))
+    } else {
+        let (c, half) = (0.5 * (x0 + x1), 0.5 * sy * w);
+        ((c - half, c + half), (y0, y1))
+    }
+}
+
+/// Draws `chart` on `area` (its caption above the axes, the labels of its markers where
+/// [`place_labels`] finds room) and returns where its parts went. With `text` false
+/// nothing textual is drawn (no font).
+pub fn draw_chart<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart,
+    text: bool,
+) -> DrawResult<ChartLayout>
+where
+    DB::ErrorType: 'static,
+{
+    let area = if text && !chart.title.is_empty() {
+        area.titled(&chart.title, (FONT, chart.title_px))?
+    } else {
+        area.clone()
+    };
+    let margin = chart.font_px.max(10);
+    let (xl, yl) = (x_label_area(chart, text), y_label_area(chart, text));
+    let (mut xr, mut yr) = (chart.x_extent(), chart.y_extent());
+    if chart.equal_aspect {
+        let (aw, ah) = area.dim_in_pixel();
+        let w = f64::from(aw) - f64::from(2 * margin + yl);
+        let h = f64::from(ah) - f64::from(2 * margin + xl);
+        (xr, yr) = equalise(xr, yr, w, h);
+    }
+    let ((x0, x1), (y0, y1)) = (xr, yr);
+    let categories = !chart.x_categories.is_empty();
+    let mut builder = ChartBuilder::on(&area);
+    builder
+        .margin(margin)
+        .x_label_area_size(xl)
+        .y_label_area_size(yl);
     let mut ctx = builder.build_cartesian_2d(x0..x1, y0..y1)?;
     {
         let mut mesh = ctx.configure_mesh();
@@ -324,31 +715,36 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
             REFERENCE.stroke_width(1),
         ))?;
     }
-    let mut legend = false;
+    let mut obstacles = Obstacles::default();
     for s in &chart.series {
         let style = ShapeStyle::from(&s.colour).stroke_width(s.width);
-        let drawn = match s.line {
+        match s.line {
             LineStyle::Solid => {
-                ctx.draw_series(LineSeries::new(s.points.iter().copied(), style))?
+                ctx.draw_series(LineSeries::new(s.points.iter().copied(), style))?;
             }
             LineStyle::Dashed => {
-                ctx.draw_series(DashedLineSeries::new(s.points.iter().copied(), 8, 5, style))?
+                ctx.draw_series(DashedLineSeries::new(s.points.iter().copied(), 8, 5, style))?;
             }
-            LineStyle::Points => ctx.draw_series(
-                s.points
-                    .iter()
-                    .map(|&p| Circle::new(p, s.width, style.filled())),
-            )?,
-        };
-        if let (Some(label), true) = (&s.label, text && chart.legend) {
-            let (c, line) = (s.colour, s.line);
-            drawn.label(label.as_str()).legend(move |at| LegendGlyph {
-                at,
-                width: 20,
-                colour: c,
-                line,
-            });
-            legend = true;
+            LineStyle::Points => {
+                ctx.draw_series(
+                    s.points
+                        .iter()
+                        .map(|&p| Circle::new(p, s.width, style.filled())),
+                )?;
+            }
+        }
+        let pixels: Vec<(i32, i32)> = s.points.iter().map(|p| ctx.backend_coord(p)).collect();
+        match s.line {
+            LineStyle::Points => obstacles.boxes.extend(pixels.iter().map(|&(x, y)| {
+                let r = s.width as i32;
+                PixelBox {
+                    x0: x - r,
+                    y0: y - r,
+                    x1: x + r,
+                    y1: y + r,
+                }
+            })),
+            _ => obstacles.lines.push(pixels),
         }
     }
     ctx.draw_series(
@@ -357,79 +753,92 @@ pub fn draw_chart(area: &Area, chart: &Chart, text: bool) -> DrawResult {
             .iter()
             .map(|m| Circle::new((m.x, m.y), 6, m.colour.stroke_width(2))),
     )?;
-    if text {
-        // each label above right of its circle, else below right, above left, below
-        // left; one that would cover every way a label placed before it or another
-        // circle is left out (its circle stays)
-        let font = (FONT, chart.font_px).into_font();
-        let measure = TextStyle::from(font.clone());
-        let (gap, up) = (8, -(chart.font_px as i32) - 2);
-        let mut offsets = Vec::with_capacity(chart.markers.len());
-        let mut candidates = Vec::with_capacity(chart.markers.len());
-        let mut circles = Vec::with_capacity(chart.markers.len());
-        for m in &chart.markers {
-            let (px, py) = ctx.backend_coord(&(m.x, m.y));
-            let (w, h) = area
-                .estimate_text_size(&m.label, &measure)
-                .unwrap_or((0, chart.font_px));
-            let (w, h) = (w as i32, h as i32);
-            let corners = [(gap, up), (gap, 4), (-gap - w, up), (-gap - w, 4)];
-            candidates.push(
-                corners
-                    .iter()
-                    .map(|&(dx, dy)| LabelBox {
-                        x0: px + dx,
-                        y0: py + dy,
-                        x1: px + dx + w,
-                        y1: py + dy + h,
-                    })
-                    .collect::<Vec<_>>(),
+    let (px, py) = ctx.plotting_area().get_pixel_range();
+    let plot = PixelBox {
+        x0: px.start,
+        y0: py.start,
+        x1: px.end,
+        y1: py.end,
+    };
+    let mut layout = ChartLayout {
+        plot,
+        labels: vec![None; chart.markers.len()],
+    };
+    if !text {
+        return Ok(layout);
+    }
+    let font = (FONT, chart.font_px).into_font();
+    let measure = TextStyle::from(font.clone());
+    let mut candidates = Vec::with_capacity(chart.markers.len());
+    let mut centres = Vec::with_capacity(chart.markers.len());
+    for m in &chart.markers {
+        let (cx, cy) = ctx.backend_coord(&(m.x, m.y));
+        obstacles.boxes.push(PixelBox {
+            x0: cx - 7,
+            y0: cy - 7,
+            x1: cx + 7,
+            y1: cy + 7,
+        });
+        let (w, h) = area
+            .estimate_text_size(&m.label, &measure)
+            .unwrap_or((0, chart.font_px));
+        candidates.push(
+            label_offsets(w as i32, h as i32)
+                .into_iter()
+                .map(|(dx, dy)| PixelBox {
+                    x0: cx + dx,
+                    y0: cy + dy,
+                    x1: cx + dx + w as i32,
+                    y1: cy + dy + h as i32,
+                })
+                .collect::<Vec<_>>(),
+        );
+        centres.push((cx, cy));
+    }
+    let placed = place_labels(&candidates, &obstacles, plot);
+    for (k, (m, at)) in chart.markers.iter().zip(&placed).enumerate() {
+        let Some(i) = *at else { continue };
+        let b = candidates[k][i];
+        let (cx, cy) = centres[k];
+        let (dx, dy) = (b.x0 - cx, b.y0 - cy);
+        // a label set off from its circle gets a leader line from the circle's edge to
+        // the nearest point of the label
+        let near = (cx.clamp(b.x0, b.x1), cy.clamp(b.y0, b.y1));
+        let (lx, ly) = (near.0 - cx, near.1 - cy);
+        let dist = f64::from(lx * lx + ly * ly).sqrt();
+        if dist > 14.0 {
+            let edge = (
+                (f64::from(lx) * 7.0 / dist).round() as i32,
+                (f64::from(ly) * 7.0 / dist).round() as i32,
             );
-            offsets.push(corners);
-            circles.push(LabelBox {
-                x0: px - 7,
-                y0: py - 7,
-                x1: px + 7,
-                y1: py + 7,
-            });
+            ctx.draw_series(std::iter::once(
+                EmptyElement::at((m.x, m.y))
+                    + PathElement::new(
+                        vec![edge, (lx, ly)],
+                        lighter(m.colour, 0.3).stroke_width(1),
+                    ),
+            ))?;
         }
-        let placed = place_labels(&candidates, &circles);
-        ctx.draw_series(
-            chart
-                .markers
-                .iter()
-                .zip(placed.iter().zip(&offsets))
-                .filter_map(|(m, (at, corners))| {
-                    let offset = corners[(*at)?];
-                    Some(
-                        EmptyElement::at((m.x, m.y))
-                            + Text::new(m.label.clone(), offset, font.color(&m.colour)),
-                    )
-                }),
-        )?;
-        if categories {
-            let style = TextStyle::from((FONT, chart.font_px).into_font())
-                .pos(Pos::new(HPos::Center, VPos::Top));
-            for (i, name) in chart.x_categories.iter().enumerate() {
-                for (k, line) in name.lines().enumerate() {
-                    let dy = 6 + k as i32 * (chart.font_px as i32 + 4);
-                    ctx.draw_series(std::iter::once(
-                        EmptyElement::at((i as f64, y0))
-                            + Text::new(line.to_string(), (0, dy), style.clone()),
-                    ))?;
-                }
+        ctx.draw_series(std::iter::once(
+            EmptyElement::at((m.x, m.y))
+                + Text::new(m.label.clone(), (dx, dy), font.color(&m.colour)),
+        ))?;
+        layout.labels[k] = Some(b);
+    }
+    if categories {
+        let style = TextStyle::from((FONT, chart.font_px).into_font())
+            .pos(Pos::new(HPos::Center, VPos::Top));
+        for (i, name) in chart.x_categories.iter().enumerate() {
+            for (k, line) in name.lines().enumerate() {
+                let dy = 6 + k as i32 * (chart.font_px as i32 + 4);
+                ctx.draw_series(std::iter::once(
+                    EmptyElement::at((i as f64, y0))
+                        + Text::new(line.to_string(), (0, dy), style.clone()),
+                ))?;
             }
         }
-        if legend {
-            ctx.configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font((FONT, chart.font_px))
-                .draw()?;
-        }
     }
-    Ok(())
+    Ok(layout)
 }
 
 /// The small picture in front of a legend entry: a line, a dashed line or a dot
@@ -485,59 +894,95 @@ pub enum LegendSample {
     None,
 }
 
-/// One entry of a legend strip.
+/// One entry of a legend.
 #[derive(Clone, Debug)]
 pub struct LegendEntry {
     pub sample: LegendSample,
     pub text: String,
 }
 
+/// Where a figure's legend goes: always outside the axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LegendAt {
+    /// A column to the right of the panels (figures of one or two panels).
+    #[default]
+    Right,
+    /// A strip below the panels, entries in columns (figures of many panels, long texts).
+    Below,
+}
+
 const SAMPLE_W: i32 = 30;
 const GAP: i32 = 24;
+/// Legend text size, pixels.
+pub const LEGEND_PX: u32 = 15;
 
-fn legend_grid(
-    area: &Area,
+fn widest(entries: &[LegendEntry], font_px: u32) -> i32 {
+    let font = FontDesc::from((FONT, f64::from(font_px)));
+    entries
+        .iter()
+        .map(|e| font.box_size(&e.text).map_or(0, |(w, _)| w as i32))
+        .max()
+        .unwrap_or(0)
+}
+
+/// Columns and cell width of a legend of `entries` on `width` pixels.
+fn legend_grid(entries: &[LegendEntry], font_px: u32, width: u32) -> (usize, i32) {
+    let cell = SAMPLE_W + 6 + widest(entries, font_px) + GAP;
+    let cols = ((width as i32 - 20) / cell.max(1)).clamp(1, entries.len().max(1) as i32) as usize;
+    (cols, cell)
+}
+
+/// Size in pixels of a legend of `entries`: below panels `width` pixels wide (a strip of
+/// that width), or to their right (a column as wide as its longest entry).
+fn legend_size(entries: &[LegendEntry], font_px: u32, at: LegendAt, width: u32) -> (u32, u32) {
+    if entries.is_empty() {
+        return (0, 0);
+    }
+    let row_h = font_px + 8;
+    match at {
+        LegendAt::Below => {
+            let (cols, _) = legend_grid(entries, font_px, width);
+            let rows = entries.len().div_ceil(cols) as u32;
+            (width, rows * row_h + 16)
+        }
+        LegendAt::Right => {
+            let w = (SAMPLE_W + 6 + widest(entries, font_px) + 24) as u32 + 12;
+            (w.min(width / 2), entries.len() as u32 * row_h + 16)
+        }
+    }
+}
+
+/// Draws `entries` in columns on `area` (row by row, left to right) inside a thin frame,
+/// centred horizontally (below) or at the top (right); returns the frame.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
     entries: &[LegendEntry],
     font_px: u32,
-) -> Result<(usize, i32), Box<dyn std::error::Error>> {
-    let style = TextStyle::from((FONT, font_px).into_font());
-    let mut widest = 0;
-    for e in entries {
-        let (w, _) = area.estimate_text_size(&e.text, &style)?;
-        widest = widest.max(w as i32);
+    at: LegendAt,
+) -> DrawResult<Option<PixelBox>>
+where
+    DB::ErrorType: 'static,
+{
+    if entries.is_empty() {
+        return Ok(None);
     }
-    let cell = SAMPLE_W + 6 + widest + GAP;
-    let (w, _) = area.dim_in_pixel();
-    let cols = ((w as i32 - 20) / cell.max(1)).clamp(1, entries.len().max(1) as i32) as usize;
-    Ok((cols, cell))
-}
-
-/// Height in pixels a [`draw_legend`] strip of `entries` needs on an area as wide as `area`.
-pub fn legend_height(area: &Area, entries: &[LegendEntry], font_px: u32, text: bool) -> u32 {
-    if !text || entries.is_empty() {
-        return 0;
-    }
-    let cols = legend_grid(area, entries, font_px).map_or(1, |(c, _)| c);
-    let rows = entries.len().div_ceil(cols) as u32;
-    rows * (font_px + 8) + 16
-}
-
-/// Draws `entries` in columns on `area` (row by row, left to right), inside a thin frame.
-pub fn draw_legend(area: &Area, entries: &[LegendEntry], font_px: u32, text: bool) -> DrawResult {
-    if !text || entries.is_empty() {
-        return Ok(());
-    }
-    let (cols, cell) = legend_grid(area, entries, font_px)?;
     let (w, h) = area.dim_in_pixel();
+    let (cols, cell) = match at {
+        LegendAt::Below => legend_grid(entries, font_px, w),
+        LegendAt::Right => (1, 0),
+    };
     let row_h = (font_px + 8) as i32;
     let rows = entries.len().div_ceil(cols) as i32;
-    let used_w = (cols as i32 * cell - GAP + 20).min(w as i32 - 2);
-    let left = (w as i32 - used_w) / 2;
+    let (left, top, used_w) = match at {
+        LegendAt::Below => {
+            let used_w = (cols as i32 * cell - GAP + 20).min(w as i32 - 2);
+            ((w as i32 - used_w) / 2, 2, used_w)
+        }
+        LegendAt::Right => (4, 16, w as i32 - 12),
+    };
+    let bottom = (top + rows * row_h + 10).min(h as i32 - 2);
     area.draw(&Rectangle::new(
-        [
-            (left, 2),
-            (left + used_w, (rows * row_h + 12).min(h as i32 - 2)),
-        ],
+        [(left, top), (left + used_w, bottom)],
         BLACK.stroke_width(1),
     ))?;
     let style =
@@ -545,7 +990,7 @@ pub fn draw_legend(area: &Area, entries: &[LegendEntry], font_px: u32, text: boo
     for (k, e) in entries.iter().enumerate() {
         let (r, c) = ((k / cols) as i32, (k % cols) as i32);
         let x = left + 10 + c * cell;
-        let y = 8 + r * row_h + row_h / 2;
+        let y = top + 6 + r * row_h + row_h / 2;
         let text_x = match e.sample {
             LegendSample::Line(colour, line) => {
                 area.draw(&LegendGlyph {
@@ -568,28 +1013,149 @@ pub fn draw_legend(area: &Area, entries: &[LegendEntry], font_px: u32, text: boo
         };
         area.draw_text(&e.text, &style, (text_x, y))?;
     }
-    Ok(())
+    let (bx, by) = area.get_base_pixel();
+    Ok(Some(PixelBox {
+        x0: bx + left,
+        y0: by + top,
+        x1: bx + left + used_w,
+        y1: by + bottom,
+    }))
 }
 
-/// Gives `draw` a white `width × height` canvas and writes it to `path` as an RGB PNG.
-pub fn render_png(
-    path: &Path,
-    (width, height): (u32, u32),
-    draw: impl FnOnce(&Area) -> DrawResult,
-) -> Result<(), FigureError> {
-    let mut buf = vec![0u8; width as usize * height as usize * 3];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
-        let drawn = root
-            .fill(&WHITE)
-            .map_err(Into::into)
-            .and_then(|()| draw(&root))
-            .and_then(|()| root.present().map_err(Into::into));
-        drawn.map_err(|e| FigureError::Draw {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
+/// Rows and columns for `n` panels.
+pub fn grid(n: usize) -> (usize, usize) {
+    match n {
+        0 | 1 => (1, 1),
+        2 => (1, 2),
+        3 | 4 => (2, 2),
+        5 | 6 => (2, 3),
+        n => (n.div_ceil(3), 3),
     }
+}
+
+/// What one figure file holds.
+#[derive(Clone, Debug, Default)]
+pub struct Figure {
+    /// Drawn above the panels only with [`Output::title`].
+    pub title: String,
+    pub panels: Vec<Chart>,
+    /// Rows and columns of the panels (default [`grid`] of their number).
+    pub grid: Option<(usize, usize)>,
+    pub legend: Vec<LegendEntry>,
+    pub legend_at: LegendAt,
+    /// Canvas size, pixels.
+    pub size: (u32, u32),
+}
+
+impl Figure {
+    /// One entry per distinct labelled series of the panels, in order of appearance.
+    pub fn legend_from_series(panels: &[Chart]) -> Vec<LegendEntry> {
+        let mut out: Vec<LegendEntry> = Vec::new();
+        for s in panels.iter().flat_map(|c| &c.series) {
+            if let Some(label) = &s.label
+                && !out.iter().any(|e| &e.text == label)
+            {
+                out.push(LegendEntry {
+                    sample: LegendSample::Line(s.colour, s.line),
+                    text: label.clone(),
+                });
+            }
+        }
+        out
+    }
+}
+
+/// Where a figure's parts went on the canvas.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Layout {
+    pub panels: Vec<ChartLayout>,
+    /// The legend's frame (`None` without a legend or without text).
+    pub legend: Option<PixelBox>,
+}
+
+fn draw_figure<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    fig: &Figure,
+    title: bool,
+    text: bool,
+) -> DrawResult<Layout>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE)?;
+    let area = if text && title && !fig.title.is_empty() {
+        root.titled(&fig.title, (FONT, 22))?
+    } else {
+        root.clone()
+    };
+    let (w, h) = area.dim_in_pixel();
+    let legend: &[LegendEntry] = if text { &fig.legend } else { &[] };
+    let (lw, lh) = legend_size(legend, LEGEND_PX, fig.legend_at, w);
+    let (plots, strip) = match fig.legend_at {
+        LegendAt::Below => area.split_vertically(h as i32 - lh.min(h / 2) as i32),
+        LegendAt::Right => area.split_horizontally(w as i32 - lw as i32),
+    };
+    let cells = plots.split_evenly(fig.grid.unwrap_or_else(|| grid(fig.panels.len())));
+    let mut layout = Layout::default();
+    for (cell, chart) in cells.iter().zip(&fig.panels) {
+        layout.panels.push(draw_chart(cell, chart, text)?);
+    }
+    layout.legend = draw_legend(&strip, legend, LEGEND_PX, fig.legend_at)?;
+    root.present()?;
+    Ok(layout)
+}
+
+/// Draws `fig` into memory (an SVG string) and returns where its parts went.
+pub fn layout(fig: &Figure, title: bool) -> Result<Layout, FigureError> {
+    let text = font().is_some();
+    let mut svg = String::new();
+    let root = SVGBackend::with_string(&mut svg, fig.size).into_drawing_area();
+    draw_figure(&root, fig, title, text).map_err(|e| FigureError::Draw {
+        path: PathBuf::from("(memory)"),
+        reason: e.to_string(),
+    })
+}
+
+/// The files of one figure and where its parts went.
+#[derive(Clone, Debug, Default)]
+pub struct Written {
+    pub files: Vec<PathBuf>,
+    pub layout: Layout,
+}
+
+/// Writes `fig` as `stem.png`, `stem.svg` (the formats of `output`).
+pub fn write_figure(stem: &Path, fig: &Figure, output: &Output) -> Result<Written, FigureError> {
+    let text = font().is_some();
+    let mut written = Written::default();
+    for &format in &output.formats {
+        let path = stem.with_extension(format.extension());
+        let draw_error = |e: Box<dyn std::error::Error>| FigureError::Draw {
+            path: path.clone(),
+            reason: e.to_string(),
+        };
+        match format {
+            Format::Svg => {
+                let root = SVGBackend::new(&path, fig.size).into_drawing_area();
+                written.layout = draw_figure(&root, fig, output.title, text).map_err(draw_error)?;
+            }
+            Format::Png => {
+                let (width, height) = fig.size;
+                let mut buf = vec![0u8; width as usize * height as usize * 3];
+                {
+                    let root =
+                        BitMapBackend::with_buffer(&mut buf, (width, height)).into_drawing_area();
+                    written.layout =
+                        draw_figure(&root, fig, output.title, text).map_err(draw_error)?;
+                }
+                write_png(&path, (width, height), &buf)?;
+            }
+        }
+        written.files.push(path);
+    }
+    Ok(written)
+}
+
+fn write_png(path: &Path, (width, height): (u32, u32), buf: &[u8]) -> Result<(), FigureError> {
     let io = |source| FigureError::Io {
         path: path.to_path_buf(),
         source,
@@ -603,44 +1169,241 @@ pub fn render_png(
     enc.set_color(png::ColorType::Rgb);
     enc.set_depth(png::BitDepth::Eight);
     let mut w = enc.write_header().map_err(encode)?;
-    w.write_image_data(&buf).map_err(encode)?;
+    w.write_image_data(buf).map_err(encode)?;
     w.finish().map_err(encode)?;
     Ok(())
 }
 
+/// The parts of a bearing position, as the thermal network names its nodes
+/// (`"<bearing> rolling elements"`, …), with the colour each has in every figure.
+pub const BEARING_PARTS: [(&str, RGBColor); 6] = [
+    ("rolling elements", PALETTE[3]),
+    ("inner ring", PALETTE[1]),
+    ("outer ring", PALETTE[0]),
+    ("lubricant", PALETTE[2]),
+    ("housing seat", PALETTE[5]),
+    ("housing flank", PALETTE[7]),
+];
+
+/// Colours of shafts (by order of appearance) in [`thermal_groups`]: none of a bearing part.
+const SHAFT_COLOURS: [RGBColor; 3] = [PALETTE[9], PALETTE[4], PALETTE[8]];
+/// Colours of disks: none of a bearing part or a shaft.
+const DISK_COLOURS: [RGBColor; 4] = [
+    PALETTE[6],
+    PALETTE_LIGHT[7],
+    RGBColor(0, 0, 0),
+    PALETTE_LIGHT[3],
+];
+
+/// One panel's worth of thermal nodes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ThermalGroup {
+    /// Panel caption, e.g. `"bearing 2#"`, `"shafts and disks"`.
+    pub title: String,
+    /// (index into the thermal nodes, legend text, colour) per node; nodes sharing a
+    /// legend text (the segments of one shaft) share the colour.
+    pub members: Vec<(usize, String, RGBColor)>,
+}
+
+/// Groups thermal nodes by their names (`nodes`: id and name, in the recording's order):
+/// a group per bearing of `bearings` (its rolling elements, rings, lubricant and the
+/// housing of the same name), then the shafts and disks (a colour per shaft, named by the
+/// words before "shaft", and one per disk), then any other nodes.
+pub fn thermal_groups(nodes: &[(u32, &str)], bearings: &[&str]) -> Vec<ThermalGroup> {
+    let mut used = vec![false; nodes.len()];
+    let mut groups = Vec::new();
+    for b in bearings {
+        let mut members = Vec::new();
+        for (part, colour) in BEARING_PARTS {
+            for (k, (_, name)) in nodes.iter().enumerate() {
+                if used[k] {
+                    continue;
+                }
+                // "1# lubricant", "bearing 1# lubricant", "1# housing flank 2"
+                let Some(at) = name.find(part) else { continue };
+                let owner = name[..at].trim_end();
+                if owner == *b || owner.ends_with(&format!(" {b}")) {
+                    used[k] = true;
+                    // the flanks of a housing share one entry
+                    let text = if part == "housing flank" {
+                        "housing flanks".to_string()
+                    } else {
+                        name[at..].to_string()
+                    };
+                    members.push((k, text, colour));
+                }
+            }
+        }
+        if !members.is_empty() {
+            groups.push(ThermalGroup {
+                title: format!("bearing {b}"),
+                members,
+            });
+        }
+    }
+    let mut shafts: Vec<String> = Vec::new();
+    let mut members = Vec::new();
+    let mut disks = 0;
+    for (k, (_, name)) in nodes.iter().enumerate() {
+        if used[k] {
+            continue;
+        }
+        if let Some(at) = name.find("shaft") {
+            let shaft = name[..at + 5].to_string();
+            let i = shafts.iter().position(|s| *s == shaft).unwrap_or_else(|| {
+                shafts.push(shaft.clone());
+                shafts.len() - 1
+            });
+            used[k] = true;
+            members.push((k, shaft, SHAFT_COLOURS[i % SHAFT_COLOURS.len()]));
+        } else if name.contains("disk") {
+            used[k] = true;
+            members.push((
+                k,
+                name.to_string(),
+                DISK_COLOURS[disks % DISK_COLOURS.len()],
+            ));
+            disks += 1;
+        }
+    }
+    if !members.is_empty() {
+        groups.push(ThermalGroup {
+            title: "shafts and disks".into(),
+            members,
+        });
+    }
+    let rest: Vec<(usize, String, RGBColor)> = (0..nodes.len())
+        .filter(|&k| !used[k])
+        .enumerate()
+        .map(|(i, k)| (k, nodes[k].1.to_string(), colour(i)))
+        .collect();
+    if !rest.is_empty() {
+        groups.push(ThermalGroup {
+            title: if groups.is_empty() {
+                "thermal nodes".into()
+            } else {
+                "other nodes".into()
+            },
+            members: rest,
+        });
+    }
+    groups
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{LabelBox, place_labels};
+    use super::{Format, Obstacles, PixelBox, parse_formats, place_labels};
 
-    #[test]
-    fn labels_take_the_first_free_place_or_are_left_out() {
-        let b = |x0, y0| LabelBox {
+    fn b(x0: i32, y0: i32) -> PixelBox {
+        PixelBox {
             x0,
             y0,
             x1: x0 + 40,
             y1: y0 + 12,
-        };
+        }
+    }
+
+    const ALL: PixelBox = PixelBox {
+        x0: -1000,
+        y0: -1000,
+        x1: 1000,
+        y1: 1000,
+    };
+
+    #[test]
+    fn labels_take_the_first_free_place_or_are_left_out() {
+        let none = Obstacles::default();
         let candidates = [
             vec![b(0, 0)],
             // the first place overlaps the first label: the second
             vec![b(10, 5), b(10, 30)],
             // both places overlap a label placed before: left out
             vec![b(5, 0), b(5, 28)],
-            // touches the first label's edge only
-            vec![b(40, 0)],
+            // keeps the gap to the first label
+            vec![b(40 + super::LABEL_GAP, 0)],
         ];
         assert_eq!(
-            place_labels(&candidates, &[]),
+            place_labels(&candidates, &none, ALL),
             vec![Some(0), Some(1), None, Some(0)]
         );
         let two = |x0, y0| vec![b(x0, y0), b(x0, y0 + 20)];
         // an obstacle (another marker's circle) counts as well
-        let circle = LabelBox {
-            x0: 5,
-            y0: 2,
-            x1: 10,
-            y1: 8,
+        let circle = Obstacles {
+            boxes: vec![PixelBox {
+                x0: 5,
+                y0: 2,
+                x1: 10,
+                y1: 8,
+            }],
+            ..Obstacles::default()
         };
-        assert_eq!(place_labels(&[two(0, 0)], &[circle]), vec![Some(1)]);
+        assert_eq!(place_labels(&[two(0, 0)], &circle, ALL), vec![Some(1)]);
+        // so does a line through the first place, and the bounds of the plot area
+        let line = Obstacles {
+            lines: vec![vec![(-50, 6), (100, 6)]],
+            ..Obstacles::default()
+        };
+        assert_eq!(place_labels(&[two(0, 0)], &line, ALL), vec![Some(1)]);
+        let bounds = PixelBox {
+            x0: 0,
+            y0: 15,
+            x1: 100,
+            y1: 100,
+        };
+        assert_eq!(place_labels(&[two(0, 0)], &none, bounds), vec![Some(1)]);
+    }
+
+    #[test]
+    fn segments_hit_boxes_they_cross_only() {
+        let r = b(0, 0);
+        assert!(r.hit_by_segment((-10, 6), (50, 6)));
+        assert!(r.hit_by_segment((-10, -10), (50, 30)));
+        assert!(r.hit_by_segment((5, 5), (6, 6)), "inside");
+        assert!(!r.hit_by_segment((-10, -10), (-1, 30)));
+        assert!(!r.hit_by_segment((50, -10), (60, 30)));
+    }
+
+    #[test]
+    fn thermal_nodes_group_by_bearing_then_shafts_and_disks() {
+        use super::thermal_groups;
+        let nodes = [
+            (1, "LP shaft LP element 1-2 seg 1/1"),
+            (2, "HP shaft HP element 12-13 seg 1/2"),
+            (3, "LPC disk"),
+            (4, "1# housing seat"),
+            (5, "1# inner ring"),
+            (6, "bearing 2# rolling elements"),
+            (7, "1# lubricant"),
+            (8, "11# lubricant"),
+            (9, "oil tank"),
+        ];
+        let groups = thermal_groups(&nodes, &["1#", "2#", "11#"]);
+        let titles: Vec<&str> = groups.iter().map(|g| g.title.as_str()).collect();
+        assert_eq!(
+            titles,
+            [
+                "bearing 1#",
+                "bearing 2#",
+                "bearing 11#",
+                "shafts and disks",
+                "other nodes"
+            ]
+        );
+        let names =
+            |g: usize| -> Vec<&str> { groups[g].members.iter().map(|m| m.1.as_str()).collect() };
+        assert_eq!(names(0), ["inner ring", "lubricant", "housing seat"]);
+        assert_eq!(names(1), ["rolling elements"]);
+        assert_eq!(names(2), ["lubricant"]);
+        assert_eq!(names(3), ["LP shaft", "HP shaft", "LPC disk"]);
+        assert_eq!(names(4), ["oil tank"]);
+    }
+
+    #[test]
+    fn formats_parse_from_a_list() {
+        assert_eq!(parse_formats("png,svg"), Ok(vec![Format::Png, Format::Svg]));
+        assert_eq!(parse_formats(" SVG "), Ok(vec![Format::Svg]));
+        assert!(parse_formats("pdf").is_err_and(|e| e.contains("rsvg-convert")));
+        assert!(parse_formats("jpg").is_err_and(|e| e.contains("jpg")));
+        assert!(parse_formats("").is_err());
     }
 }

@@ -420,12 +420,15 @@ flow_l_min = 2.0
     path
 }
 
-const FIGURES: [&str; 7] = [
+const FIGURES: [&str; 10] = [
     "amplitude_node8.png",
     "clearance_variation.png",
     "effective_clearance.png",
+    "bearing_loads_mean.png",
     "rolling_element_temperatures.png",
-    "node_temperatures.png",
+    "temperature_node58.png",
+    "node_temperatures_q20.png",
+    "node_temperatures_q2.png",
     "temperature_extremes.png",
     "bearing_temperatures_omega402.png",
 ];
@@ -447,6 +450,10 @@ fn has_colour(px: &[u8], c: plotters::style::RGBColor) -> bool {
 fn options() -> FigureOptions {
     FigureOptions {
         omega_rad_s: 402.0,
+        output: tmrotor::figure::Output {
+            formats: vec![tmrotor::figure::Format::Png],
+            title: false,
+        },
         ..FigureOptions::default()
     }
 }
@@ -488,6 +495,10 @@ fn campaign_plot_overlays_the_runs_and_marks_incomplete_ones() {
             ink > 1200 * 800 / 200,
             "{name}: only {ink} non-white pixels"
         );
+        if name.starts_with("node_temperatures_") {
+            // one run per figure, a colour per part of a bearing
+            continue;
+        }
         // Both runs are drawn, each in its own colour.
         assert!(has_colour(&px, PALETTE[0]), "{name}: run q20 missing");
         assert!(has_colour(&px, PALETTE[1]), "{name}: run q2 missing");
@@ -728,7 +739,7 @@ fn campaign_plot_draws_unstable_parts_differently() {
     assert!(
         done.notes
             .iter()
-            .any(|n| n.contains("rolling_element_temperatures.png not written")),
+            .any(|n| n.contains("rolling_element_temperatures not written")),
         "{:?}",
         done.notes
     );

@@ -331,7 +331,7 @@ fn plot_binary_writes_pngs_with_stable_and_unstable_colours_and_handles_bad_file
         );
         for name in ["amplitude_node1.png", "clearance.png", "temperatures.png"] {
             let (w, h, px) = png_pixels(&figs.join(name));
-            assert_eq!((w, h), (1000, 650));
+            assert_eq!((w, h), (1100, 650));
             if name.starts_with("amplitude") {
                 let has = |r: u8, g: u8, b: u8| px.chunks(3).any(|p| p == [r, g, b]);
                 assert!(has(31, 119, 180), "stable colour missing");

@@ -1,17 +1,21 @@
 //! Figures of a campaign: the runs of an output directory overlaid on common axes, like the
 //! paper's figures (`tmrotor campaign plot DIR`, and at the end of `tmrotor campaign FILE`).
 //!
-//! [`plot_campaign`] reads `DIR/manifest.toml` and every run's recording and writes:
+//! [`plot_campaign`] reads `DIR/manifest.toml` and every run's recording and writes, each
+//! in the formats of [`FigureOptions::output`] (PNG and SVG by default, no title):
 //!
 //! | file | what | paper |
 //! |---|---|---|
-//! | `amplitude_node8.png` | RMS amplitude (Eq. 35) of dynamic node 8 against ω, one colour per run; period-doubled points (`ω/2` share ≥ 5 %) dotted | Figs. 8a, 9a, 10a, 21a |
-//! | `clearance_variation.png` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
-//! | `effective_clearance.png` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
-//! | `rolling_element_temperatures.png` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
-//! | `node_temperatures.png` | mean temperature of every thermal node against ω, a panel per run | Figs. 14a, 14b |
-//! | `temperature_extremes.png` | highest and lowest mean node temperature against ω | Figs. 14a, 14b, 22a |
-//! | `bearing_temperatures_omega620.png` | rolling elements, rings, lubricant and housing of each bearing at the recorded point nearest to ω = 620 rad/s | Figs. 14d, 14e |
+//! | `amplitude_node8` | RMS amplitude of dynamic node 8 against ω, one colour per run; period-doubled points (`ω/2` share ≥ 5 %) dotted | Figs. 8a, 9a, 10a, 21a |
+//! | `amplitude_node8_per_run` | the same, a panel per run on shared axes ([`FigureOptions::per_run`]) | |
+//! | `clearance_variation` | RC variation δv against ω, a panel per bearing | Figs. 8b, 9b, 10b, 21b |
+//! | `effective_clearance` | effective clearance δe = δ0 + δv against ω, δ0 as a dashed line | section 5.2, Fig. 9b (δe of 2#, 4# above 5 δ0 near 620 rad/s) |
+//! | `bearing_loads_mean` | mean radial load of each bearing against ω, a panel per bearing | Fig. 16 (averages) |
+//! | `rolling_element_temperatures` | mean temperature of each bearing's rolling elements against ω | Fig. 14c |
+//! | `temperature_node58` (and `_per_run`) | mean temperature of one thermal node against ω, bifurcations circled | Fig. 15 |
+//! | `node_temperatures_<run>` | mean temperature of every thermal node against ω, a panel per bearing and one of the shafts and disks ([`figure::thermal_groups`]) | Figs. 14a, 14b |
+//! | `temperature_extremes` | highest and lowest mean node temperature against ω | Figs. 14a, 14b, 22a |
+//! | `bearing_temperatures_omega620` | rolling elements, rings, lubricant and housing of each bearing at the recorded point nearest to ω = 620 rad/s | Figs. 14d, 14e |
 //!
 //! On every curve, parts recorded as unstable are dashed and lighter; stable and
 //! not-assessed parts are solid (the legend says which applies). Bifurcations are circled
@@ -36,8 +40,8 @@ use rayon::prelude::*;
 use super::{CampaignError, Manifest, ManifestEntry, sha256_file};
 use crate::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::figure::{
-    self, Chart, FONT, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, data_range,
-    draw_chart, draw_legend, legend_height, lighter, render_png, tick,
+    self, BranchStyle, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker,
+    Output, Series, share_axes, thermal_groups, tick,
 };
 use crate::record::{ReadError, RunInfo, read_recording};
 use crate::stability::BifurcationKind;
@@ -55,6 +59,14 @@ pub struct FigureOptions {
     /// How far a run's nearest recorded point may lie from [`Self::omega_rad_s`] to be
     /// shown there, rad/s (default 10).
     pub omega_tolerance_rad_s: f64,
+    /// Thermal node of `temperature_node<id>` (default: 58, the paper's Fig. 15, when
+    /// every run has it and the model is the built-in dual rotor; else none is drawn).
+    pub thermal_node: Option<u32>,
+    /// Also draw the amplitude and node-temperature figures as small multiples, one panel
+    /// per run on shared axes (`…_per_run`; default false).
+    pub per_run: bool,
+    /// Formats and title (default PNG and SVG, no title).
+    pub output: Output,
     /// Size of every figure, pixels (default 1200 × 800).
     pub size: (u32, u32),
 }
@@ -65,6 +77,9 @@ impl Default for FigureOptions {
             nodes: Vec::new(),
             omega_rad_s: 620.0,
             omega_tolerance_rad_s: 10.0,
+            thermal_node: None,
+            per_run: false,
+            output: Output::default(),
             size: (1200, 800),
         }
     }
@@ -73,8 +88,11 @@ impl Default for FigureOptions {
 /// What [`plot_campaign`] did.
 #[derive(Clone, Debug, Default)]
 pub struct CampaignFigures {
-    /// The PNG files written, in the order of the module table.
+    /// The files written (each figure in every format asked for), in the order of the
+    /// module table.
     pub written: Vec<PathBuf>,
+    /// Where each figure's panels, marker labels and legend went, by file stem.
+    pub layouts: Vec<(String, figure::Layout)>,
     /// Things the user should know: incomplete runs, skipped figures, missing font.
     pub notes: Vec<String>,
     /// The legend label of every run, in manifest order (ends with `(incomplete)` for a
@@ -92,6 +110,7 @@ struct PointData {
     delta_v_m: Vec<f64>,
     effective_m: Vec<f64>,
     temp_c: Vec<f64>,
+    load_n: Vec<f64>,
 }
 
 struct BifurcationData {
@@ -99,10 +118,15 @@ struct BifurcationData {
     number: u32,
     omega_rad_s: f64,
     amplitude_m: Vec<f64>,
+    /// Mean temperature per thermal node at the located point (from its coefficients, else
+    /// interpolated between the points on either side); empty when unknown.
+    temp_c: Vec<f64>,
 }
 
 /// One run, reduced to what the figures use (a recording holds far more).
 struct RunData {
+    name: String,
+    model: String,
     legend: String,
     colour: RGBColor,
     node_ids: Vec<u32>,
@@ -173,30 +197,10 @@ fn run_label(entry: &ManifestEntry, run: Option<&RunInfo>) -> String {
     }
 }
 
-/// Lighter companions of [`PALETTE`]'s colours (the second half of the "tab20" set; for its
-/// light grey, too close to the grid lines, an indigo), for runs 11–20 of a campaign (a
-/// grid of five flow rates at three temperatures has 15).
-const PALETTE_LIGHT: [RGBColor; 10] = [
-    RGBColor(174, 199, 232),
-    RGBColor(255, 187, 120),
-    RGBColor(152, 223, 138),
-    RGBColor(255, 152, 150),
-    RGBColor(197, 176, 213),
-    RGBColor(196, 156, 148),
-    RGBColor(247, 182, 210),
-    RGBColor(82, 84, 163),
-    RGBColor(219, 219, 141),
-    RGBColor(158, 218, 229),
-];
-
-/// The colour of run `k` in the overlays: the ten colours of `PALETTE`, then the ten of
-/// `PALETTE_LIGHT` (tab20's light set), then again.
+/// The colour of run `k` in the overlays: [`figure::colour`] (the ten colours of tab10,
+/// then the ten of tab20's light set, then again).
 pub fn run_colour(k: usize) -> RGBColor {
-    let n = PALETTE.len() + PALETTE_LIGHT.len();
-    match k % n {
-        i if i < PALETTE.len() => PALETTE[i],
-        i => PALETTE_LIGHT[i - PALETTE.len()],
-    }
+    figure::colour(k)
 }
 
 fn load_run(
@@ -227,6 +231,8 @@ fn load_run(
                 entry.status
             );
             let data = RunData {
+                name: entry.name.clone(),
+                model: String::new(),
                 legend: format!("{} (incomplete: no recording)", run_label(entry, None)),
                 colour,
                 node_ids: Vec::new(),
@@ -270,7 +276,10 @@ fn load_run(
         legend.push_str(" (incomplete)");
     }
     let run = &rec.run;
+    let nc = run.n_coeffs();
     let data = RunData {
+        name: entry.name.clone(),
+        model: run.model_name.clone(),
         legend,
         colour,
         node_ids: run.nodes.iter().map(|n| n.id).collect(),
@@ -295,6 +304,7 @@ fn load_run(
                 delta_v_m: p.clearances.iter().map(|c| c.delta_v_m).collect(),
                 effective_m: p.clearances.iter().map(|c| c.effective_m).collect(),
                 temp_c: p.temperatures.iter().map(|t| t.mean_c).collect(),
+                load_n: p.bearing_loads.iter().map(|l| l.mean_n).collect(),
             })
             .collect(),
         bifurcations: rec
@@ -305,6 +315,7 @@ fn load_run(
                 number: b.number,
                 omega_rad_s: b.omega_rad_s,
                 amplitude_m: b.amplitude_rms_m.clone(),
+                temp_c: bifurcation_temperatures(&rec, b, nc),
             })
             .collect(),
     };
@@ -315,38 +326,42 @@ fn load_run(
 /// dashed and lighter where recorded as unstable. Points where `y` has no value break the
 /// line.
 fn branch_series(run: &RunData, y: impl Fn(&PointData) -> Option<f64>) -> Vec<Series> {
-    let mut out: Vec<Series> = Vec::new();
-    let mut previous: Option<((f64, f64), bool)> = None;
-    for p in &run.points {
-        let Some(v) = y(p).filter(|v| v.is_finite()) else {
-            previous = None;
-            continue;
-        };
-        let pt = (p.omega_rad_s, v);
-        let unstable = p.stable == Some(false);
-        match previous {
-            Some((_, u)) if u == unstable => {
-                if let Some(s) = out.last_mut() {
-                    s.points.push(pt);
-                }
-            }
-            _ => {
-                // A new segment starts at the previous point so the curve stays connected.
-                let mut points: Vec<(f64, f64)> = previous.map(|(q, _)| q).into_iter().collect();
-                points.push(pt);
-                out.push(if unstable {
-                    Series {
-                        line: LineStyle::Dashed,
-                        ..Series::new(points, lighter(run.colour, 0.35))
-                    }
-                } else {
-                    Series::new(points, run.colour)
-                });
-            }
-        }
-        previous = Some((pt, unstable));
+    figure::branch_series(
+        run.points.iter().map(|p| (p.omega_rad_s, y(p), p.stable)),
+        BranchStyle::Dashes(run.colour),
+    )
+}
+
+/// Mean temperatures at a located bifurcation: the constant coefficients of its recorded
+/// thermal coefficients, else interpolated on the arc length between the points on either
+/// side.
+fn bifurcation_temperatures(
+    rec: &crate::record::Recording,
+    b: &crate::record::BifurcationRecord,
+    nc: usize,
+) -> Vec<f64> {
+    if !b.coeffs_therm.is_empty() {
+        return rec
+            .run
+            .thermal_nodes
+            .iter()
+            .filter_map(|n| b.coeffs_therm.get(n.dof * nc).copied())
+            .collect();
     }
-    out
+    let (Some(p), Some(q)) = (rec.point(b.after_point), rec.point(b.after_point + 1)) else {
+        return Vec::new();
+    };
+    let span = q.arc_length - p.arc_length;
+    let t = if span.abs() > 0.0 {
+        ((b.arc_length - p.arc_length) / span).clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    p.temperatures
+        .iter()
+        .zip(&q.temperatures)
+        .map(|(a, c)| a.mean_c + t * (c.mean_c - a.mean_c))
+        .collect()
 }
 
 /// Legend entries: one per run, then how stability and bifurcations are drawn.
@@ -378,7 +393,7 @@ fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
             },
         });
         entries.push(LegendEntry {
-            sample: LegendSample::Line(lighter(grey, 0.35), LineStyle::Dashed),
+            sample: LegendSample::Line(figure::unstable_of(grey), LineStyle::Dashed),
             text: "unstable".into(),
         });
     } else if points().all(|p| p.stable.is_none()) {
@@ -396,53 +411,55 @@ fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
             ),
         });
     }
-    if with_markers && runs.iter().any(|r| !r.bifurcations.is_empty()) {
+    let mut kinds: Vec<&str> = Vec::new();
+    for b in runs.iter().flat_map(|r| &r.bifurcations) {
+        let name = match b.kind {
+            BifurcationKind::SaddleNode => "SN saddle-node",
+            BifurcationKind::PeriodDoubling => "PD period doubling",
+            BifurcationKind::NeimarkSacker => "NS Neimark–Sacker",
+        };
+        if !kinds.contains(&name) {
+            kinds.push(name);
+        }
+    }
+    if with_markers && !kinds.is_empty() {
         entries.push(LegendEntry {
             sample: LegendSample::Marker(BLACK),
-            text: "bifurcation: SN saddle-node, PD period doubling, NS Neimark–Sacker".into(),
+            text: format!("bifurcation: {}", kinds.join(", ")),
         });
     }
     entries
 }
 
-/// Rows and columns for `n` panels.
-fn grid(n: usize) -> (usize, usize) {
-    match n {
-        0 | 1 => (1, 1),
-        2 => (1, 2),
-        3 | 4 => (2, 2),
-        5 | 6 => (2, 3),
-        n => (n.div_ceil(3), 3),
-    }
+/// Writes one figure (all formats) and records its files and layout.
+fn write_figure(
+    out: &Path,
+    stem: &str,
+    fig: Figure,
+    options: &FigureOptions,
+    result: &mut CampaignFigures,
+) -> Result<(), CampaignError> {
+    let written = figure::write_figure(&out.join(stem), &fig, &options.output)?;
+    result.written.extend(written.files);
+    result.layouts.push((stem.to_string(), written.layout));
+    Ok(())
 }
 
-const LEGEND_PX: u32 = 15;
-
-/// A figure: a title, panels on a grid, one legend strip at the bottom.
-fn write_figure(
-    path: &Path,
-    size: (u32, u32),
+/// A figure of `panels` with the legend below.
+fn figure_of(
     title: &str,
-    panels: &[Chart],
-    legend: &[LegendEntry],
-    text: bool,
-) -> Result<(), CampaignError> {
-    render_png(path, size, |root| {
-        let area = if text {
-            root.titled(title, (FONT, 22))?
-        } else {
-            root.clone()
-        };
-        let (_, h) = area.dim_in_pixel();
-        let lh = legend_height(&area, legend, LEGEND_PX, text).min(h / 2);
-        let (plots, strip) = area.split_vertically(h as i32 - lh as i32);
-        let cells = plots.split_evenly(grid(panels.len()));
-        for (cell, chart) in cells.iter().zip(panels) {
-            draw_chart(cell, chart, text)?;
-        }
-        draw_legend(&strip, legend, LEGEND_PX, text)
-    })?;
-    Ok(())
+    panels: Vec<Chart>,
+    legend: Vec<LegendEntry>,
+    size: (u32, u32),
+) -> Figure {
+    Figure {
+        title: title.into(),
+        panels,
+        legend,
+        legend_at: LegendAt::Below,
+        size,
+        ..Figure::default()
+    }
 }
 
 /// Panel style: small title and fonts when several panels share a figure.
@@ -451,7 +468,7 @@ fn panel(title: String, x_desc: &str, y_desc: &str, several: bool) -> Chart {
         title,
         x_desc: x_desc.into(),
         y_desc: y_desc.into(),
-        title_px: if several { 18 } else { 20 },
+        title_px: if several { 16 } else { 18 },
         font_px: if several { 14 } else { 16 },
         ..Chart::default()
     }
@@ -459,18 +476,30 @@ fn panel(title: String, x_desc: &str, y_desc: &str, several: bool) -> Chart {
 
 /// One y-range for all panels so that they compare directly.
 fn share_y(panels: &mut [Chart]) {
-    let y = data_range(panels.iter().flat_map(|c| {
-        c.series
-            .iter()
-            .flat_map(|s| s.points.iter().map(|p| p.1))
-            .chain(c.hlines.iter().copied())
-    }));
-    for c in panels {
-        c.y_range = Some(y);
-    }
+    share_axes(panels, false, true);
 }
 
-const OMEGA: &str = "ω (rad/s)";
+/// Small multiples: one panel per run with `draw(run, chart)` on shared axes.
+fn per_run_panels(
+    runs: &[RunData],
+    x_desc: &str,
+    y_desc: &str,
+    draw: impl Fn(&RunData, &mut Chart),
+) -> Vec<Chart> {
+    let mut panels: Vec<Chart> = runs
+        .iter()
+        .map(|r| {
+            let mut chart = panel(r.legend.clone(), x_desc, y_desc, true);
+            chart.title_px = 14;
+            draw(r, &mut chart);
+            chart
+        })
+        .collect();
+    share_axes(&mut panels, true, true);
+    panels
+}
+
+const OMEGA: &str = "speed ω (rad/s)";
 
 /// Reads `dir/manifest.toml` and every run's recording and writes the campaign figures
 /// (see the module docs) into `out`, which is created if missing.
@@ -502,8 +531,7 @@ pub fn plot_campaign(
         path: out.display().to_string(),
         source,
     })?;
-    let text = figure::font().is_some();
-    if !text {
+    if figure::font().is_none() {
         result.notes.push(
             "no TrueType font found (set TMROTOR_FONT to a .ttf file): figures have no text".into(),
         );
@@ -541,9 +569,9 @@ pub fn plot_campaign(
                 ),
             });
         }
-        let mut chart = panel(String::new(), OMEGA, "RMS amplitude (µm)", false);
-        for r in &runs {
-            let Some(k) = r.node(id) else { continue };
+        let y_desc = format!("RMS amplitude, node {id} (µm)");
+        let draw = |r: &RunData, chart: &mut Chart| {
+            let Some(k) = r.node(id) else { return };
             let amplitude = |p: &PointData| p.amplitude_m.get(k).map(|a| a * 1e6);
             chart.series.extend(branch_series(r, amplitude));
             let dots: Vec<(f64, f64)> = r
@@ -567,17 +595,34 @@ pub fn plot_campaign(
                     colour: r.colour,
                 })
             }));
+        };
+        let mut chart = panel(String::new(), OMEGA, &y_desc, false);
+        for r in &runs {
+            draw(r, &mut chart);
         }
-        let path = out.join(format!("amplitude_node{id}.png"));
+        let title = format!("Amplitude–frequency response of dynamic node {id}");
         write_figure(
-            &path,
-            size,
-            &format!("Amplitude–frequency response of dynamic node {id} (RMS amplitude, Eq. 35)"),
-            &[chart],
-            &run_legend(&runs, true),
-            text,
+            out,
+            &format!("amplitude_node{id}"),
+            figure_of(&title, vec![chart], run_legend(&runs, true), size),
+            options,
+            &mut result,
         )?;
-        result.written.push(path);
+        if options.per_run {
+            let panels = per_run_panels(&runs, OMEGA, "RMS amplitude (µm)", draw);
+            let mut legend = vec![LegendEntry {
+                sample: LegendSample::None,
+                text: format!("dynamic node {id}, a panel per run:"),
+            }];
+            legend.extend(style_legend(&runs, true));
+            write_figure(
+                out,
+                &format!("amplitude_node{id}_per_run"),
+                figure_of(&title, panels, legend, size),
+                options,
+                &mut result,
+            )?;
+        }
     }
 
     // Clearances, a panel per bearing (the bearings of the first run that has any).
@@ -591,23 +636,23 @@ pub fn plot_campaign(
         .any(|r| r.points.iter().any(|p| !p.delta_v_m.is_empty()));
     if bearings.is_empty() || !has_clearance {
         result.notes.push(
-            "no run recorded bearing clearances: clearance_variation.png and \
-             effective_clearance.png not written"
+            "no run recorded bearing clearances: clearance_variation and \
+             effective_clearance not written"
                 .into(),
         );
     } else {
         let several = bearings.len() > 1;
         for (file, title, y_desc, effective) in [
             (
-                "clearance_variation.png",
+                "clearance_variation",
                 "Radial clearance (RC) variation δv of each bearing (δv > 0: the clearance grows)",
-                "δv (µm)",
+                "radial clearance variation δv (µm)",
                 false,
             ),
             (
-                "effective_clearance.png",
+                "effective_clearance",
                 "Effective radial clearance δe = δ0 + δv of each bearing (dashed: initial clearance δ0)",
-                "δe (µm)",
+                "effective radial clearance δe (µm)",
                 true,
             ),
         ] {
@@ -630,10 +675,59 @@ pub fn plot_campaign(
             }
             // Each panel keeps its own y-range: the bearings' variations differ by an
             // order of magnitude, and the runs are compared within a bearing.
-            let path = out.join(file);
-            write_figure(&path, size, title, &panels, &run_legend(&runs, false), text)?;
-            result.written.push(path);
+            let mut legend = run_legend(&runs, false);
+            if effective {
+                legend.push(LegendEntry {
+                    sample: LegendSample::Line(figure::REFERENCE, LineStyle::Dashed),
+                    text: "initial clearance δ0".into(),
+                });
+            }
+            write_figure(
+                out,
+                file,
+                figure_of(title, panels, legend, size),
+                options,
+                &mut result,
+            )?;
         }
+    }
+
+    // Mean bearing loads, a panel per bearing (Fig. 16, averages).
+    let has_loads = runs
+        .iter()
+        .any(|r| r.points.iter().any(|p| !p.load_n.is_empty()));
+    if !bearings.is_empty() && has_loads {
+        let several = bearings.len() > 1;
+        let panels = bearings
+            .iter()
+            .map(|(name, _)| {
+                let mut chart = panel(
+                    format!("bearing {name}"),
+                    OMEGA,
+                    "mean radial load (N)",
+                    several,
+                );
+                for r in &runs {
+                    let Some(b) = r.bearing(name) else { continue };
+                    chart
+                        .series
+                        .extend(branch_series(r, |p| p.load_n.get(b).copied()));
+                }
+                chart
+            })
+            .collect();
+        write_figure(
+            out,
+            "bearing_loads_mean",
+            figure_of(
+                "Mean radial load of each bearing",
+                panels,
+                run_legend(&runs, false),
+                size,
+            ),
+            options,
+            &mut result,
+        )?;
     }
 
     // Temperatures.
@@ -642,8 +736,8 @@ pub fn plot_campaign(
         .any(|r| r.points.iter().any(|p| !p.temp_c.is_empty()));
     if !has_temps {
         result.notes.push(
-            "no run recorded temperatures: rolling_element_temperatures.png, \
-             temperature_extremes.png and the bearing-position chart not written"
+            "no run recorded temperatures: rolling_element_temperatures, \
+             temperature_extremes and the bearing-position chart not written"
                 .into(),
         );
         return Ok(result);
@@ -673,53 +767,133 @@ pub fn plot_campaign(
     if element_panels.is_empty() {
         result.notes.push(
             "no thermal node is named \"<bearing> rolling elements\": \
-             rolling_element_temperatures.png not written"
+             rolling_element_temperatures not written"
                 .into(),
         );
     } else {
         let mut panels = element_panels;
         share_y(&mut panels);
-        let path = out.join("rolling_element_temperatures.png");
         write_figure(
-            &path,
-            size,
-            "Rolling-element temperature of each bearing",
-            &panels,
-            &run_legend(&runs, false),
-            text,
+            out,
+            "rolling_element_temperatures",
+            figure_of(
+                "Rolling-element temperature of each bearing",
+                panels,
+                run_legend(&runs, false),
+                size,
+            ),
+            options,
+            &mut result,
         )?;
-        result.written.push(path);
     }
 
-    // Every node's temperature, a panel per run (Figs. 14a-b).
-    let mut panels: Vec<Chart> = runs
-        .iter()
-        .map(|r| {
-            let mut chart = panel(r.legend.clone(), OMEGA, "mean temperature (°C)", true);
-            for t in 0..r.thermal.len() {
-                chart.series.extend(
-                    branch_series(r, |p| p.temp_c.get(t).copied())
-                        .into_iter()
-                        .map(|s| Series { width: 1, ..s }),
-                );
+    // One thermal node against ω, runs overlaid (Fig. 15).
+    let thermal_node = options.thermal_node.or_else(|| {
+        let paper = runs
+            .iter()
+            .filter(|r| !r.points.is_empty())
+            .all(|r| r.model == "dual_rotor" && r.thermal.iter().any(|(id, _)| *id == 58));
+        paper.then_some(58)
+    });
+    if let Some(id) = thermal_node {
+        let index = |r: &RunData| r.thermal.iter().position(|(n, _)| *n == id);
+        let name = runs
+            .iter()
+            .find_map(|r| index(r).map(|t| r.thermal[t].1.clone()));
+        match name {
+            None => result.notes.push(format!(
+                "no run has thermal node {id}: temperature_node{id} not written"
+            )),
+            Some(name) => {
+                let y_desc = format!("mean temperature, {name} (thermal node {id}) (°C)");
+                let draw = |r: &RunData, chart: &mut Chart| {
+                    let Some(t) = index(r) else { return };
+                    chart
+                        .series
+                        .extend(branch_series(r, |p| p.temp_c.get(t).copied()));
+                    chart.markers.extend(r.bifurcations.iter().filter_map(|b| {
+                        Some(Marker {
+                            x: b.omega_rad_s,
+                            y: *b.temp_c.get(t)?,
+                            label: format!("{}{}", b.kind.abbreviation(), b.number + 1),
+                            colour: r.colour,
+                        })
+                    }));
+                };
+                let mut chart = panel(String::new(), OMEGA, &y_desc, false);
+                for r in &runs {
+                    draw(r, &mut chart);
+                }
+                let title = format!("Mean temperature of thermal node {id} ({name})");
+                write_figure(
+                    out,
+                    &format!("temperature_node{id}"),
+                    figure_of(&title, vec![chart], run_legend(&runs, true), size),
+                    options,
+                    &mut result,
+                )?;
+                if options.per_run {
+                    let panels = per_run_panels(&runs, OMEGA, "mean temperature (°C)", draw);
+                    let mut legend = vec![LegendEntry {
+                        sample: LegendSample::None,
+                        text: format!("thermal node {id} ({name}), a panel per run:"),
+                    }];
+                    legend.extend(style_legend(&runs, true));
+                    write_figure(
+                        out,
+                        &format!("temperature_node{id}_per_run"),
+                        figure_of(&title, panels, legend, size),
+                        options,
+                        &mut result,
+                    )?;
+                }
             }
-            chart
-        })
-        .collect();
-    share_y(&mut panels);
-    let path = out.join("node_temperatures.png");
-    write_figure(
-        &path,
-        size,
-        &format!(
-            "Mean temperature of every thermal node ({} nodes), one panel per run",
-            runs.iter().map(|r| r.thermal.len()).max().unwrap_or(0)
-        ),
-        &panels,
-        &style_legend(&runs, false),
-        text,
-    )?;
-    result.written.push(path);
+        }
+    }
+
+    // Every node's temperature, grouped by bearing, a figure per run (Figs. 14a-b).
+    for r in runs
+        .iter()
+        .filter(|r| r.points.iter().any(|p| !p.temp_c.is_empty()))
+    {
+        let names: Vec<(u32, &str)> = r.thermal.iter().map(|(id, n)| (*id, n.as_str())).collect();
+        let bearing_names: Vec<&str> = r.bearings.iter().map(|(n, _)| n.as_str()).collect();
+        let groups = thermal_groups(&names, &bearing_names);
+        let mut panels: Vec<Chart> = groups
+            .iter()
+            .map(|g| {
+                let mut chart = panel(g.title.clone(), OMEGA, "mean temperature (°C)", true);
+                for (t, label, c) in &g.members {
+                    let mut s = figure::branch_series(
+                        r.points
+                            .iter()
+                            .map(|p| (p.omega_rad_s, p.temp_c.get(*t).copied(), p.stable)),
+                        BranchStyle::Dashes(*c),
+                    );
+                    if let Some(first) = s.iter_mut().find(|s| s.colour == *c) {
+                        first.label = Some(label.clone());
+                    }
+                    chart.series.extend(s);
+                }
+                chart
+            })
+            .collect();
+        share_y(&mut panels);
+        let mut legend = Figure::legend_from_series(&panels);
+        legend.extend(style_legend(std::slice::from_ref(r), false));
+        write_figure(
+            out,
+            &format!("node_temperatures_{}", file_safe(&r.name)),
+            figure_of(
+                &format!("Mean temperatures of the thermal nodes, {}", r.legend),
+                panels,
+                legend,
+                size,
+            ),
+            options,
+            &mut result,
+        )?;
+    }
 
     let extreme = |max: bool| {
         move |p: &PointData| {
@@ -735,28 +909,49 @@ pub fn plot_campaign(
         panel(
             "highest mean node temperature".into(),
             OMEGA,
-            "T (°C)",
+            "highest mean temperature (°C)",
             true,
         ),
-        panel("lowest mean node temperature".into(), OMEGA, "T (°C)", true),
+        panel(
+            "lowest mean node temperature".into(),
+            OMEGA,
+            "lowest mean temperature (°C)",
+            true,
+        ),
     ];
     for r in &runs {
         panels[0].series.extend(branch_series(r, extreme(true)));
         panels[1].series.extend(branch_series(r, extreme(false)));
     }
-    let path = out.join("temperature_extremes.png");
     write_figure(
-        &path,
-        size,
-        "Highest and lowest temperature over the thermal network",
-        &panels,
-        &run_legend(&runs, false),
-        text,
+        out,
+        "temperature_extremes",
+        figure_of(
+            "Highest and lowest temperature over the thermal network",
+            panels,
+            run_legend(&runs, false),
+            size,
+        ),
+        options,
+        &mut result,
     )?;
-    result.written.push(path);
 
-    bearing_positions(&runs, &bearings, out, options, text, &mut result)?;
+    bearing_positions(&runs, &bearings, out, options, &mut result)?;
     Ok(result)
+}
+
+/// A run name as part of a file name: letters, digits, `-`, `_` and `.` kept, anything
+/// else `_`.
+fn file_safe(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "-_.".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
 }
 
 /// The dot chart of the bearing positions' temperatures at one ω (Figs. 14d–e).
@@ -765,7 +960,6 @@ fn bearing_positions(
     bearings: &[(String, f64)],
     out: &Path,
     options: &FigureOptions,
-    text: bool,
     result: &mut CampaignFigures,
 ) -> Result<(), CampaignError> {
     const PARTS: [(&str, &str); 5] = [
@@ -835,7 +1029,7 @@ fn bearing_positions(
         }
         panels.push(chart);
     }
-    let file = format!("bearing_temperatures_omega{}.png", tick(&target));
+    let file = format!("bearing_temperatures_omega{}", tick(&target));
     if panels.is_empty() {
         result.notes.push(format!(
             "no thermal node is named after a bearing part: {file} not written"
@@ -866,18 +1060,20 @@ fn bearing_positions(
             },
         })
         .collect();
-    let path = out.join(&file);
     write_figure(
-        &path,
-        options.size,
-        &format!(
-            "Temperatures of the bearing positions at ω = {} rad/s (nearest recorded point of each run)",
-            tick(&target)
+        out,
+        &file,
+        figure_of(
+            &format!(
+                "Temperatures of the bearing positions at ω = {} rad/s (nearest recorded point of each run)",
+                tick(&target)
+            ),
+            panels,
+            legend,
+            options.size,
         ),
-        &panels,
-        &legend,
-        text,
+        options,
+        result,
     )?;
-    result.written.push(path);
     Ok(())
 }

@@ -1,5 +1,5 @@
 //! `tmrotor campaign`: several sweeps from one file, in parallel, with a manifest; and
-//! `campaign plot DIR`: the runs overlaid in PNG figures ([`campaign::figures`]).
+//! `campaign plot DIR`: the runs overlaid in figures (PNG and SVG) ([`campaign::figures`]).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -53,8 +53,9 @@ pub enum CampaignCommand {
         /// The campaign's output directory.
         dir: PathBuf,
     },
-    /// PNG figures of all runs overlaid: amplitude of node 8, clearance variations,
-    /// temperatures (reads manifest.toml and the recordings of DIR).
+    /// Figures (PNG and SVG) of all runs overlaid: amplitude of node 8, clearance
+    /// variations, bearing loads, temperatures (reads manifest.toml and the recordings of
+    /// DIR).
     Plot {
         /// The campaign's output directory (holds manifest.toml).
         dir: PathBuf,
@@ -68,6 +69,16 @@ pub enum CampaignCommand {
         /// ω of the bearing-position temperature chart, rad/s (nearest recorded point).
         #[arg(long, default_value_t = 620.0)]
         omega: f64,
+        /// Thermal node of `temperature_node<ID>`, runs overlaid (default: 58, the paper's
+        /// Fig. 15, for the built-in dual rotor; else not drawn).
+        #[arg(long, value_name = "ID")]
+        thermal_node: Option<u32>,
+        /// Also draw the amplitude and node-temperature figures as small multiples: one
+        /// panel per run on shared axes (`…_per_run`).
+        #[arg(long)]
+        per_run: bool,
+        #[command(flatten)]
+        figures: crate::cli::FigureArgs,
     },
 }
 
@@ -115,11 +126,17 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         out: fig_dir,
         nodes,
         omega,
+        thermal_node,
+        per_run,
+        figures,
     }) = &args.command
     {
         let options = FigureOptions {
             nodes: nodes.clone(),
             omega_rad_s: *omega,
+            thermal_node: *thermal_node,
+            per_run: *per_run,
+            output: figures.output()?,
             ..FigureOptions::default()
         };
         let fig_dir = fig_dir.clone().unwrap_or_else(|| dir.join("figures"));

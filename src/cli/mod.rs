@@ -186,6 +186,30 @@ impl std::error::Error for Interrupted {}
 /// Exit status of an [`Interrupted`] run (128 + SIGINT, the shell's convention).
 pub const INTERRUPTED_EXIT: u8 = 130;
 
+/// The figure flags shared by `replay plot` and `tmrotor campaign plot`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct FigureArgs {
+    /// Figure formats, comma-separated: png, svg (default both: the PNG to look at, the
+    /// SVG, vector graphics with text kept as text, for a paper). PDF: convert the SVG,
+    /// e.g. `rsvg-convert -f pdf`.
+    #[arg(long, value_name = "LIST", default_value = "png,svg")]
+    pub format: String,
+    /// Draw each figure's title above its panels (default: none; a caption says it).
+    #[arg(long)]
+    pub title: bool,
+}
+
+impl FigureArgs {
+    /// The output settings; an unknown format is an error saying what is accepted.
+    pub fn output(&self) -> anyhow::Result<crate::figure::Output> {
+        Ok(crate::figure::Output {
+            formats: crate::figure::parse_formats(&self.format)
+                .map_err(|e| anyhow::anyhow!("--format {:?}: {e}", self.format))?,
+            title: self.title,
+        })
+    }
+}
+
 /// A re-derivation the recording cannot support (e.g. its embedded model cannot be rebuilt
 /// by this version): exit status [`NOT_AVAILABLE_EXIT`], not a failure of the tool.
 #[derive(Debug, thiserror::Error)]

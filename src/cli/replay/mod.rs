@@ -12,7 +12,7 @@
 //! | `orbit FILE --point N [--node K] [--samples S]` | time histories re-derived from the coefficients |
 //! | `stability FILE [--sip-intervals N]` | Floquet multipliers recomputed (optionally with a finer product) and compared with the stored ones |
 //! | `recover IN OUT` | a clean recording of every intact point of a damaged or cut file |
-//! | `plot FILE [--out DIR]` | PNG amplitude–frequency curves, RC variations, temperatures |
+//! | `plot FILE [--out DIR] [--format png,svg] [--title] [--node ID] [--thermal-node ID] [--point N]` | figures as PNG and SVG: amplitude–frequency curves, RC variations, temperatures, multipliers, orbits, bearing loads |
 //!
 //! Model-dependent re-derivations go through [`crate::derive::rederivers_for`]; where it
 //! has nothing for the recording's model, replay says so instead of guessing.
@@ -84,12 +84,28 @@ pub enum Command {
         #[arg(long, value_name = "N")]
         sip_intervals: Option<usize>,
     },
-    /// PNG figures: amplitude–frequency curves, RC variations, temperatures.
+    /// Figures (PNG and SVG): amplitude–frequency curves, RC variations, temperatures
+    /// grouped by bearing, one thermal node with stability, Floquet multipliers against the
+    /// unit circle, orbits at the resonant peaks, bearing loads.
     Plot {
         file: PathBuf,
         /// Output directory (created if missing).
         #[arg(long, default_value = ".")]
         out: PathBuf,
+        #[command(flatten)]
+        figures: super::FigureArgs,
+        /// Dynamic node whose resonant peaks give the orbits and whose highest point is the
+        /// default `--point` (default: node 8 when recorded, else the first).
+        #[arg(long, value_name = "ID")]
+        node: Option<u32>,
+        /// Thermal node of `temperature_node<ID>` (default: 58 for the built-in dual rotor,
+        /// the paper's Fig. 15; else the hottest node at the last point).
+        #[arg(long, value_name = "ID")]
+        thermal_node: Option<u32>,
+        /// Point (index as in `replay branch`) of the multiplier and bearing-load figures
+        /// (default: the highest amplitude of `--node`).
+        #[arg(long, value_name = "N")]
+        point: Option<u64>,
     },
     /// Write a clean recording of every intact point of a damaged or cut one (OUT must not
     /// exist); what was lost is logged in it and printed.
@@ -157,7 +173,22 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result
             let rec = open_with(&file, ReadOptions::default(), err)?;
             recover::run(&rec, &target, out)
         }
-        Command::Plot { file, out: dir } => plot::run(&open(&file, err)?, &dir, out, err),
+        Command::Plot {
+            file,
+            out: dir,
+            figures,
+            node,
+            thermal_node,
+            point,
+        } => {
+            let options = plot::PlotOptions {
+                output: figures.output()?,
+                node,
+                thermal_node,
+                point,
+            };
+            plot::run(&open(&file, err)?, &dir, &options, out, err)
+        }
         Command::Synthetic {
             file,
             mechanical,
