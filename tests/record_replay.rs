@@ -154,6 +154,21 @@ fn export_writes_every_table_with_the_recorded_values() {
         std::fs::read_to_string(out_dir.join("model.toml")).expect("model"),
         rec.run.model_text
     );
+    // An output that exists and is not a directory is named as such, for tables and figures.
+    let file = out_dir.join("branch.csv");
+    for sub in ["export", "plot"] {
+        let (res, _, _) = replay_in_process(&[
+            sub,
+            path.to_str().expect("utf-8"),
+            "--out",
+            file.to_str().expect("utf-8"),
+        ]);
+        let e = format!("{:#}", res.expect_err("not a directory"));
+        assert!(
+            e.contains("is not a directory") && e.contains("branch.csv"),
+            "{sub}: {e}"
+        );
+    }
 }
 
 #[test]

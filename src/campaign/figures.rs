@@ -527,7 +527,7 @@ pub fn plot_campaign(
         result.legends.push(run.legend.clone());
         runs.push(run);
     }
-    std::fs::create_dir_all(out).map_err(|source| CampaignError::Io {
+    figure::ensure_dir(out).map_err(|source| CampaignError::Io {
         path: out.display().to_string(),
         source,
     })?;

@@ -619,7 +619,7 @@ pub fn run(
         out,
         manifest_path,
     } = prepare(campaign_path, shard)?;
-    std::fs::create_dir_all(&out).map_err(|source| CampaignError::Io {
+    crate::figure::ensure_dir(&out).map_err(|source| CampaignError::Io {
         path: out.display().to_string(),
         source,
     })?;

@@ -892,7 +892,8 @@ pub fn run(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    crate::figure::ensure_dir(dir)
+        .with_context(|| format!("output directory {}", dir.display()))?;
     if rec.points.is_empty() {
         anyhow::bail!("{} has no points to plot", rec.file.display());
     }
