@@ -447,3 +447,29 @@ fn a_rotor_held_by_nothing_is_named() {
         "{msg}"
     );
 }
+
+/// A value the validator rejects (not the TOML parser) is reported with its line too.
+#[test]
+fn rejected_value_names_its_line() {
+    let first = BUILTIN_TOML
+        .lines()
+        .find(|l| l.trim_start().starts_with("initial_clearance_m"))
+        .expect("a clearance line");
+    let text = edited(first, "initial_clearance_m = -1e-5");
+    let line = text
+        .lines()
+        .position(|l| l == "initial_clearance_m = -1e-5")
+        .expect("edited")
+        + 1;
+    let e = check(&text, "bearings[0].initial_clearance_m", |k| {
+        matches!(k, InvalidKind::Negative(_))
+    });
+    match &e {
+        ModelError::Invalid { line: l, .. } => assert_eq!(*l, Some(line), "{e}"),
+        other => panic!("{other}"),
+    }
+    assert!(
+        e.to_string().starts_with(&format!("{FILE}:{line}: ")),
+        "{e}"
+    );
+}

@@ -130,6 +130,55 @@ fn position(item: &Item, sel: &str, at: &str) -> Result<usize, String> {
         })
 }
 
+/// The 1-based line of the value at `path` in `text` (a path as the validator's errors
+/// write it, e.g. `bearings[0].initial_clearance_m`), or of the deepest key of the path
+/// that exists; `None` when the text does not parse or no key of the path is found.
+pub(super) fn line_of(text: &str, path: &str) -> Option<usize> {
+    use toml_edit::TableLike;
+    let doc = toml_edit::Document::parse(text).ok()?;
+    let steps = parse_path(path).ok()?;
+    let mut table: &dyn TableLike = doc.as_table();
+    let mut offset: Option<usize> = None;
+    'steps: for step in &steps {
+        let Some((key, item)) = table.get_key_value(step.key) else {
+            break;
+        };
+        offset = key
+            .span()
+            .or_else(|| item.span())
+            .map(|s| s.start)
+            .or(offset);
+        let mut next: Option<&dyn TableLike> = item.as_table_like();
+        if let Some(sel) = step.select.first() {
+            let Ok(i) = position(item, sel, step.key) else {
+                break;
+            };
+            next = match item {
+                Item::ArrayOfTables(a) => a.get(i).map(|t| {
+                    offset = t
+                        .iter()
+                        .next()
+                        .and_then(|(k, _)| t.key(k))
+                        .and_then(toml_edit::Key::span)
+                        .map(|s| s.start)
+                        .or(offset);
+                    t as &dyn TableLike
+                }),
+                Item::Value(toml_edit::Value::Array(a)) => a.get(i).and_then(|v| {
+                    offset = v.span().map(|s| s.start).or(offset);
+                    v.as_inline_table().map(|t| t as &dyn TableLike)
+                }),
+                _ => None,
+            };
+        }
+        match next {
+            Some(t) => table = t,
+            None => break 'steps,
+        }
+    }
+    offset.map(|o| text[..o.min(text.len())].matches('\n').count() + 1)
+}
+
 /// `value` as a `toml_edit` value, an integer turned into a float where `old` is a float.
 fn edit_value(value: &toml::Value, old: Option<&Item>) -> Result<toml_edit::Value, String> {
     let value = match (value, old.and_then(Item::as_value)) {
@@ -321,6 +370,18 @@ k = 2.0
         assert!(e.contains("is not a table"), "{e}");
         let e = one("bearings[0.k", toml::Value::Float(1.0)).expect_err("an error");
         assert!(e.contains("unclosed"), "{e}");
+    }
+
+    #[test]
+    fn lines_of_paths() {
+        let text = "a = 1\n\n[damping]\nzeta = 0.03\n\n[[bearings]]\nid = \"1#\"\nk = 2\n\n[[bearings]]\nid = \"2#\"\nk = 3\n";
+        assert_eq!(line_of(text, "a"), Some(1));
+        assert_eq!(line_of(text, "damping.zeta"), Some(4));
+        assert_eq!(line_of(text, "bearings[1].k"), Some(12));
+        assert_eq!(line_of(text, "bearings[1#].k"), Some(8));
+        // the deepest key that exists
+        assert_eq!(line_of(text, "damping.missing"), Some(3));
+        assert_eq!(line_of(text, "nothing.here"), None);
     }
 
     #[test]

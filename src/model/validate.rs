@@ -138,7 +138,20 @@ impl Model {
                 kind,
             }
         })?;
-        let mut model = Validator::new(name).run(spec)?;
+        let mut model = Validator::new(name).run(spec).map_err(|e| match e {
+            ModelError::Invalid {
+                file,
+                line: None,
+                path,
+                kind,
+            } => ModelError::Invalid {
+                file,
+                line: super::set::line_of(text, &path),
+                path,
+                kind,
+            },
+            other => other,
+        })?;
         model.text = text.to_string();
         Ok(model)
     }
