@@ -383,6 +383,22 @@ fn grid_errors_name_the_key_or_the_run() {
             "{text:?}: {msg}"
         );
     }
+    // A grid too large is refused before it is expanded (three axes of 1000 values).
+    let axis = |n: usize| {
+        let v: Vec<String> = (0..n).map(|i| format!("{}.0", i + 1)).collect();
+        format!("[{}]", v.join(", "))
+    };
+    let big = format!(
+        "[grid]\nflow_l_min = {}\ncooling_temp_c = {}\nambient_temp_c = {}\n",
+        axis(1000),
+        axis(1000),
+        axis(1000)
+    );
+    let msg = err(&big);
+    assert!(
+        msg.contains("bad.toml") && msg.contains("1000 × 1000 × 1000 runs is more than the 10000"),
+        "{msg}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------

@@ -473,3 +473,41 @@ fn rejected_value_names_its_line() {
         "{e}"
     );
 }
+
+/// Problems of single values do not stop the checks: all of them are reported at once,
+/// in file order of the checks, each with its line.
+#[test]
+fn all_value_problems_are_reported_at_once_with_their_lines() {
+    let density = BUILTIN_TOML
+        .lines()
+        .find(|l| l.trim_start().starts_with("density_kg_m3"))
+        .expect("a density line");
+    let clearance = BUILTIN_TOML
+        .lines()
+        .find(|l| l.trim_start().starts_with("initial_clearance_m"))
+        .expect("a clearance line");
+    let text = BUILTIN_TOML
+        .replacen(density, "density_kg_m3 = -7800.0", 1)
+        .replacen(clearance, "initial_clearance_m = -1e-5", 1);
+    let line = |needle: &str| text.lines().position(|l| l == needle).expect("edited") + 1;
+    let e = reject(&text);
+    let problems = e.problems();
+    assert_eq!(problems.len(), 2, "{e}");
+    let msg = e.to_string();
+    let lines: Vec<&str> = msg.lines().collect();
+    assert_eq!(lines.len(), 2, "{msg}");
+    assert!(
+        lines[0].starts_with(&format!(
+            "{FILE}:{}: materials[0].density_kg_m3",
+            line("density_kg_m3 = -7800.0")
+        )),
+        "{msg}"
+    );
+    assert!(
+        lines[1].starts_with(&format!(
+            "{FILE}:{}: bearings[0].initial_clearance_m",
+            line("initial_clearance_m = -1e-5")
+        )),
+        "{msg}"
+    );
+}

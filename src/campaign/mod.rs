@@ -292,6 +292,10 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
 /// The values of one grid axis with their text for run names.
 type Axis = Vec<(toml::Value, String)>;
 
+/// Most runs a grid may expand to: 10 000 (a campaign of sweeps of seconds to minutes
+/// each; more is a typo, or several campaigns).
+pub const MAX_GRID_RUNS: usize = 10_000;
+
 /// The runs of a `[grid]` table: `(name, settings)` for every combination of the values
 /// of its keys, the keys in alphabetical order with the first varying slowest. Each key is
 /// a [`StudySettings`] key with a non-empty array of numbers, strings or booleans; the
@@ -373,7 +377,20 @@ pub fn expand_grid(grid: &toml::Table) -> Result<Vec<(String, toml::Table)>, Str
             rest = &rest[open + close + 1..];
         }
     }
-    let count: usize = axes.iter().map(|(_, _, a)| a.len()).product();
+    // Checked before anything is allocated: a typo in a grid (a range of a million values)
+    // must not become a million runs, or an overflow.
+    let sizes: Vec<String> = axes.iter().map(|(_, _, a)| a.len().to_string()).collect();
+    let count = axes
+        .iter()
+        .try_fold(1usize, |n, (_, _, a)| n.checked_mul(a.len()))
+        .filter(|&n| n <= MAX_GRID_RUNS)
+        .ok_or_else(|| {
+            format!(
+                "grid: {} runs is more than the {MAX_GRID_RUNS} a campaign takes (split it \
+                 into several campaigns)",
+                sizes.join(" × ")
+            )
+        })?;
     let mut runs = Vec::with_capacity(count);
     for mut index in (0..count).rev() {
         // mixed radix, the last key fastest; built backwards, reversed below

@@ -22,25 +22,39 @@ pub enum ModelError {
         path: String,
         kind: InvalidKind,
     },
+    /// Several problems of one file, each on its own line (the value checks that do not
+    /// depend on each other are all reported at once; at least two).
+    #[error("{}", errors.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n"))]
+    Several { errors: Vec<ModelError> },
     /// The model is valid but a numerical step of the assembly failed.
     #[error("{file}: {what}")]
     Numerical { file: String, what: String },
 }
 
 impl ModelError {
-    /// The reason, when the model file was rejected.
+    /// The reason, when the model file was rejected (the first one of several).
     pub fn kind(&self) -> Option<&InvalidKind> {
         match self {
             Self::Invalid { kind, .. } => Some(kind),
+            Self::Several { errors } => errors.first().and_then(Self::kind),
             _ => None,
         }
     }
 
-    /// The field path, when the model file was rejected.
+    /// The field path, when the model file was rejected (the first one of several).
     pub fn path(&self) -> Option<&str> {
         match self {
             Self::Invalid { path, .. } => Some(path),
+            Self::Several { errors } => errors.first().and_then(Self::path),
             _ => None,
+        }
+    }
+
+    /// Every problem: the errors of [`ModelError::Several`], or this one.
+    pub fn problems(&self) -> Vec<&ModelError> {
+        match self {
+            Self::Several { errors } => errors.iter().collect(),
+            other => vec![other],
         }
     }
 }

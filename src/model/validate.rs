@@ -138,20 +138,9 @@ impl Model {
                 kind,
             }
         })?;
-        let mut model = Validator::new(name).run(spec).map_err(|e| match e {
-            ModelError::Invalid {
-                file,
-                line: None,
-                path,
-                kind,
-            } => ModelError::Invalid {
-                file,
-                line: super::set::line_of(text, &path),
-                path,
-                kind,
-            },
-            other => other,
-        })?;
+        let mut model = Validator::new(name)
+            .run(spec)
+            .map_err(|e| with_lines(e, text))?;
         model.text = text.to_string();
         Ok(model)
     }
@@ -278,13 +267,72 @@ pub(crate) fn path_at(text: &str, offset: usize) -> (usize, String) {
 
 struct Validator<'a> {
     file: &'a str,
+    /// Problems of single values ([`Validator::positive`], [`Validator::non_negative`]):
+    /// they do not stop the checks, so a file's value problems are all reported at once.
+    found: std::cell::RefCell<Vec<ModelError>>,
 }
 
 type VResult<T> = Result<T, ModelError>;
 
+/// The error with the line of each problem in `text`, found from its path.
+fn with_lines(e: ModelError, text: &str) -> ModelError {
+    match e {
+        ModelError::Invalid {
+            file,
+            line: None,
+            path,
+            kind,
+        } => ModelError::Invalid {
+            file,
+            line: super::set::line_of(text, &path),
+            path,
+            kind,
+        },
+        ModelError::Several { errors } => ModelError::Several {
+            errors: errors.into_iter().map(|e| with_lines(e, text)).collect(),
+        },
+        other => other,
+    }
+}
+
+/// One error as itself, more as [`ModelError::Several`].
+fn several(mut errors: Vec<ModelError>) -> ModelError {
+    if errors.len() == 1 {
+        errors.remove(0)
+    } else {
+        ModelError::Several { errors }
+    }
+}
+
 impl<'a> Validator<'a> {
     fn new(file: &'a str) -> Self {
-        Self { file }
+        Self {
+            file,
+            found: std::cell::RefCell::new(Vec::new()),
+        }
+    }
+
+    /// Runs every check; the value problems found on the way come first, then the problem
+    /// that stopped the checks, if any.
+    fn run(self, spec: ModelFile) -> VResult<Model> {
+        let result = self.check(spec);
+        let mut errors = self.found.take();
+        // one problem per field (a value refused as negative is not also out of range)
+        let mut seen = std::collections::BTreeSet::new();
+        errors.retain(|e| seen.insert(e.path().unwrap_or_default().to_string()));
+        let errors_then = |e: ModelError, errors: &mut Vec<ModelError>| {
+            if !seen.contains(e.path().unwrap_or_default()) {
+                errors.push(e);
+            }
+        };
+        match result {
+            Ok(model) if errors.is_empty() => Ok(model),
+            Ok(_) => Err(several(errors)),
+            Err(e) => {
+                errors_then(e, &mut errors);
+                Err(several(errors))
+            }
+        }
     }
 
     fn err(&self, path: impl Into<String>, kind: InvalidKind) -> ModelError {
@@ -296,20 +344,22 @@ impl<'a> Validator<'a> {
         }
     }
 
+    /// Records a problem of `path` when `v` is not positive and finite; the checks go on.
     fn positive(&self, path: impl Into<String>, v: f64) -> VResult<()> {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(self.err(path, InvalidKind::NotPositive(v)))
+        if !(v.is_finite() && v > 0.0) {
+            let e = self.err(path, InvalidKind::NotPositive(v));
+            self.found.borrow_mut().push(e);
         }
+        Ok(())
     }
 
+    /// Records a problem of `path` when `v` is negative or not finite; the checks go on.
     fn non_negative(&self, path: impl Into<String>, v: f64) -> VResult<()> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(())
-        } else {
-            Err(self.err(path, InvalidKind::Negative(v)))
+        if !(v.is_finite() && v >= 0.0) {
+            let e = self.err(path, InvalidKind::Negative(v));
+            self.found.borrow_mut().push(e);
         }
+        Ok(())
     }
 
     fn unique<'s>(&self, section: &str, ids: impl Iterator<Item = &'s str>) -> VResult<()> {
@@ -339,7 +389,7 @@ impl<'a> Validator<'a> {
         }
     }
 
-    fn run(self, spec: ModelFile) -> VResult<Model> {
+    fn check(&self, spec: ModelFile) -> VResult<Model> {
         // Gravity.
         self.non_negative("gravity.acceleration_m_s2", spec.gravity.acceleration_m_s2)?;
 
