@@ -393,131 +393,9 @@ impl<'a> Validator<'a> {
         // Gravity.
         self.non_negative("gravity.acceleration_m_s2", spec.gravity.acceleration_m_s2)?;
 
-        // Damping.
-        let rayleigh = match &spec.damping {
-            None => (0.0, 0.0),
-            Some(d) => {
-                let direct = d.a0_1_s.is_some() || d.a1_s.is_some();
-                let modal = d.damping_ratio.is_some() || d.frequencies_rad_s.is_some();
-                match (direct, modal) {
-                    (true, true) => {
-                        return Err(self.err(
-                            "damping",
-                            InvalidKind::Conflict(
-                                "give either a0_1_s/a1_s or damping_ratio/frequencies_rad_s, not both"
-                                    .into(),
-                            ),
-                        ));
-                    }
-                    (false, false) => {
-                        return Err(self.err(
-                            "damping",
-                            InvalidKind::Conflict(
-                                "give a0_1_s/a1_s or damping_ratio with frequencies_rad_s".into(),
-                            ),
-                        ));
-                    }
-                    (true, false) => {
-                        let a0 = d.a0_1_s.unwrap_or(0.0);
-                        let a1 = d.a1_s.unwrap_or(0.0);
-                        self.non_negative("damping.a0_1_s", a0)?;
-                        self.non_negative("damping.a1_s", a1)?;
-                        (a0, a1)
-                    }
-                    (false, true) => {
-                        let zeta = d.damping_ratio.ok_or_else(|| {
-                            self.err("damping", InvalidKind::MissingKey("`damping_ratio`".into()))
-                        })?;
-                        let [w1, w2] = d.frequencies_rad_s.ok_or_else(|| {
-                            self.err(
-                                "damping",
-                                InvalidKind::MissingKey("`frequencies_rad_s`".into()),
-                            )
-                        })?;
-                        self.non_negative("damping.damping_ratio", zeta)?;
-                        self.positive("damping.frequencies_rad_s[0]", w1)?;
-                        self.positive("damping.frequencies_rad_s[1]", w2)?;
-                        if (w1 - w2).abs() <= 1e-12 * w1.max(w2) {
-                            return Err(self.err(
-                                "damping.frequencies_rad_s",
-                                InvalidKind::OutOfRange {
-                                    value: w2,
-                                    reason: "the two frequencies must differ".into(),
-                                },
-                            ));
-                        }
-                        rayleigh_from_ratio(zeta, w1, w2)
-                    }
-                }
-            }
-        };
-
-        // Materials.
-        self.unique("materials", spec.materials.iter().map(|m| m.id.as_str()))?;
-        for (i, m) in spec.materials.iter().enumerate() {
-            let p = |f: &str| format!("materials[{i}].{f}");
-            self.positive(p("youngs_modulus_pa"), m.youngs_modulus_pa)?;
-            if !(1e6..=1.5e12).contains(&m.youngs_modulus_pa) {
-                return Err(self.err(
-                    p("youngs_modulus_pa"),
-                    InvalidKind::OutOfRange {
-                        value: m.youngs_modulus_pa,
-                        reason: "engineering solids lie between about 1e6 Pa (elastomers) and \
-                                 1.2e12 Pa (diamond); steel is 2.1e11"
-                            .into(),
-                    },
-                ));
-            }
-            self.positive(p("density_kg_m3"), m.density_kg_m3)?;
-            if !(m.poisson_ratio.is_finite() && (0.0..0.5).contains(&m.poisson_ratio)) {
-                return Err(self.err(
-                    p("poisson_ratio"),
-                    InvalidKind::OutOfRange {
-                        value: m.poisson_ratio,
-                        reason: "must lie in [0, 0.5)".into(),
-                    },
-                ));
-            }
-            for (f, v) in [
-                ("specific_heat_j_kg_k", m.specific_heat_j_kg_k),
-                ("conductivity_w_m_k", m.conductivity_w_m_k),
-                ("expansion_1_k", m.expansion_1_k),
-            ] {
-                if let Some(v) = v {
-                    self.positive(p(f), v)?;
-                }
-            }
-        }
-
-        // Rotors and nodes.
-        if spec.rotors.is_empty() {
-            return Err(self.err("rotors", InvalidKind::MissingKey("`rotors`".into())));
-        }
-        self.unique("rotors", spec.rotors.iter().map(|r| r.id.as_str()))?;
-        let mut owner: BTreeMap<u32, usize> = BTreeMap::new();
-        let mut speed_ratios = Vec::with_capacity(spec.rotors.len());
-        for (r, rotor) in spec.rotors.iter().enumerate() {
-            speed_ratios.push(
-                parse_ratio(&rotor.speed_ratio)
-                    .map_err(|k| self.err(format!("rotors[{r}].speed_ratio"), k))?,
-            );
-            if rotor.nodes.is_empty() {
-                return Err(self.err(
-                    format!("rotors[{r}].nodes"),
-                    InvalidKind::Conflict("a rotor needs at least one node".into()),
-                ));
-            }
-            for (j, &n) in rotor.nodes.iter().enumerate() {
-                if owner.insert(n, r).is_some() {
-                    return Err(self.err(
-                        format!("rotors[{r}].nodes[{j}]"),
-                        InvalidKind::DuplicateId(format!("node {n}")),
-                    ));
-                }
-            }
-        }
-        let nodes: Vec<u32> = owner.keys().copied().collect();
-        let node_rotor: Vec<usize> = owner.values().copied().collect();
+        let rayleigh = self.damping(spec.damping.as_ref())?;
+        self.materials(&spec)?;
+        let (nodes, node_rotor, speed_ratios) = self.rotors(&spec)?;
         let mut has_mass = vec![false; nodes.len()];
 
         // Shaft elements.
@@ -640,13 +518,164 @@ impl<'a> Validator<'a> {
             )?;
         }
 
-        // Bearings.
+        self.bearings(&spec, &nodes)?;
+        self.held_to_ground(&spec, &nodes)?;
+
+        Ok(Model {
+            source: self.file.to_string(),
+            text: String::new(),
+            spec,
+            nodes,
+            node_rotor,
+            speed_ratios,
+            rayleigh,
+        })
+    }
+    /// Rayleigh coefficients `(a0, a1)` from `[damping]`: given directly, or from a damping
+    /// ratio at two frequencies; none without the table.
+    fn damping(&self, damping: Option<&super::file::DampingSpec>) -> VResult<(f64, f64)> {
+        Ok(match damping {
+            None => (0.0, 0.0),
+            Some(d) => {
+                let direct = d.a0_1_s.is_some() || d.a1_s.is_some();
+                let modal = d.damping_ratio.is_some() || d.frequencies_rad_s.is_some();
+                match (direct, modal) {
+                    (true, true) => {
+                        return Err(self.err(
+                        "damping",
+                        InvalidKind::Conflict(
+                            "give either a0_1_s/a1_s or damping_ratio/frequencies_rad_s, not both"
+                                .into(),
+                        ),
+                    ));
+                    }
+                    (false, false) => {
+                        return Err(self.err(
+                            "damping",
+                            InvalidKind::Conflict(
+                                "give a0_1_s/a1_s or damping_ratio with frequencies_rad_s".into(),
+                            ),
+                        ));
+                    }
+                    (true, false) => {
+                        let a0 = d.a0_1_s.unwrap_or(0.0);
+                        let a1 = d.a1_s.unwrap_or(0.0);
+                        self.non_negative("damping.a0_1_s", a0)?;
+                        self.non_negative("damping.a1_s", a1)?;
+                        (a0, a1)
+                    }
+                    (false, true) => {
+                        let zeta = d.damping_ratio.ok_or_else(|| {
+                            self.err("damping", InvalidKind::MissingKey("`damping_ratio`".into()))
+                        })?;
+                        let [w1, w2] = d.frequencies_rad_s.ok_or_else(|| {
+                            self.err(
+                                "damping",
+                                InvalidKind::MissingKey("`frequencies_rad_s`".into()),
+                            )
+                        })?;
+                        self.non_negative("damping.damping_ratio", zeta)?;
+                        self.positive("damping.frequencies_rad_s[0]", w1)?;
+                        self.positive("damping.frequencies_rad_s[1]", w2)?;
+                        if (w1 - w2).abs() <= 1e-12 * w1.max(w2) {
+                            return Err(self.err(
+                                "damping.frequencies_rad_s",
+                                InvalidKind::OutOfRange {
+                                    value: w2,
+                                    reason: "the two frequencies must differ".into(),
+                                },
+                            ));
+                        }
+                        rayleigh_from_ratio(zeta, w1, w2)
+                    }
+                }
+            }
+        })
+    }
+
+    /// The materials: unique ids, each value within its range.
+    fn materials(&self, spec: &ModelFile) -> VResult<()> {
+        self.unique("materials", spec.materials.iter().map(|m| m.id.as_str()))?;
+        for (i, m) in spec.materials.iter().enumerate() {
+            let p = |f: &str| format!("materials[{i}].{f}");
+            self.positive(p("youngs_modulus_pa"), m.youngs_modulus_pa)?;
+            if !(1e6..=1.5e12).contains(&m.youngs_modulus_pa) {
+                return Err(self.err(
+                    p("youngs_modulus_pa"),
+                    InvalidKind::OutOfRange {
+                        value: m.youngs_modulus_pa,
+                        reason: "engineering solids lie between about 1e6 Pa (elastomers) and \
+                             1.2e12 Pa (diamond); steel is 2.1e11"
+                            .into(),
+                    },
+                ));
+            }
+            self.positive(p("density_kg_m3"), m.density_kg_m3)?;
+            if !(m.poisson_ratio.is_finite() && (0.0..0.5).contains(&m.poisson_ratio)) {
+                return Err(self.err(
+                    p("poisson_ratio"),
+                    InvalidKind::OutOfRange {
+                        value: m.poisson_ratio,
+                        reason: "must lie in [0, 0.5)".into(),
+                    },
+                ));
+            }
+            for (f, v) in [
+                ("specific_heat_j_kg_k", m.specific_heat_j_kg_k),
+                ("conductivity_w_m_k", m.conductivity_w_m_k),
+                ("expansion_1_k", m.expansion_1_k),
+            ] {
+                if let Some(v) = v {
+                    self.positive(p(f), v)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The rotors: unique ids, speed ratios, and each node in exactly one rotor. Returns the
+    /// node ids in ascending order, the rotor of each, and the speed ratios.
+    fn rotors(&self, spec: &ModelFile) -> VResult<(Vec<u32>, Vec<usize>, Vec<Ratio>)> {
+        if spec.rotors.is_empty() {
+            return Err(self.err("rotors", InvalidKind::MissingKey("`rotors`".into())));
+        }
+        self.unique("rotors", spec.rotors.iter().map(|r| r.id.as_str()))?;
+        let mut owner: BTreeMap<u32, usize> = BTreeMap::new();
+        let mut speed_ratios = Vec::with_capacity(spec.rotors.len());
+        for (r, rotor) in spec.rotors.iter().enumerate() {
+            speed_ratios.push(
+                parse_ratio(&rotor.speed_ratio)
+                    .map_err(|k| self.err(format!("rotors[{r}].speed_ratio"), k))?,
+            );
+            if rotor.nodes.is_empty() {
+                return Err(self.err(
+                    format!("rotors[{r}].nodes"),
+                    InvalidKind::Conflict("a rotor needs at least one node".into()),
+                ));
+            }
+            for (j, &n) in rotor.nodes.iter().enumerate() {
+                if owner.insert(n, r).is_some() {
+                    return Err(self.err(
+                        format!("rotors[{r}].nodes[{j}]"),
+                        InvalidKind::DuplicateId(format!("node {n}")),
+                    ));
+                }
+            }
+        }
+        let nodes: Vec<u32> = owner.keys().copied().collect();
+        let node_rotor: Vec<usize> = owner.values().copied().collect();
+        Ok((nodes, node_rotor, speed_ratios))
+    }
+
+    /// The bearings: unique ids, nodes, materials, geometry and the source of their
+    /// linearised stiffness.
+    fn bearings(&self, spec: &ModelFile, nodes: &[u32]) -> VResult<()> {
         self.unique("bearings", spec.bearings.iter().map(|b| b.id.as_str()))?;
         for (i, b) in spec.bearings.iter().enumerate() {
             let p = |f: &str| format!("bearings[{i}].{f}");
-            self.node(&nodes, p("inner_node"), b.inner_node)?;
+            self.node(nodes, p("inner_node"), b.inner_node)?;
             if let Some(o) = b.outer_node {
-                self.node(&nodes, p("outer_node"), o)?;
+                self.node(nodes, p("outer_node"), o)?;
                 if o == b.inner_node {
                     return Err(self.err(
                         p("outer_node"),
@@ -656,9 +685,9 @@ impl<'a> Validator<'a> {
                     ));
                 }
             }
-            self.material(&spec, p("material"), &b.material)?;
+            self.material(spec, p("material"), &b.material)?;
             if let Some(h) = &b.housing_material {
-                self.material(&spec, p("housing_material"), h)?;
+                self.material(spec, p("housing_material"), h)?;
             }
             for (f, v) in [
                 ("inner_race_diameter_m", b.inner_race_diameter_m),
@@ -721,7 +750,7 @@ impl<'a> Validator<'a> {
                     InvalidKind::OutOfRange {
                         value: b.initial_clearance_m,
                         reason: "radial clearances of rolling bearings are micrometres to a few \
-                                 tenths of a millimetre (at most 1e-3 m here)"
+                             tenths of a millimetre (at most 1e-3 m here)"
                             .into(),
                     },
                 ));
@@ -767,25 +796,14 @@ impl<'a> Validator<'a> {
                 && b.linearization_load_n.is_none()
             {
                 return Err(self.err(
-                    format!("bearings[{i}]"),
-                    InvalidKind::Conflict(
-                        "with gravity off the linearised stiffness cannot come from the static gravity load: give linear_stiffness_n_m or linearization_load_n".into(),
-                    ),
-                ));
+                format!("bearings[{i}]"),
+                InvalidKind::Conflict(
+                    "with gravity off the linearised stiffness cannot come from the static gravity load: give linear_stiffness_n_m or linearization_load_n".into(),
+                ),
+            ));
             }
         }
-
-        self.held_to_ground(&spec, &nodes)?;
-
-        Ok(Model {
-            source: self.file.to_string(),
-            text: String::new(),
-            spec,
-            nodes,
-            node_rotor,
-            speed_ratios,
-            rayleigh,
-        })
+        Ok(())
     }
 }
 
