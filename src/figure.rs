@@ -25,6 +25,11 @@
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+/// A bifurcation's label on a figure: its abbreviation and its 1-based number (`SN2`).
+pub fn bifurcation_label(kind: crate::stability::BifurcationKind, number: u32) -> String {
+    format!("{}{}", kind.abbreviation(), number + 1)
+}
+
 /// Creates the output directory `dir` (with its parents) for figures or tables. A path
 /// that exists but is not a directory (a file, `/dev/full`) is named as such, where
 /// `create_dir_all` says only "File exists".

@@ -4,29 +4,12 @@ use std::path::Path;
 
 use tmrotor::campaign::{self, sha256_file};
 
+mod common;
+use common::{SMALL_CAMPAIGN, has_colour, png_pixels};
+
 fn write_campaign(dir: &Path) -> std::path::PathBuf {
     let path = dir.join("c.toml");
-    std::fs::write(
-        &path,
-        r#"
-output_dir = "out"
-[defaults]
-order = 1
-omega_start = 400.0
-omega_end = 402.0
-max_points = 3
-stability = false
-thermal = false
-[[runs]]
-name = "a"
-[[runs]]
-name = "b"
-ambient_temp_c = 30.0
-[[runs]]
-name = "c"
-"#,
-    )
-    .expect("write campaign");
+    std::fs::write(&path, SMALL_CAMPAIGN).expect("write campaign");
     path
 }
 
@@ -448,20 +431,6 @@ const FIGURES: [&str; 10] = [
     "temperature_extremes.png",
     "bearing_temperatures_omega402.png",
 ];
-
-fn png_pixels(path: &Path) -> (u32, u32, Vec<u8>) {
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(path).expect("png"),
-    ));
-    let mut reader = decoder.read_info().expect("png header");
-    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
-    let info = reader.next_frame(&mut buf).expect("png data");
-    (info.width, info.height, buf)
-}
-
-fn has_colour(px: &[u8], c: plotters::style::RGBColor) -> bool {
-    px.chunks(3).any(|p| p == [c.0, c.1, c.2])
-}
 
 fn options() -> FigureOptions {
     FigureOptions {

@@ -5,38 +5,13 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use clap::Parser;
+mod common;
+use common::{has_colour, png_pixels, replay_in_process};
+
 use tmrotor::campaign::figures::{FigureOptions, plot_campaign};
 use tmrotor::campaign::{self, sha256_file};
-use tmrotor::cli::replay::{self, Cli};
 use tmrotor::figure::{self, Format, NOT_ASSESSED, Output, PixelBox, STABLE, UNSTABLE};
 use tmrotor::record::synthetic::{self, SyntheticOptions};
-
-fn replay_in_process(args: &[&str]) -> (anyhow::Result<()>, String, String) {
-    let cli = Cli::try_parse_from(std::iter::once("replay").chain(args.iter().copied()))
-        .expect("arguments parse");
-    let (mut out, mut err) = (Vec::new(), Vec::new());
-    let res = replay::run(cli, &mut out, &mut err);
-    (
-        res,
-        String::from_utf8_lossy(&out).into_owned(),
-        String::from_utf8_lossy(&err).into_owned(),
-    )
-}
-
-fn png_pixels(path: &Path) -> Vec<u8> {
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
-    ));
-    let mut reader = decoder.read_info().expect("png header");
-    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
-    reader.next_frame(&mut buf).expect("png data");
-    buf
-}
-
-fn has_colour(px: &[u8], c: plotters::style::RGBColor) -> bool {
-    px.chunks(3).any(|p| p == [c.0, c.1, c.2])
-}
 
 /// A small well-formedness check of XML: one root element, every tag closed in order,
 /// attribute values quoted, `&` only in entities. Returns the text content.
@@ -212,7 +187,7 @@ fn replay_plot_writes_every_kind_as_png_and_svg_from_the_synthetic_recording() {
         "temperature_node52",
         "bearing_loads_mean",
     ] {
-        let px = png_pixels(&figs.join(format!("{name}.png")));
+        let (_, _, px) = png_pixels(&figs.join(format!("{name}.png")));
         assert!(has_colour(&px, STABLE), "{name}: stable colour");
         assert!(has_colour(&px, UNSTABLE), "{name}: unstable colour");
     }
@@ -249,7 +224,7 @@ fn replay_plot_writes_every_kind_as_png_and_svg_from_the_synthetic_recording() {
         "png",
     ]);
     assert!(res.is_ok(), "{err}");
-    let px = png_pixels(&out3.join("amplitude_node1.png"));
+    let (_, _, px) = png_pixels(&out3.join("amplitude_node1.png"));
     assert!(has_colour(&px, NOT_ASSESSED) && !has_colour(&px, UNSTABLE));
 
     // bad flags say what is wrong

@@ -6,6 +6,8 @@ use tmrotor::record::reader::{ReadError, read_recording_bytes};
 use tmrotor::record::synthetic::{self, SyntheticOptions};
 use tmrotor::record::{RunStatus, read_recording};
 
+mod common;
+
 fn sample(dir: &Path, finish: bool) -> (std::path::PathBuf, Vec<tmrotor::record::PointRecord>) {
     let path = dir.join(if finish { "full.mcap" } else { "killed.mcap" });
     let options = SyntheticOptions {
@@ -361,8 +363,6 @@ fn completed_status_survives_the_round_trip() {
 /// the lost point; an existing output is refused.
 #[test]
 fn recover_writes_the_intact_points_into_a_clean_file() {
-    use clap::Parser;
-    use tmrotor::cli::replay::{self, Cli};
     let dir = tempfile::tempdir().expect("tempdir");
     let (path, _) = sample(dir.path(), true);
     let mut bytes = std::fs::read(&path).expect("read");
@@ -375,11 +375,8 @@ fn recover_writes_the_intact_points_into_a_clean_file() {
 
     let target = dir.path().join("recovered.mcap");
     let run = |args: &[&str]| {
-        let cli = Cli::try_parse_from(std::iter::once("replay").chain(args.iter().copied()))
-            .expect("arguments");
-        let (mut out, mut err) = (Vec::new(), Vec::new());
-        let res = replay::run(cli, &mut out, &mut err);
-        (res, String::from_utf8_lossy(&out).into_owned())
+        let (res, out, _) = common::replay_in_process(args);
+        (res, out)
     };
     let args = [
         "recover",

@@ -3,9 +3,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use clap::Parser;
+mod common;
+use common::{png_pixels, replay_in_process};
+
 use num_complex::Complex64;
-use tmrotor::cli::replay::{self, Cli, stability};
+use tmrotor::cli::replay::{self, stability};
 use tmrotor::derive::{DeriveError, StabilityRederive};
 use tmrotor::record::synthetic::{self, SyntheticOptions};
 use tmrotor::record::{PointRecord, read_recording};
@@ -19,18 +21,6 @@ fn recording(dir: &Path, finish: bool) -> PathBuf {
     };
     synthetic::write_mcap(&path, &options, finish).expect("write");
     path
-}
-
-fn replay_in_process(args: &[&str]) -> (anyhow::Result<()>, String, String) {
-    let cli = Cli::try_parse_from(std::iter::once("replay").chain(args.iter().copied()))
-        .expect("arguments parse");
-    let (mut out, mut err) = (Vec::new(), Vec::new());
-    let res = replay::run(cli, &mut out, &mut err);
-    (
-        res,
-        String::from_utf8_lossy(&out).into_owned(),
-        String::from_utf8_lossy(&err).into_owned(),
-    )
 }
 
 #[test]
@@ -314,16 +304,6 @@ fn info_on_complete_and_cut_recordings() {
         out.contains("INCOMPLETE") && err.contains("incomplete"),
         "{out}\n{err}"
     );
-}
-
-fn png_pixels(path: &Path) -> (u32, u32, Vec<u8>) {
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(path).expect("png"),
-    ));
-    let mut reader = decoder.read_info().expect("png header");
-    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
-    let info = reader.next_frame(&mut buf).expect("png data");
-    (info.width, info.height, buf)
 }
 
 #[test]

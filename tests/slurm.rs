@@ -10,24 +10,8 @@ use std::process::Command;
 use tmrotor::campaign;
 use tmrotor::record::read_recording;
 
-const CAMPAIGN: &str = r#"
-output_dir = "out"
-[defaults]
-order = 1
-omega_start = 400.0
-omega_end = 402.0
-max_points = 3
-stability = false
-thermal = false
-[[runs]]
-name = "a"
-[[runs]]
-name = "b"
-ambient_temp_c = 30.0
-[[runs]]
-name = "c"
-flow_l_min = 5.0
-"#;
+mod common;
+use common::SMALL_CAMPAIGN as CAMPAIGN;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -501,6 +501,55 @@ fn per_run_panels(
 
 const OMEGA: &str = "speed ω (rad/s)";
 
+/// Names and labels of a figure of runs against ω: [`overlay_and_per_run`].
+struct OverlayText {
+    /// File stem of the overlay; the per-run figure adds `_per_run`.
+    stem: String,
+    title: String,
+    /// y label of the overlay.
+    y_desc: String,
+    /// Shorter y label of the small panels.
+    y_short: &'static str,
+    /// First legend line of the per-run figure (what its panels show).
+    heading: String,
+}
+
+/// The runs drawn by `draw` into one panel against ω, and with `per_run` also one panel
+/// per run on shared axes.
+fn overlay_and_per_run(
+    out: &Path,
+    text: &OverlayText,
+    runs: &[RunData],
+    draw: impl Fn(&RunData, &mut Chart),
+    size: (u32, u32),
+    options: &FigureOptions,
+    result: &mut CampaignFigures,
+) -> Result<(), CampaignError> {
+    let mut chart = panel(String::new(), OMEGA, &text.y_desc, false);
+    for r in runs {
+        draw(r, &mut chart);
+    }
+    let overlay = figure_of(&text.title, vec![chart], run_legend(runs, true), size);
+    write_figure(out, &text.stem, overlay, options, result)?;
+    if options.per_run {
+        let panels = per_run_panels(runs, OMEGA, text.y_short, draw);
+        let mut legend = vec![LegendEntry {
+            sample: LegendSample::None,
+            text: text.heading.clone(),
+        }];
+        legend.extend(style_legend(runs, true));
+        let stem = format!("{}_per_run", text.stem);
+        write_figure(
+            out,
+            &stem,
+            figure_of(&text.title, panels, legend, size),
+            options,
+            result,
+        )?;
+    }
+    Ok(())
+}
+
 /// Reads `dir/manifest.toml` and every run's recording and writes the campaign figures
 /// (see the module docs) into `out`, which is created if missing.
 ///
@@ -591,38 +640,19 @@ pub fn plot_campaign(
                 Some(Marker {
                     x: b.omega_rad_s,
                     y: b.amplitude_m.get(k)? * 1e6,
-                    label: format!("{}{}", b.kind.abbreviation(), b.number + 1),
+                    label: figure::bifurcation_label(b.kind, b.number),
                     colour: r.colour,
                 })
             }));
         };
-        let mut chart = panel(String::new(), OMEGA, &y_desc, false);
-        for r in &runs {
-            draw(r, &mut chart);
-        }
-        let title = format!("Amplitude–frequency response of dynamic node {id}");
-        write_figure(
-            out,
-            &format!("amplitude_node{id}"),
-            figure_of(&title, vec![chart], run_legend(&runs, true), size),
-            options,
-            &mut result,
-        )?;
-        if options.per_run {
-            let panels = per_run_panels(&runs, OMEGA, "RMS amplitude (µm)", draw);
-            let mut legend = vec![LegendEntry {
-                sample: LegendSample::None,
-                text: format!("dynamic node {id}, a panel per run:"),
-            }];
-            legend.extend(style_legend(&runs, true));
-            write_figure(
-                out,
-                &format!("amplitude_node{id}_per_run"),
-                figure_of(&title, panels, legend, size),
-                options,
-                &mut result,
-            )?;
-        }
+        let text = OverlayText {
+            stem: format!("amplitude_node{id}"),
+            title: format!("Amplitude–frequency response of dynamic node {id}"),
+            y_desc,
+            y_short: "RMS amplitude (µm)",
+            heading: format!("dynamic node {id}, a panel per run:"),
+        };
+        overlay_and_per_run(out, &text, &runs, draw, size, options, &mut result)?;
     }
 
     // Clearances, a panel per bearing (the bearings of the first run that has any).
@@ -815,38 +845,19 @@ pub fn plot_campaign(
                         Some(Marker {
                             x: b.omega_rad_s,
                             y: *b.temp_c.get(t)?,
-                            label: format!("{}{}", b.kind.abbreviation(), b.number + 1),
+                            label: figure::bifurcation_label(b.kind, b.number),
                             colour: r.colour,
                         })
                     }));
                 };
-                let mut chart = panel(String::new(), OMEGA, &y_desc, false);
-                for r in &runs {
-                    draw(r, &mut chart);
-                }
-                let title = format!("Mean temperature of thermal node {id} ({name})");
-                write_figure(
-                    out,
-                    &format!("temperature_node{id}"),
-                    figure_of(&title, vec![chart], run_legend(&runs, true), size),
-                    options,
-                    &mut result,
-                )?;
-                if options.per_run {
-                    let panels = per_run_panels(&runs, OMEGA, "mean temperature (°C)", draw);
-                    let mut legend = vec![LegendEntry {
-                        sample: LegendSample::None,
-                        text: format!("thermal node {id} ({name}), a panel per run:"),
-                    }];
-                    legend.extend(style_legend(&runs, true));
-                    write_figure(
-                        out,
-                        &format!("temperature_node{id}_per_run"),
-                        figure_of(&title, panels, legend, size),
-                        options,
-                        &mut result,
-                    )?;
-                }
+                let text = OverlayText {
+                    stem: format!("temperature_node{id}"),
+                    title: format!("Mean temperature of thermal node {id} ({name})"),
+                    y_desc,
+                    y_short: "mean temperature (°C)",
+                    heading: format!("thermal node {id} ({name}), a panel per run:"),
+                };
+                overlay_and_per_run(out, &text, &runs, draw, size, options, &mut result)?;
             }
         }
     }

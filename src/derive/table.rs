@@ -263,13 +263,20 @@ pub fn bearing_loads(rec: &Recording) -> Table {
         let mut row = start(p);
         row.push(number(p.period_s));
         entity_cells(&mut row, &p.bearing_loads, keys.len(), 3, |l| {
-            let min = l.radial_n.iter().copied().fold(f64::INFINITY, f64::min);
-            let max = l.radial_n.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            if l.radial_n.is_empty() {
-                vec![l.mean_n, f64::NAN, f64::NAN]
-            } else {
-                vec![l.mean_n, min, max]
-            }
+            // NaN (an empty cell) without samples
+            let min = l
+                .radial_n
+                .iter()
+                .copied()
+                .reduce(f64::min)
+                .unwrap_or(f64::NAN);
+            let max = l
+                .radial_n
+                .iter()
+                .copied()
+                .reduce(f64::max)
+                .unwrap_or(f64::NAN);
+            vec![l.mean_n, min, max]
         });
         t.rows.push(row);
     }

@@ -35,6 +35,14 @@ pub fn partial_path(target: &Path) -> PathBuf {
     with_suffix(target, ".partial")
 }
 
+/// Writes `bytes` to `path` under its [`partial_path`] and renames it into place, so a file
+/// at `path` is always whole.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let tmp = partial_path(path);
+    std::fs::write(&tmp, bytes)?;
+    std::fs::rename(&tmp, path)
+}
+
 /// The lock file of a recording `target`.
 pub fn lock_path(target: &Path) -> PathBuf {
     with_suffix(target, ".lock")

@@ -201,7 +201,7 @@ impl Collected {
             return;
         }
         let topic = ch.topic.clone();
-        if let Err(reason) = decode_message(
+        match decode_message(
             &topic,
             data,
             &mut self.run,
@@ -209,13 +209,9 @@ impl Collected {
             &mut self.bifs,
             &mut self.warnings,
         ) {
-            self.undecodable.push(format!("{topic}: {reason}"));
-            return;
-        }
-        if topic == schema::TOPIC_SUMMARY.name
-            && let Ok(m) = pb::PointSummary::decode(data)
-        {
-            self.build(m.index);
+            Ok(Some(summary_of)) => self.build(summary_of),
+            Ok(None) => {}
+            Err(reason) => self.undecodable.push(format!("{topic}: {reason}")),
         }
     }
 
@@ -562,6 +558,8 @@ fn decode<M: Message + Default>(data: &[u8]) -> Result<M, String> {
     M::decode(data).map_err(|e| format!("protobuf decoding failed: {e}"))
 }
 
+/// Decodes one message into its place; returns the point index when it was a point's
+/// `/summary` (the last message of a point).
 fn decode_message(
     topic: &str,
     data: &[u8],
@@ -569,7 +567,7 @@ fn decode_message(
     parts: &mut BTreeMap<u64, PointParts>,
     bifs: &mut Vec<pb::Bifurcation>,
     warnings: &mut Vec<String>,
-) -> Result<(), String> {
+) -> Result<Option<u64>, String> {
     match topic {
         t if t == schema::TOPIC_RUN_INFO.name => {
             if run.is_some() {
@@ -581,6 +579,7 @@ fn decode_message(
             let m: pb::PointSummary = decode(data)?;
             let index = m.index;
             parts.entry(index).or_default().summary = Some(m);
+            return Ok(Some(index));
         }
         t if t == schema::TOPIC_HARMONICS.name => {
             let m: pb::Harmonics = decode(data)?;
@@ -626,5 +625,5 @@ fn decode_message(
         }
         _ => {} // /scene and unknown topics are not needed to rebuild the run
     }
-    Ok(())
+    Ok(None)
 }

@@ -99,6 +99,13 @@ pub enum ScanError {
     NotMcap(String),
 }
 
+/// The little-endian `u64` at `b[at..at + 8]` (the caller has checked the length).
+fn le_u64(b: &[u8], at: usize) -> u64 {
+    let mut a = [0u8; 8];
+    a.copy_from_slice(&b[at..at + 8]);
+    u64::from_le_bytes(a)
+}
+
 /// A bounded little-endian cursor over a record body.
 struct Cur<'a> {
     b: &'a [u8],
@@ -129,10 +136,7 @@ impl<'a> Cur<'a> {
         Ok(u32::from_le_bytes([s[0], s[1], s[2], s[3]]))
     }
     fn u64(&mut self, what: &str) -> Result<u64, String> {
-        let s = self.take(8, what)?;
-        let mut a = [0u8; 8];
-        a.copy_from_slice(s);
-        Ok(u64::from_le_bytes(a))
+        Ok(le_u64(self.take(8, what)?, 0))
     }
     fn string(&mut self, what: &str) -> Result<String, String> {
         let n = self.u32(what)?;
@@ -321,16 +325,11 @@ fn chunk_signature(head: &[u8], left: u64) -> bool {
     if head.len() < 54 || head[0] != OP_CHUNK {
         return false;
     }
-    let le = |s: &[u8]| {
-        let mut a = [0u8; 8];
-        a.copy_from_slice(s);
-        u64::from_le_bytes(a)
-    };
-    let len = le(&head[1..9]);
+    let len = le_u64(head, 1);
     len >= 44
         && len.saturating_add(9) <= left
         && &head[37..45] == b"\x04\x00\x00\x00zstd"
-        && le(&head[45..53]) == len - 44
+        && le_u64(head, 45) == len - 44
 }
 
 /// Whether `head` starts a data-end record (opcode, length 4).
@@ -374,9 +373,7 @@ pub fn scan<R: Read + Seek, E>(
                 report
                     .damage
                     .push(format!("{why}; the summary section is not used"));
-                let mut a = [0u8; 8];
-                a.copy_from_slice(&body[0..8]);
-                untrusted_from = Some(u64::from_le_bytes(a));
+                untrusted_from = Some(le_u64(body, 0));
             }
         }
     }
@@ -405,9 +402,7 @@ pub fn scan<R: Read + Seek, E>(
         let mut head = [0u8; 9];
         r.read_exact(&mut head).map_err(ScanError::Io)?;
         let op = head[0];
-        let mut len_bytes = [0u8; 8];
-        len_bytes.copy_from_slice(&head[1..9]);
-        let len = u64::from_le_bytes(len_bytes);
+        let len = le_u64(&head, 1);
         let fits = len <= left - 9;
         // tmrotor writes every schema, channel and message inside a (checked) chunk; one of
         // them outside a chunk in the data section, or an opcode MCAP does not define,
@@ -512,12 +507,7 @@ fn check_summary_crc<R: Read + Seek>(
     body: &[u8],
     footer_pos: u64,
 ) -> io::Result<Option<String>> {
-    let le = |s: &[u8]| {
-        let mut a = [0u8; 8];
-        a.copy_from_slice(s);
-        u64::from_le_bytes(a)
-    };
-    let summary_start = le(&body[0..8]);
+    let summary_start = le_u64(body, 0);
     let stated = u32::from_le_bytes([body[16], body[17], body[18], body[19]]);
     if stated == 0 || summary_start == 0 {
         return Ok(None);

@@ -7,6 +7,7 @@ use std::path::Path;
 use anyhow::Context;
 
 use crate::derive::table;
+use crate::record::output::write_atomic;
 use crate::record::reader::Recording;
 
 /// Writes the tables and the embedded texts into `dir` (created if missing) and lists what
@@ -42,10 +43,5 @@ pub fn run(rec: &Recording, dir: &Path, out: &mut dyn Write) -> anyhow::Result<(
 }
 
 fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".partial");
-    let tmp = std::path::PathBuf::from(tmp);
-    std::fs::write(&tmp, bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path)
-        .with_context(|| format!("cannot rename {} to {}", tmp.display(), path.display()))
+    write_atomic(path, bytes).with_context(|| format!("cannot write {}", path.display()))
 }

@@ -77,21 +77,25 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
         r.bearings.len()
     )?;
     // The index a viewer's message path uses (`/summary.amplitude_rms_m[7]`).
-    let nodes: Vec<String> = r
-        .nodes
-        .iter()
-        .enumerate()
-        .map(|(i, n)| format!("[{i}] {}", n.name))
-        .collect();
-    writeln!(out, "node index:  {}", nodes.join(", "))?;
-    let bearings: Vec<String> = r
-        .bearings
-        .iter()
-        .enumerate()
-        .map(|(i, b)| format!("[{i}] {}", b.name))
-        .collect();
-    if !bearings.is_empty() {
-        writeln!(out, "bearing index: {}", bearings.join(", "))?;
+    let indexed = |names: Vec<&str>| -> String {
+        let items: Vec<String> = names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| format!("[{i}] {n}"))
+            .collect();
+        items.join(", ")
+    };
+    writeln!(
+        out,
+        "node index:  {}",
+        indexed(r.nodes.iter().map(|n| n.name.as_str()).collect())
+    )?;
+    if !r.bearings.is_empty() {
+        writeln!(
+            out,
+            "bearing index: {}",
+            indexed(r.bearings.iter().map(|b| b.name.as_str()).collect())
+        )?;
     }
     writeln!(out, "points:      {}", rec.points.len())?;
     if let Some((lo, hi)) = rec.omega_range() {

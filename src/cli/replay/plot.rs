@@ -103,7 +103,7 @@ fn period_doubled_dots(rec: &Recording, y: impl Fn(&PointRecord) -> Option<f64>)
 }
 
 fn bifurcation_label(b: &BifurcationRecord) -> String {
-    format!("{}{}", b.kind.abbreviation(), b.number + 1)
+    crate::figure::bifurcation_label(b.kind, b.number)
 }
 
 /// The legend entry of the bifurcation circles, naming the kinds that occur.

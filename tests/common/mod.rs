@@ -1,0 +1,57 @@
+//! Helpers shared by the integration tests (`mod common;` in each test file that uses
+//! them; each test binary uses a part, hence `dead_code` is allowed).
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use clap::Parser;
+use tmrotor::cli::replay::{self, Cli};
+
+/// Runs `replay ARGS` in-process: the result, stdout and stderr.
+pub fn replay_in_process(args: &[&str]) -> (anyhow::Result<()>, String, String) {
+    let cli = Cli::try_parse_from(std::iter::once("replay").chain(args.iter().copied()))
+        .expect("arguments parse");
+    let (mut out, mut err) = (Vec::new(), Vec::new());
+    let res = replay::run(cli, &mut out, &mut err);
+    (
+        res,
+        String::from_utf8_lossy(&out).into_owned(),
+        String::from_utf8_lossy(&err).into_owned(),
+    )
+}
+
+/// Width, height and RGB bytes of a PNG file.
+pub fn png_pixels(path: &Path) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())),
+    ));
+    let mut reader = decoder.read_info().expect("png header");
+    let mut buf = vec![0; reader.output_buffer_size().expect("size")];
+    let info = reader.next_frame(&mut buf).expect("png data");
+    (info.width, info.height, buf)
+}
+
+/// Whether RGB bytes hold the colour `c` exactly.
+pub fn has_colour(px: &[u8], c: plotters::style::RGBColor) -> bool {
+    px.chunks(3).any(|p| p == [c.0, c.1, c.2])
+}
+
+/// A campaign of three short mechanical runs (order 1, ω 400–402 rad/s, at most 3 points,
+/// no stability): seconds in all.
+pub const SMALL_CAMPAIGN: &str = r#"
+output_dir = "out"
+[defaults]
+order = 1
+omega_start = 400.0
+omega_end = 402.0
+max_points = 3
+stability = false
+thermal = false
+[[runs]]
+name = "a"
+[[runs]]
+name = "b"
+ambient_temp_c = 30.0
+[[runs]]
+name = "c"
+"#;
