@@ -431,20 +431,6 @@ fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
     entries
 }
 
-/// Writes one figure (all formats) and records its files and layout.
-fn write_figure(
-    out: &Path,
-    stem: &str,
-    fig: Figure,
-    options: &FigureOptions,
-    result: &mut CampaignFigures,
-) -> Result<(), CampaignError> {
-    let written = figure::write_figure(&out.join(stem), &fig, &options.output)?;
-    result.written.extend(written.files);
-    result.layouts.push((stem.to_string(), written.layout));
-    Ok(())
-}
-
 /// A figure of `panels` with the legend below.
 fn figure_of(
     title: &str,
@@ -517,21 +503,19 @@ struct OverlayText {
 /// The runs drawn by `draw` into one panel against ω, and with `per_run` also one panel
 /// per run on shared axes.
 fn overlay_and_per_run(
-    out: &Path,
+    sink: &mut FigureSink,
     text: &OverlayText,
     runs: &[RunData],
     draw: impl Fn(&RunData, &mut Chart),
-    size: (u32, u32),
-    options: &FigureOptions,
-    result: &mut CampaignFigures,
 ) -> Result<(), CampaignError> {
+    let size = sink.options.size;
     let mut chart = panel(String::new(), OMEGA, &text.y_desc, false);
     for r in runs {
         draw(r, &mut chart);
     }
     let overlay = figure_of(&text.title, vec![chart], run_legend(runs, true), size);
-    write_figure(out, &text.stem, overlay, options, result)?;
-    if options.per_run {
+    sink.write(&text.stem, overlay)?;
+    if sink.options.per_run {
         let panels = per_run_panels(runs, OMEGA, text.y_short, draw);
         let mut legend = vec![LegendEntry {
             sample: LegendSample::None,
@@ -539,13 +523,7 @@ fn overlay_and_per_run(
         }];
         legend.extend(style_legend(runs, true));
         let stem = format!("{}_per_run", text.stem);
-        write_figure(
-            out,
-            &stem,
-            figure_of(&text.title, panels, legend, size),
-            options,
-            result,
-        )?;
+        sink.write(&stem, figure_of(&text.title, panels, legend, size))?;
     }
     Ok(())
 }
@@ -569,11 +547,15 @@ pub fn plot_campaign(
         .enumerate()
         .map(|(k, e)| load_run(dir, e, k))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut result = CampaignFigures::default();
+    let mut sink = FigureSink {
+        out,
+        options,
+        result: CampaignFigures::default(),
+    };
     let mut runs = Vec::new();
     for (run, notes) in loaded {
-        result.notes.extend(notes);
-        result.legends.push(run.legend.clone());
+        sink.result.notes.extend(notes);
+        sink.result.legends.push(run.legend.clone());
         runs.push(run);
     }
     figure::ensure_dir(out).map_err(|source| CampaignError::Io {
@@ -581,14 +563,64 @@ pub fn plot_campaign(
         source,
     })?;
     if figure::font().is_none() {
-        result.notes.push(
+        sink.result.notes.push(
             "no TrueType font found (set TMROTOR_FONT to a .ttf file): figures have no text".into(),
         );
     }
-    let size = options.size;
+    // The bearings of the first run that has any.
+    let bearings: Vec<(String, f64)> = runs
+        .iter()
+        .find(|r| !r.bearings.is_empty())
+        .map(|r| r.bearings.clone())
+        .unwrap_or_default();
 
-    // Amplitude–frequency curves.
-    let nodes = if options.nodes.is_empty() {
+    amplitude_figures(&mut sink, dir, &runs)?;
+    clearance_figures(&mut sink, &runs, &bearings)?;
+    load_figure(&mut sink, &runs, &bearings)?;
+    let has_temps = runs
+        .iter()
+        .any(|r| r.points.iter().any(|p| !p.temp_c.is_empty()));
+    if !has_temps {
+        sink.result.notes.push(
+            "no run recorded temperatures: rolling_element_temperatures, \
+             temperature_extremes and the bearing-position chart not written"
+                .into(),
+        );
+        return Ok(sink.result);
+    }
+    element_temperature_figure(&mut sink, &runs, &bearings)?;
+    thermal_node_figures(&mut sink, &runs)?;
+    node_temperature_figures(&mut sink, &runs)?;
+    temperature_extremes_figure(&mut sink, &runs)?;
+    bearing_positions(&mut sink, &runs, &bearings)?;
+    Ok(sink.result)
+}
+
+/// Where the figures go, how they are drawn, and what has been written so far.
+struct FigureSink<'a> {
+    out: &'a Path,
+    options: &'a FigureOptions,
+    result: CampaignFigures,
+}
+
+impl FigureSink<'_> {
+    /// Writes one figure (all formats) and records its files and layout.
+    fn write(&mut self, stem: &str, fig: Figure) -> Result<(), CampaignError> {
+        let written = figure::write_figure(&self.out.join(stem), &fig, &self.options.output)?;
+        self.result.written.extend(written.files);
+        self.result.layouts.push((stem.to_string(), written.layout));
+        Ok(())
+    }
+}
+
+/// Amplitude–frequency curves of the requested dynamic nodes (node 8, or the first
+/// recorded, by default); a node no run recorded is an error naming the manifest.
+fn amplitude_figures(
+    sink: &mut FigureSink,
+    dir: &Path,
+    runs: &[RunData],
+) -> Result<(), CampaignError> {
+    let nodes = if sink.options.nodes.is_empty() {
         let any = |id: u32| runs.iter().any(|r| r.node(id).is_some());
         let first = runs.iter().find_map(|r| r.node_ids.first().copied());
         match (any(8), first) {
@@ -597,7 +629,7 @@ pub fn plot_campaign(
             (false, None) => Vec::new(),
         }
     } else {
-        options.nodes.clone()
+        sink.options.nodes.clone()
     };
     for &id in &nodes {
         if !runs.iter().any(|r| r.node(id).is_some()) {
@@ -652,20 +684,22 @@ pub fn plot_campaign(
             y_short: "RMS amplitude (µm)",
             heading: format!("dynamic node {id}, a panel per run:"),
         };
-        overlay_and_per_run(out, &text, &runs, draw, size, options, &mut result)?;
+        overlay_and_per_run(sink, &text, runs, draw)?;
     }
+    Ok(())
+}
 
-    // Clearances, a panel per bearing (the bearings of the first run that has any).
-    let bearings: Vec<(String, f64)> = runs
-        .iter()
-        .find(|r| !r.bearings.is_empty())
-        .map(|r| r.bearings.clone())
-        .unwrap_or_default();
+/// RC variation and effective clearance, a panel per bearing (Figs. 8b–10b).
+fn clearance_figures(
+    sink: &mut FigureSink,
+    runs: &[RunData],
+    bearings: &[(String, f64)],
+) -> Result<(), CampaignError> {
     let has_clearance = runs
         .iter()
         .any(|r| r.points.iter().any(|p| !p.delta_v_m.is_empty()));
     if bearings.is_empty() || !has_clearance {
-        result.notes.push(
+        sink.result.notes.push(
             "no run recorded bearing clearances: clearance_variation and \
              effective_clearance not written"
                 .into(),
@@ -687,10 +721,10 @@ pub fn plot_campaign(
             ),
         ] {
             let mut panels = Vec::new();
-            for (name, d0) in &bearings {
+            for (name, d0) in bearings {
                 let mut chart = panel(format!("bearing {name}"), OMEGA, y_desc, several);
                 chart.hlines.push(if effective { d0 * 1e6 } else { 0.0 });
-                for r in &runs {
+                for r in runs {
                     let Some(b) = r.bearing(name) else { continue };
                     chart.series.extend(branch_series(r, |p| {
                         let v = if effective {
@@ -705,24 +739,25 @@ pub fn plot_campaign(
             }
             // Each panel keeps its own y-range: the bearings' variations differ by an
             // order of magnitude, and the runs are compared within a bearing.
-            let mut legend = run_legend(&runs, false);
+            let mut legend = run_legend(runs, false);
             if effective {
                 legend.push(LegendEntry {
                     sample: LegendSample::Line(figure::REFERENCE, LineStyle::Dashed),
                     text: "initial clearance δ0".into(),
                 });
             }
-            write_figure(
-                out,
-                file,
-                figure_of(title, panels, legend, size),
-                options,
-                &mut result,
-            )?;
+            sink.write(file, figure_of(title, panels, legend, sink.options.size))?;
         }
     }
+    Ok(())
+}
 
-    // Mean bearing loads, a panel per bearing (Fig. 16, averages).
+/// Mean bearing loads, a panel per bearing (Fig. 16, averages).
+fn load_figure(
+    sink: &mut FigureSink,
+    runs: &[RunData],
+    bearings: &[(String, f64)],
+) -> Result<(), CampaignError> {
     let has_loads = runs
         .iter()
         .any(|r| r.points.iter().any(|p| !p.load_n.is_empty()));
@@ -737,7 +772,7 @@ pub fn plot_campaign(
                     "mean radial load (N)",
                     several,
                 );
-                for r in &runs {
+                for r in runs {
                     let Some(b) = r.bearing(name) else { continue };
                     chart
                         .series
@@ -746,32 +781,25 @@ pub fn plot_campaign(
                 chart
             })
             .collect();
-        write_figure(
-            out,
+        sink.write(
             "bearing_loads_mean",
             figure_of(
                 "Mean radial load of each bearing",
                 panels,
-                run_legend(&runs, false),
-                size,
+                run_legend(runs, false),
+                sink.options.size,
             ),
-            options,
-            &mut result,
         )?;
     }
+    Ok(())
+}
 
-    // Temperatures.
-    let has_temps = runs
-        .iter()
-        .any(|r| r.points.iter().any(|p| !p.temp_c.is_empty()));
-    if !has_temps {
-        result.notes.push(
-            "no run recorded temperatures: rolling_element_temperatures, \
-             temperature_extremes and the bearing-position chart not written"
-                .into(),
-        );
-        return Ok(result);
-    }
+/// Rolling-element temperature of each bearing, panels on one y-range (Fig. 14c).
+fn element_temperature_figure(
+    sink: &mut FigureSink,
+    runs: &[RunData],
+    bearings: &[(String, f64)],
+) -> Result<(), CampaignError> {
     let element_panels: Vec<Chart> = bearings
         .iter()
         .filter_map(|(name, _)| {
@@ -783,7 +811,7 @@ pub fn plot_campaign(
                 "mean temperature (°C)",
                 bearings.len() > 1,
             );
-            for r in &runs {
+            for r in runs {
                 let Some((t, _)) = r.thermal_node(&label) else {
                     continue;
                 };
@@ -795,7 +823,7 @@ pub fn plot_campaign(
         })
         .collect();
     if element_panels.is_empty() {
-        result.notes.push(
+        sink.result.notes.push(
             "no thermal node is named \"<bearing> rolling elements\": \
              rolling_element_temperatures not written"
                 .into(),
@@ -803,22 +831,23 @@ pub fn plot_campaign(
     } else {
         let mut panels = element_panels;
         share_y(&mut panels);
-        write_figure(
-            out,
+        sink.write(
             "rolling_element_temperatures",
             figure_of(
                 "Rolling-element temperature of each bearing",
                 panels,
-                run_legend(&runs, false),
-                size,
+                run_legend(runs, false),
+                sink.options.size,
             ),
-            options,
-            &mut result,
         )?;
     }
+    Ok(())
+}
 
-    // One thermal node against ω, runs overlaid (Fig. 15).
-    let thermal_node = options.thermal_node.or_else(|| {
+/// One thermal node against ω, runs overlaid (Fig. 15): the requested node, or node 58
+/// when every run is of the built-in dual rotor.
+fn thermal_node_figures(sink: &mut FigureSink, runs: &[RunData]) -> Result<(), CampaignError> {
+    let thermal_node = sink.options.thermal_node.or_else(|| {
         let paper = runs
             .iter()
             .filter(|r| !r.points.is_empty())
@@ -831,7 +860,7 @@ pub fn plot_campaign(
             .iter()
             .find_map(|r| index(r).map(|t| r.thermal[t].1.clone()));
         match name {
-            None => result.notes.push(format!(
+            None => sink.result.notes.push(format!(
                 "no run has thermal node {id}: temperature_node{id} not written"
             )),
             Some(name) => {
@@ -857,12 +886,15 @@ pub fn plot_campaign(
                     y_short: "mean temperature (°C)",
                     heading: format!("thermal node {id} ({name}), a panel per run:"),
                 };
-                overlay_and_per_run(out, &text, &runs, draw, size, options, &mut result)?;
+                overlay_and_per_run(sink, &text, runs, draw)?;
             }
         }
     }
+    Ok(())
+}
 
-    // Every node's temperature, grouped by bearing, a figure per run (Figs. 14a-b).
+/// Every node's temperature, grouped by bearing, a figure per run (Figs. 14a–b).
+fn node_temperature_figures(sink: &mut FigureSink, runs: &[RunData]) -> Result<(), CampaignError> {
     for r in runs
         .iter()
         .filter(|r| r.points.iter().any(|p| !p.temp_c.is_empty()))
@@ -892,20 +924,24 @@ pub fn plot_campaign(
         share_y(&mut panels);
         let mut legend = Figure::legend_from_series(&panels);
         legend.extend(style_legend(std::slice::from_ref(r), false));
-        write_figure(
-            out,
+        sink.write(
             &format!("node_temperatures_{}", file_safe(&r.name)),
             figure_of(
                 &format!("Mean temperatures of the thermal nodes, {}", r.legend),
                 panels,
                 legend,
-                size,
+                sink.options.size,
             ),
-            options,
-            &mut result,
         )?;
     }
+    Ok(())
+}
 
+/// Highest and lowest mean temperature over the thermal network against ω.
+fn temperature_extremes_figure(
+    sink: &mut FigureSink,
+    runs: &[RunData],
+) -> Result<(), CampaignError> {
     let extreme = |max: bool| {
         move |p: &PointData| {
             let it = p.temp_c.iter().copied().filter(|t| t.is_finite());
@@ -930,25 +966,20 @@ pub fn plot_campaign(
             true,
         ),
     ];
-    for r in &runs {
+    for r in runs {
         panels[0].series.extend(branch_series(r, extreme(true)));
         panels[1].series.extend(branch_series(r, extreme(false)));
     }
-    write_figure(
-        out,
+    sink.write(
         "temperature_extremes",
         figure_of(
             "Highest and lowest temperature over the thermal network",
             panels,
-            run_legend(&runs, false),
-            size,
+            run_legend(runs, false),
+            sink.options.size,
         ),
-        options,
-        &mut result,
     )?;
-
-    bearing_positions(&runs, &bearings, out, options, &mut result)?;
-    Ok(result)
+    Ok(())
 }
 
 /// A run name as part of a file name: letters, digits, `-`, `_` and `.` kept, anything
@@ -967,12 +998,11 @@ fn file_safe(name: &str) -> String {
 
 /// The dot chart of the bearing positions' temperatures at one ω (Figs. 14d–e).
 fn bearing_positions(
+    sink: &mut FigureSink,
     runs: &[RunData],
     bearings: &[(String, f64)],
-    out: &Path,
-    options: &FigureOptions,
-    result: &mut CampaignFigures,
 ) -> Result<(), CampaignError> {
+    let options = sink.options;
     const PARTS: [(&str, &str); 5] = [
         ("rolling elements", "elements"),
         ("inner ring", "inner ring"),
@@ -1042,13 +1072,13 @@ fn bearing_positions(
     }
     let file = format!("bearing_temperatures_omega{}", tick(&target));
     if panels.is_empty() {
-        result.notes.push(format!(
+        sink.result.notes.push(format!(
             "no thermal node is named after a bearing part: {file} not written"
         ));
         return Ok(());
     }
     if nearest.iter().all(Option::is_none) {
-        result.notes.push(format!(
+        sink.result.notes.push(format!(
             "no run has a point within {} rad/s of ω = {} rad/s: {file} not written",
             tick(&options.omega_tolerance_rad_s),
             tick(&target)
@@ -1071,9 +1101,7 @@ fn bearing_positions(
             },
         })
         .collect();
-    write_figure(
-        out,
-        &file,
+    sink.write(&file,
         figure_of(
             &format!(
                 "Temperatures of the bearing positions at ω = {} rad/s (nearest recorded point of each run)",
@@ -1083,8 +1111,6 @@ fn bearing_positions(
             legend,
             options.size,
         ),
-        options,
-        result,
     )?;
     Ok(())
 }
