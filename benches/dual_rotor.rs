@@ -61,7 +61,7 @@ fn bench(c: &mut Criterion) {
         })
     });
     let full = ExpSip {
-        intervals: settings.sip_intervals,
+        intervals: settings.floquet.sip_intervals,
         ..ExpSip::default()
     };
     g.bench_function("stability/exp_sip_full", |b| {
@@ -80,7 +80,7 @@ fn bench(c: &mut Criterion) {
             b.iter_batched(
                 || {
                     let mut opts = ContinuationOptions::new(OMEGA, 700.0);
-                    opts.ds_max = settings.ds_max;
+                    opts.ds_max = settings.sweep.ds_max;
                     opts.initial_guess = Some(a.clone());
                     let hb = HarmonicBalance::new(sys, basis, None).expect("hb");
                     let stab: Option<&dyn StabilityMethod> = if with_stability {

@@ -104,9 +104,12 @@ fn time_parts(rec: &tmrotor::record::reader::Recording) -> anyhow::Result<()> {
     let settings = StudySettings::from_run(&rec.run)?;
     let model = tmrotor::model::Model::from_str(&rec.run.model_text, &rec.run.model_name)?;
     let problem = SweepProblem::with_model(&settings, model)?;
-    let hb =
-        tmrotor::hb::HarmonicBalance::new(&problem.system, &problem.basis, settings.aft_samples)?;
-    let method = stability_method(&settings, &problem.system, settings.omega_start)?;
+    let hb = tmrotor::hb::HarmonicBalance::new(
+        &problem.system,
+        &problem.basis,
+        settings.harmonic.aft_samples,
+    )?;
+    let method = stability_method(&settings, &problem.system, settings.sweep.omega_start)?;
     let (mut t_slow, mut t_fast, mut t_full) = (0.0, 0.0, 0.0);
     for p in rec.points.iter().take(20) {
         let sol = tmrotor::hb::HbSolution {

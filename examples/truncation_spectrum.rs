@@ -17,7 +17,7 @@ use rustfft::num_complex::Complex64;
 use tmrotor::hb::newton::{self, NewtonOptions};
 use tmrotor::hb::{HarmonicBalance, HbSolution, time_domain_residual};
 use tmrotor::model::Dir;
-use tmrotor::sweep::{StudySettings, SweepProblem};
+use tmrotor::sweep::{FloquetSettings, HarmonicSettings, StudySettings, SweepProblem};
 
 const SAMPLES: usize = 4096;
 
@@ -56,8 +56,14 @@ fn main() -> anyhow::Result<()> {
     for &omega in &speeds {
         for order in 1..=4u32 {
             let settings = StudySettings {
-                order,
-                stability: false,
+                harmonic: HarmonicSettings {
+                    order,
+                    ..Default::default()
+                },
+                floquet: FloquetSettings {
+                    stability: false,
+                    ..Default::default()
+                },
                 ..Default::default()
             };
             let p = SweepProblem::new(&settings)?;

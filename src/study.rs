@@ -45,23 +45,85 @@ pub enum StudyError {
 /// Samples per period used for the recorded orbits, bearing loads and temperature ranges.
 pub const RECORD_SAMPLES: usize = 128;
 
-/// Everything a sweep needs besides the model file. Every default is the paper's default
-/// study (see the module docs).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+/// Everything a sweep needs besides the model file, grouped by the layer that uses it:
+/// the operating point of the coupled model, the harmonic basis, the continuation in ω
+/// and the Floquet stability. Every default is the paper's default study (see the module
+/// docs).
+///
+/// In files (a study's settings TOML, a campaign's `[defaults]` and runs, the settings a
+/// recording embeds) the settings are one flat table, e.g. `flow_l_min = 2.0` and
+/// `order = 3`, as they have always been; [`FlatSettings`] is that form.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(from = "FlatSettings", into = "FlatSettings")]
 pub struct StudySettings {
     /// Model file; `None` is the built-in dual rotor.
     pub model: Option<PathBuf>,
-    /// Lubricant flow rate per bearing `q_l` (L/min).
+    /// The operating point of the coupled model.
+    pub operating: OperatingSettings,
+    /// The harmonic-balance basis and its time grid.
+    pub harmonic: HarmonicSettings,
+    /// The continuation in rotor speed.
+    pub sweep: SweepSettings,
+    /// Floquet multipliers and the bifurcations found from them.
+    pub floquet: FloquetSettings,
+    /// Values of the model file set by path before it is validated (`[set]` in a
+    /// campaign, `--set PATH=VALUE` on the command line; see [`crate::model::set`]), e.g.
+    /// `"thermal.bearings[2#].f_v" = 3.0`. Empty by default; absent from the settings TOML
+    /// when empty.
+    pub set: ModelSet,
+}
+
+/// The operating point of the coupled model (paper section 5; used by
+/// [`crate::coupled::CoupledRotor`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OperatingSettings {
+    /// Lubricant flow rate per bearing `q_l` (L/min). Default 2, the paper's default study.
     pub flow_l_min: f64,
-    /// Lubricant cooling temperature `T_L∞` (°C).
+    /// Lubricant cooling temperature `T_L∞` (°C). Default 25 (section 5).
     pub cooling_temp_c: f64,
-    /// Ambient temperature `T_∞` (°C).
+    /// Ambient temperature `T_∞` (°C). Default 25 (section 5).
     pub ambient_temp_c: f64,
-    /// Truncation order `k` of the basis (Eq. 34).
+    /// Solve the thermal network together with the vibration (two-way coupling). Default
+    /// on.
+    pub thermal: bool,
+}
+
+impl Default for OperatingSettings {
+    fn default() -> Self {
+        Self {
+            flow_l_min: 2.0,
+            cooling_temp_c: 25.0,
+            ambient_temp_c: 25.0,
+            thermal: true,
+        }
+    }
+}
+
+/// The harmonic-balance basis ([`crate::hb`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HarmonicSettings {
+    /// Truncation order `k` of the basis (Eq. 34). Default 3: the paper's order, and
+    /// converged on the default study (`docs/validation.md`, truncation).
     pub order: u32,
-    /// Sweep start and end (rad/s).
+    /// AFT samples per period; `None` (default) chooses from the basis.
+    pub aft_samples: Option<usize>,
+}
+
+impl Default for HarmonicSettings {
+    fn default() -> Self {
+        Self {
+            order: 3,
+            aft_samples: None,
+        }
+    }
+}
+
+/// The continuation in rotor speed ([`crate::continuation`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SweepSettings {
+    /// Sweep start (rad/s). Default 300, the paper's range.
     pub omega_start: f64,
+    /// Sweep end (rad/s). Default 700.
     pub omega_end: f64,
     /// Largest continuation step (scaled arclength; see `continuation::ContinuationOptions`).
     ///
@@ -71,15 +133,30 @@ pub struct StudySettings {
     /// step control shortens the step where the branch bends, so the cap mostly sets
     /// the spacing on the flat parts.
     pub ds_max: f64,
-    /// Maximum number of points.
+    /// Maximum number of points. Default 2000, far above the 150–500 points a sweep of the
+    /// paper's range takes: a guard against a branch that never reaches the end.
     pub max_points: usize,
-    /// Solve the thermal network together with the vibration (two-way coupling).
-    pub thermal: bool,
+}
+
+impl Default for SweepSettings {
+    fn default() -> Self {
+        Self {
+            omega_start: 300.0,
+            omega_end: 700.0,
+            ds_max: 0.15,
+            max_points: 2000,
+        }
+    }
+}
+
+/// Floquet stability ([`crate::stability`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FloquetSettings {
     /// Compute Floquet multipliers at every point (and locate the Neimark–Sacker and
     /// period-doubling points; saddle-nodes, the folds of the branch, are located either
-    /// way).
+    /// way). Default on.
     pub stability: bool,
-    /// Floquet method (see [`StabilityChoice`]).
+    /// Floquet method (see [`StabilityChoice`]). Default `exp-sip`.
     pub stability_method: StabilityChoice,
     /// Intervals per period of the SIP product (Eq. 33), default 512. `exp-sip`: the fine
     /// product of the extrapolation (even), the start of the refinement near the unit
@@ -92,38 +169,113 @@ pub struct StudySettings {
     pub interval_map: IntervalMap,
     /// Cut-off (rad/s) of the Craig–Bampton reduction the stability is computed on
     /// (interior modes of the rotor with its bearing DoFs held, up to this frequency);
-    /// 0 computes on the full model.
+    /// 0 computes on the full model. Default: [`ReductionSettings::default`].
     pub reduction_cutoff_rad_s: f64,
-    /// AFT samples per period; `None` chooses from the basis.
-    pub aft_samples: Option<usize>,
-    /// Values of the model file set by path before it is validated (`[set]` in a
-    /// campaign, `--set PATH=VALUE` on the command line; see [`crate::model::set`]), e.g.
-    /// `"thermal.bearings[2#].f_v" = 3.0`. Empty by default; absent from the settings TOML
-    /// when empty.
-    #[serde(skip_serializing_if = "ModelSet::is_empty")]
-    pub set: ModelSet,
 }
 
-impl Default for StudySettings {
+impl Default for FloquetSettings {
     fn default() -> Self {
         Self {
-            model: None,
-            flow_l_min: 2.0,
-            cooling_temp_c: 25.0,
-            ambient_temp_c: 25.0,
-            order: 3,
-            omega_start: 300.0,
-            omega_end: 700.0,
-            ds_max: 0.15,
-            max_points: 2000,
-            thermal: true,
             stability: true,
             stability_method: StabilityChoice::ExpSip,
             sip_intervals: DEFAULT_INTERVALS,
             interval_map: IntervalMap::Exponential,
             reduction_cutoff_rad_s: ReductionSettings::default().cutoff_rad_s,
-            aft_samples: None,
-            set: ModelSet::new(),
+        }
+    }
+}
+
+/// [`StudySettings`] as files spell them: one flat table, unknown keys refused, absent
+/// keys at their defaults. The field meanings are those of the grouped settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FlatSettings {
+    pub model: Option<PathBuf>,
+    pub flow_l_min: f64,
+    pub cooling_temp_c: f64,
+    pub ambient_temp_c: f64,
+    pub order: u32,
+    pub omega_start: f64,
+    pub omega_end: f64,
+    pub ds_max: f64,
+    pub max_points: usize,
+    pub thermal: bool,
+    pub stability: bool,
+    pub stability_method: StabilityChoice,
+    pub sip_intervals: usize,
+    pub interval_map: IntervalMap,
+    pub reduction_cutoff_rad_s: f64,
+    pub aft_samples: Option<usize>,
+    #[serde(skip_serializing_if = "ModelSet::is_empty")]
+    pub set: ModelSet,
+}
+
+impl Default for FlatSettings {
+    fn default() -> Self {
+        StudySettings::default().into()
+    }
+}
+
+impl From<StudySettings> for FlatSettings {
+    fn from(s: StudySettings) -> Self {
+        let StudySettings {
+            model,
+            operating,
+            harmonic,
+            sweep,
+            floquet,
+            set,
+        } = s;
+        Self {
+            model,
+            flow_l_min: operating.flow_l_min,
+            cooling_temp_c: operating.cooling_temp_c,
+            ambient_temp_c: operating.ambient_temp_c,
+            order: harmonic.order,
+            omega_start: sweep.omega_start,
+            omega_end: sweep.omega_end,
+            ds_max: sweep.ds_max,
+            max_points: sweep.max_points,
+            thermal: operating.thermal,
+            stability: floquet.stability,
+            stability_method: floquet.stability_method,
+            sip_intervals: floquet.sip_intervals,
+            interval_map: floquet.interval_map,
+            reduction_cutoff_rad_s: floquet.reduction_cutoff_rad_s,
+            aft_samples: harmonic.aft_samples,
+            set,
+        }
+    }
+}
+
+impl From<FlatSettings> for StudySettings {
+    fn from(f: FlatSettings) -> Self {
+        Self {
+            model: f.model,
+            operating: OperatingSettings {
+                flow_l_min: f.flow_l_min,
+                cooling_temp_c: f.cooling_temp_c,
+                ambient_temp_c: f.ambient_temp_c,
+                thermal: f.thermal,
+            },
+            harmonic: HarmonicSettings {
+                order: f.order,
+                aft_samples: f.aft_samples,
+            },
+            sweep: SweepSettings {
+                omega_start: f.omega_start,
+                omega_end: f.omega_end,
+                ds_max: f.ds_max,
+                max_points: f.max_points,
+            },
+            floquet: FloquetSettings {
+                stability: f.stability,
+                stability_method: f.stability_method,
+                sip_intervals: f.sip_intervals,
+                interval_map: f.interval_map,
+                reduction_cutoff_rad_s: f.reduction_cutoff_rad_s,
+            },
+            set: f.set,
         }
     }
 }
@@ -141,7 +293,7 @@ impl StudySettings {
         })?;
         let mut settings = Self::from_table(&table)?;
         if !table.contains_key("interval_map") {
-            settings.interval_map = IntervalMap::Strang;
+            settings.floquet.interval_map = IntervalMap::Strang;
         }
         settings.model = None;
         Ok(settings)
@@ -239,16 +391,16 @@ pub fn stability_method(
     omega_ref: f64,
 ) -> Result<Box<dyn StabilityMethod>, StabilityError> {
     let exp = ExpSip {
-        intervals: settings.sip_intervals,
-        interval_map: settings.interval_map,
+        intervals: settings.floquet.sip_intervals,
+        interval_map: settings.floquet.interval_map,
         ..ExpSip::default()
     };
     let sip = Sip {
-        intervals: settings.sip_intervals,
+        intervals: settings.floquet.sip_intervals,
         ..Sip::default()
     };
-    if settings.reduction_cutoff_rad_s == 0.0 {
-        return Ok(match settings.stability_method {
+    if settings.floquet.reduction_cutoff_rad_s == 0.0 {
+        return Ok(match settings.floquet.stability_method {
             StabilityChoice::ExpSip => Box::new(exp),
             StabilityChoice::Sip => Box::new(sip),
         });
@@ -257,11 +409,11 @@ pub fn stability_method(
         system,
         omega_ref,
         ReductionSettings {
-            cutoff_rad_s: settings.reduction_cutoff_rad_s,
+            cutoff_rad_s: settings.floquet.reduction_cutoff_rad_s,
             max_modes: usize::MAX,
         },
     )?;
-    Ok(match settings.stability_method {
+    Ok(match settings.floquet.stability_method {
         StabilityChoice::ExpSip => Box::new(Reduced {
             reduction,
             method: exp,
@@ -295,23 +447,23 @@ impl SweepProblem {
     pub fn with_model(settings: &StudySettings, model: Model) -> Result<Self, StudyError> {
         check_settings(settings)?;
         let study = StudyOverrides {
-            flow_l_min: Some(settings.flow_l_min),
-            cooling_temp_c: Some(settings.cooling_temp_c),
-            ambient_temp_c: Some(settings.ambient_temp_c),
+            flow_l_min: Some(settings.operating.flow_l_min),
+            cooling_temp_c: Some(settings.operating.cooling_temp_c),
+            ambient_temp_c: Some(settings.operating.ambient_temp_c),
         };
         let system = CoupledRotor::new(
             &model,
             &study,
             CouplingOptions {
-                thermal: settings.thermal,
+                thermal: settings.operating.thermal,
                 frozen_clearance: false,
             },
         )?;
         let lambda = speed_ratio(&model);
         let basis = if lambda == (Ratio { num: 1, den: 1 }) {
-            Basis::integer(settings.order)?
+            Basis::integer(settings.harmonic.order)?
         } else {
-            Basis::paper(settings.order, lambda)?
+            Basis::paper(settings.harmonic.order, lambda)?
         };
         let run = run_info(&model, &system, &basis, lambda, settings);
         Ok(Self {
@@ -324,67 +476,89 @@ impl SweepProblem {
     }
 }
 
+/// A refused setting.
+fn bad(field: &'static str, value: impl ToString, reason: &'static str) -> Result<(), StudyError> {
+    Err(StudyError::Setting {
+        field,
+        value: value.to_string(),
+        reason,
+    })
+}
+
+/// Checks every group; the first refused setting is the error.
 fn check_settings(s: &StudySettings) -> Result<(), StudyError> {
-    let bad = |field: &'static str, value: String, reason: &'static str| {
-        Err(StudyError::Setting {
-            field,
-            value,
-            reason,
-        })
-    };
-    if !(s.omega_start.is_finite() && s.omega_start > 0.0) {
-        return bad(
-            "omega_start",
-            s.omega_start.to_string(),
-            "must be positive (rad/s)",
-        );
+    s.sweep.check()?;
+    s.harmonic.check()?;
+    s.floquet.check()
+}
+
+impl SweepSettings {
+    /// Refuses a non-positive or empty speed range, step or point budget.
+    pub fn check(&self) -> Result<(), StudyError> {
+        if !(self.omega_start.is_finite() && self.omega_start > 0.0) {
+            return bad("omega_start", self.omega_start, "must be positive (rad/s)");
+        }
+        if !(self.omega_end.is_finite()
+            && self.omega_end > 0.0
+            && self.omega_end != self.omega_start)
+        {
+            return bad(
+                "omega_end",
+                self.omega_end,
+                "must be positive and differ from omega_start",
+            );
+        }
+        if !(self.ds_max.is_finite() && self.ds_max > 0.0) {
+            return bad("ds_max", self.ds_max, "must be positive");
+        }
+        if self.max_points == 0 {
+            return bad("max_points", 0, "must be at least 1");
+        }
+        Ok(())
     }
-    if !(s.omega_end.is_finite() && s.omega_end > 0.0 && s.omega_end != s.omega_start) {
-        return bad(
-            "omega_end",
-            s.omega_end.to_string(),
-            "must be positive and differ from omega_start",
-        );
+}
+
+impl HarmonicSettings {
+    /// Refuses an order outside 1–12.
+    pub fn check(&self) -> Result<(), StudyError> {
+        if self.order == 0 || self.order > 12 {
+            return bad("order", self.order, "must be between 1 and 12");
+        }
+        Ok(())
     }
-    if s.order == 0 || s.order > 12 {
-        return bad("order", s.order.to_string(), "must be between 1 and 12");
+}
+
+impl FloquetSettings {
+    /// Refuses a negative cut-off and interval counts the products cannot use.
+    pub fn check(&self) -> Result<(), StudyError> {
+        if !(self.reduction_cutoff_rad_s.is_finite() && self.reduction_cutoff_rad_s >= 0.0) {
+            return bad(
+                "reduction_cutoff_rad_s",
+                self.reduction_cutoff_rad_s,
+                "must be 0 (full model) or a positive frequency in rad/s",
+            );
+        }
+        if self.sip_intervals > MAX_SIP_INTERVALS {
+            return bad(
+                "sip_intervals",
+                self.sip_intervals,
+                "must be at most 200000 (the product keeps a state per interval; more would \
+                 need gigabytes of memory, and 4096 already resolves the paper's rotor)",
+            );
+        }
+        if self.sip_intervals < 8 {
+            return bad("sip_intervals", self.sip_intervals, "must be at least 8");
+        }
+        if self.stability_method == StabilityChoice::ExpSip && !self.sip_intervals.is_multiple_of(2)
+        {
+            return bad(
+                "sip_intervals",
+                self.sip_intervals,
+                "must be even for exp-sip (its product is extrapolated from N and N/2 intervals)",
+            );
+        }
+        Ok(())
     }
-    if !(s.ds_max.is_finite() && s.ds_max > 0.0) {
-        return bad("ds_max", s.ds_max.to_string(), "must be positive");
-    }
-    if s.max_points == 0 {
-        return bad("max_points", "0".into(), "must be at least 1");
-    }
-    if !(s.reduction_cutoff_rad_s.is_finite() && s.reduction_cutoff_rad_s >= 0.0) {
-        return bad(
-            "reduction_cutoff_rad_s",
-            s.reduction_cutoff_rad_s.to_string(),
-            "must be 0 (full model) or a positive frequency in rad/s",
-        );
-    }
-    if s.sip_intervals > MAX_SIP_INTERVALS {
-        return bad(
-            "sip_intervals",
-            s.sip_intervals.to_string(),
-            "must be at most 200000 (the product keeps a state per interval; more would \
-             need gigabytes of memory, and 4096 already resolves the paper's rotor)",
-        );
-    }
-    if s.sip_intervals < 8 {
-        return bad(
-            "sip_intervals",
-            s.sip_intervals.to_string(),
-            "must be at least 8",
-        );
-    }
-    if s.stability_method == StabilityChoice::ExpSip && !s.sip_intervals.is_multiple_of(2) {
-        return bad(
-            "sip_intervals",
-            s.sip_intervals.to_string(),
-            "must be even for exp-sip (its product is extrapolated from N and N/2 intervals)",
-        );
-    }
-    Ok(())
 }
 
 /// λ: the speed ratio of the second rotor (1 for a single rotor). Ratios are rational by
@@ -506,5 +680,82 @@ fn run_info(
         nodes,
         thermal_nodes,
         bearings,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grouped settings read and write the flat TOML of earlier versions: every key at
+    /// the top level, unknown keys refused.
+    #[test]
+    fn grouped_settings_keep_the_flat_toml() {
+        let text = "flow_l_min = 5.0\ncooling_temp_c = 50.0\norder = 2\nomega_start = 400.0\n\
+                    ds_max = 0.1\nthermal = false\nstability_method = \"sip\"\n\
+                    sip_intervals = 1024\naft_samples = 64\n";
+        let s: StudySettings = toml::from_str(text).expect("flat settings");
+        assert_eq!(s.operating.flow_l_min, 5.0);
+        assert_eq!(s.operating.cooling_temp_c, 50.0);
+        assert!(!s.operating.thermal);
+        assert_eq!(s.harmonic.order, 2);
+        assert_eq!(s.harmonic.aft_samples, Some(64));
+        assert_eq!(s.sweep.omega_start, 400.0);
+        assert_eq!(s.sweep.omega_end, 700.0, "absent keys take their defaults");
+        assert_eq!(s.sweep.ds_max, 0.1);
+        assert_eq!(s.floquet.stability_method, StabilityChoice::Sip);
+        assert_eq!(s.floquet.sip_intervals, 1024);
+        let back = toml::to_string(&s).expect("write");
+        let again: StudySettings = toml::from_str(&back).expect("read back");
+        assert_eq!(again, s);
+        let mut keys: Vec<String> = s.key_values().into_iter().map(|(k, _)| k).collect();
+        keys.sort();
+        let mut expected = [
+            "flow_l_min",
+            "cooling_temp_c",
+            "ambient_temp_c",
+            "order",
+            "omega_start",
+            "omega_end",
+            "ds_max",
+            "max_points",
+            "thermal",
+            "stability",
+            "stability_method",
+            "sip_intervals",
+            "interval_map",
+            "reduction_cutoff_rad_s",
+            "aft_samples",
+            "model",
+        ];
+        expected.sort();
+        assert_eq!(keys, expected);
+        let err = toml::from_str::<StudySettings>("flow_rate = 3.0\n").expect_err("unknown");
+        assert!(err.to_string().contains("flow_rate"), "{err}");
+    }
+
+    /// Each group refuses its own impossible values, naming the key.
+    #[test]
+    fn each_group_names_the_refused_key() {
+        let mut s = StudySettings::default();
+        s.sweep.omega_end = s.sweep.omega_start;
+        assert!(
+            check_settings(&s)
+                .unwrap_err()
+                .to_string()
+                .contains("omega_end")
+        );
+        let mut s = StudySettings::default();
+        s.harmonic.order = 13;
+        assert!(
+            check_settings(&s)
+                .unwrap_err()
+                .to_string()
+                .contains("order")
+        );
+        let mut s = StudySettings::default();
+        s.floquet.sip_intervals = 511;
+        assert!(check_settings(&s).unwrap_err().to_string().contains("even"));
+        assert!(check_settings(&StudySettings::default()).is_ok());
     }
 }

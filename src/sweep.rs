@@ -28,8 +28,8 @@ use crate::record::types::{BifurcationRecord, FloquetCounts, PointRecord, RunInf
 use crate::record::{RecordError, Sink};
 use crate::stability::{BifurcationKind, ExpSip, FloquetResult, StabilityError, StabilityMethod};
 pub use crate::study::{
-    DEFAULT_INTERVALS, RECORD_SAMPLES, StabilityChoice, StudyError, StudySettings, SweepProblem,
-    stability_method,
+    DEFAULT_INTERVALS, FloquetSettings, HarmonicSettings, OperatingSettings, RECORD_SAMPLES,
+    StabilityChoice, StudyError, StudySettings, SweepProblem, SweepSettings, stability_method,
 };
 
 /// How one lead-in continuation (see `SweepProblem::run`) ended.
@@ -420,7 +420,13 @@ impl SweepProblem {
         stability: Option<&'s dyn StabilityMethod>,
     ) -> Result<Continuation<'s>, SweepError> {
         let s = &self.settings;
-        self.continuation_over(s.omega_start, s.omega_end, None, stability, s.max_points)
+        self.continuation_over(
+            s.sweep.omega_start,
+            s.sweep.omega_end,
+            None,
+            stability,
+            s.sweep.max_points,
+        )
     }
 
     /// A continuation from `from` to `to` with the study's settings, started from `guess`
@@ -434,10 +440,10 @@ impl SweepProblem {
         max_points: usize,
     ) -> Result<Continuation<'s>, SweepError> {
         let s = &self.settings;
-        let hb = HarmonicBalance::new(&self.system, &self.basis, s.aft_samples)?;
+        let hb = HarmonicBalance::new(&self.system, &self.basis, s.harmonic.aft_samples)?;
         let mut opts = ContinuationOptions::new(from, to);
-        opts.ds_max = s.ds_max;
-        opts.ds_initial = opts.ds_initial.min(s.ds_max);
+        opts.ds_max = s.sweep.ds_max;
+        opts.ds_initial = opts.ds_initial.min(s.sweep.ds_max);
         opts.max_points = max_points;
         opts.initial_guess =
             Some(guess.unwrap_or_else(|| self.system.initial_guess(self.basis.n_coeffs())));
@@ -467,13 +473,13 @@ impl SweepProblem {
         pools: &dyn StepPools,
     ) -> Result<LeadIn, SweepError> {
         let s = &self.settings;
-        let up = s.omega_end >= s.omega_start;
+        let up = s.sweep.omega_end >= s.sweep.omega_start;
         let mut tried = Vec::new();
         for frac in LEAD_IN_FRACTIONS {
             let from = if up {
-                s.omega_start * frac
+                s.sweep.omega_start * frac
             } else {
-                s.omega_start / frac
+                s.sweep.omega_start / frac
             };
             match self.lead_in_from(from, interrupted, at, pools)? {
                 LeadIn::Failed(why) => tried.push(format!("from {from:.3} rad/s: {why}")),
@@ -481,7 +487,7 @@ impl SweepProblem {
             }
         }
         Err(SweepError::LeadIn {
-            omega: s.omega_start,
+            omega: s.sweep.omega_start,
             tried: tried.join("; "),
         })
     }
@@ -494,9 +500,9 @@ impl SweepProblem {
         at: &mut dyn FnMut(f64),
         pools: &dyn StepPools,
     ) -> Result<LeadIn, SweepError> {
-        let target = self.settings.omega_start;
+        let target = self.settings.sweep.omega_start;
         // not recorded: the sweep's own point budget does not apply
-        let budget = StudySettings::default().max_points;
+        let budget = StudySettings::default().sweep.max_points;
         let mut cont = self.continuation_over(from, target, None, None, budget)?;
         let mut last = None;
         loop {
@@ -549,12 +555,16 @@ impl SweepProblem {
     ) -> Result<SweepReport, SweepError> {
         let start = std::time::Instant::now();
         let s = &self.settings;
-        let sip = GivingUp::new(if s.stability {
-            stability_method(s, &self.system, s.omega_start)
+        let sip = GivingUp::new(if s.floquet.stability {
+            stability_method(s, &self.system, s.sweep.omega_start)
         } else {
             Ok(Box::new(ExpSip::default()) as Box<dyn StabilityMethod>)
         });
-        let stab: Option<&dyn StabilityMethod> = if s.stability { Some(&sip) } else { None };
+        let stab: Option<&dyn StabilityMethod> = if s.floquet.stability {
+            Some(&sip)
+        } else {
+            None
+        };
         let mut cont = self.continuation(stab)?;
 
         sink.begin_run(&self.run)?;
@@ -664,8 +674,8 @@ impl SweepProblem {
                         prog.points += 1;
                         prog.omega_rad_s = point.solution.omega;
                         prog.bifurcations = bifs.len();
-                        prog.fraction = ((point.solution.omega - s.omega_start)
-                            / (s.omega_end - s.omega_start))
+                        prog.fraction = ((point.solution.omega - s.sweep.omega_start)
+                            / (s.sweep.omega_end - s.sweep.omega_start))
                             .clamp(0.0, 1.0);
                         progress(&prog);
                     }
@@ -713,11 +723,11 @@ impl SweepProblem {
                     };
                     lead_in_from = Some(from);
                     cont = self.continuation_over(
-                        s.omega_start,
-                        s.omega_end,
+                        s.sweep.omega_start,
+                        s.sweep.omega_end,
                         Some(guess),
                         stab,
-                        s.max_points,
+                        s.sweep.max_points,
                     )?;
                 }
                 Err(e) => return Err(e.into()),

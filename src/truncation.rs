@@ -197,11 +197,11 @@ pub fn check_options(
             "must be between 1 and 12",
         ));
     }
-    if settings.omega_end <= settings.omega_start {
+    if settings.sweep.omega_end <= settings.sweep.omega_start {
         return Err(option_error(
             format!(
                 "range {}–{} rad/s",
-                settings.omega_start, settings.omega_end
+                settings.sweep.omega_start, settings.sweep.omega_end
             ),
             "the branch is traced upwards: the end must exceed the start",
         ));
@@ -213,8 +213,8 @@ pub fn check_options(
         ));
     }
     let (lo, hi) = (
-        settings.omega_start.min(settings.omega_end),
-        settings.omega_start.max(settings.omega_end),
+        settings.sweep.omega_start.min(settings.sweep.omega_end),
+        settings.sweep.omega_start.max(settings.sweep.omega_end),
     );
     if let Some(w) = opts
         .omegas_rad_s
@@ -317,14 +317,12 @@ pub fn run(
     let mut missed = Vec::new();
     let mut unreached = Vec::new();
     let mut thermal_ids = Vec::new();
-    let span = (settings.omega_end - settings.omega_start).abs();
+    let span = (settings.sweep.omega_end - settings.sweep.omega_start).abs();
     for (oi, &order) in opts.orders.iter().enumerate() {
         let start = std::time::Instant::now();
-        let study = StudySettings {
-            order,
-            stability: false,
-            ..settings.clone()
-        };
+        let mut study = settings.clone();
+        study.harmonic.order = order;
+        study.floquet.stability = false;
         let problem = SweepProblem::new(&study)?;
         let nodes = resolve_nodes(&problem, opts)?;
         thermal_ids.clone_from(&nodes.thermal_ids);
@@ -381,7 +379,7 @@ pub fn run(
                     prog.points += 1;
                     prog.omega_rad_s = sol.omega;
                     prog.crossings = seen.iter().sum();
-                    let f = ((sol.omega - settings.omega_start).abs() / span).clamp(0.0, 1.0);
+                    let f = ((sol.omega - settings.sweep.omega_start).abs() / span).clamp(0.0, 1.0);
                     prog.fraction = (oi as f64 + f) / opts.orders.len() as f64;
                     progress(&prog);
                     prev = Some(sol);
@@ -485,7 +483,7 @@ fn row(
     found: &Found,
 ) -> Result<TruncationRow, TruncationError> {
     let sol = &found.solution;
-    let order = problem.settings.order;
+    let order = problem.settings.harmonic.order;
     let res = |cause| TruncationError::Residual { order, cause };
     let r = TimeResidual::evaluate(&problem.system, sol, Some(samples)).map_err(res)?;
     let mut residual_node_n = Vec::new();

@@ -279,7 +279,12 @@ flow_l_min = 1.0
         .iter()
         .map(|r| {
             let s = &r.settings;
-            (r.name.as_str(), s.flow_l_min, s.cooling_temp_c, s.order)
+            (
+                r.name.as_str(),
+                s.operating.flow_l_min,
+                s.operating.cooling_temp_c,
+                s.harmonic.order,
+            )
         })
         .collect();
     // keys alphabetically, the first (cooling_temp_c) slowest; the listed run after
@@ -308,7 +313,7 @@ flow_l_min = 1.0
         names,
         ["flow_l_min=20_thermal=true", "flow_l_min=20_thermal=false"]
     );
-    assert!(runs[0].settings.thermal && !runs[1].settings.thermal);
+    assert!(runs[0].settings.operating.thermal && !runs[1].settings.operating.thermal);
 }
 
 #[test]
@@ -742,7 +747,7 @@ fn the_example_campaign_files_load() {
         (grid[0].name.as_str(), grid[9].name.as_str()),
         ("q20-25C", "q1-50C")
     );
-    assert!(grid.iter().all(|r| r.settings.order == 3));
+    assert!(grid.iter().all(|r| r.settings.harmonic.order == 3));
     assert_eq!(out, examples.join("grid_campaign-out"));
 }
 

@@ -6,7 +6,10 @@ use tmrotor::derive::ModelRederive;
 use tmrotor::hb::{Basis, HarmonicBalance, NewtonOptions, Ratio, newton};
 use tmrotor::model::Model;
 use tmrotor::record::MemorySink;
-use tmrotor::sweep::{StudySettings, SweepProblem};
+use tmrotor::sweep::{
+    FloquetSettings, HarmonicSettings, OperatingSettings, StudySettings, SweepProblem,
+    SweepSettings,
+};
 
 fn solve(sys: &CoupledRotor, basis: &Basis, omega: f64) -> Vec<f64> {
     let hb = HarmonicBalance::new(sys, basis, None).expect("hb");
@@ -99,11 +102,20 @@ fn two_way_coupling_changes_the_vibration() {
 #[test]
 fn short_sweep_records_points_and_replay_rederives_bearings() {
     let settings = StudySettings {
-        omega_start: 400.0,
-        omega_end: 404.0,
-        order: 1,
-        stability: false,
-        max_points: 6,
+        harmonic: HarmonicSettings {
+            order: 1,
+            ..Default::default()
+        },
+        sweep: SweepSettings {
+            omega_start: 400.0,
+            omega_end: 404.0,
+            max_points: 6,
+            ..Default::default()
+        },
+        floquet: FloquetSettings {
+            stability: false,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let problem = SweepProblem::new(&settings).expect("problem");
@@ -147,10 +159,16 @@ fn short_sweep_records_points_and_replay_rederives_bearings() {
 fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
     use tmrotor::derive::{StabilityRederive, multiplier_deviation};
     let settings = StudySettings {
-        omega_start: 400.0,
-        omega_end: 402.0,
-        order: 1,
-        max_points: 3,
+        harmonic: HarmonicSettings {
+            order: 1,
+            ..Default::default()
+        },
+        sweep: SweepSettings {
+            omega_start: 400.0,
+            omega_end: 402.0,
+            max_points: 3,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let problem = SweepProblem::new(&settings).expect("problem");
@@ -195,7 +213,10 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
         run.settings_toml
     );
     let strang = StudySettings {
-        interval_map: tmrotor::stability::IntervalMap::Strang,
+        floquet: FloquetSettings {
+            interval_map: tmrotor::stability::IntervalMap::Strang,
+            ..settings.floquet
+        },
         ..settings.clone()
     };
     let mut sink_strang = MemorySink::new();
@@ -238,7 +259,6 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
     use tmrotor::stability::BifurcationKind;
     // the literature values (folds at every flow rate; docs/calibration.md)
     let settings = StudySettings {
-        flow_l_min: 5.0,
         model: Some(
             concat!(
                 env!("CARGO_MANIFEST_DIR"),
@@ -246,6 +266,10 @@ fn a_step_over_a_fold_pair_is_refused_and_both_folds_are_located() {
             )
             .into(),
         ),
+        operating: OperatingSettings {
+            flow_l_min: 5.0,
+            ..Default::default()
+        },
         ..StudySettings::default()
     };
     let p = SweepProblem::new(&settings).expect("problem");
@@ -322,10 +346,16 @@ fn inside_the_nonlinear_range() -> StudySettings {
             )
             .into(),
         ),
-        omega_start: 600.0,
-        omega_end: 601.0,
-        stability: false,
-        max_points: 3,
+        sweep: SweepSettings {
+            omega_start: 600.0,
+            omega_end: 601.0,
+            max_points: 3,
+            ..Default::default()
+        },
+        floquet: FloquetSettings {
+            stability: false,
+            ..Default::default()
+        },
         ..Default::default()
     }
 }
@@ -351,10 +381,16 @@ fn a_start_inside_the_nonlinear_range_is_reached_by_continuation() {
     // the reference: a sweep from the lead-in's speed, whose last point is re-solved on
     // 600 rad/s
     let reference = StudySettings {
-        omega_start: from,
-        omega_end: 600.0,
-        stability: false,
-        max_points: StudySettings::default().max_points,
+        sweep: SweepSettings {
+            omega_start: from,
+            omega_end: 600.0,
+            max_points: StudySettings::default().sweep.max_points,
+            ..inside_the_nonlinear_range().sweep
+        },
+        floquet: FloquetSettings {
+            stability: false,
+            ..inside_the_nonlinear_range().floquet
+        },
         ..inside_the_nonlinear_range()
     };
     let mut ref_sink = MemorySink::new();

@@ -14,7 +14,10 @@ use faer::linalg::solvers::Solve;
 use tmrotor::hb::{HarmonicBalance, HbSolution, NewtonOptions, newton};
 use tmrotor::record::MemorySink;
 use tmrotor::stability::{BifurcationKind, slow_exponents, thermal_schur};
-use tmrotor::study::{StudySettings, SweepProblem, stability_method};
+use tmrotor::study::{
+    HarmonicSettings, OperatingSettings, StudySettings, SweepProblem, SweepSettings,
+    stability_method,
+};
 use tmrotor::system::{PeriodicOrbit, System};
 
 /// A converged point of `problem` at `omega`.
@@ -28,7 +31,10 @@ fn point(problem: &SweepProblem, hb: &HarmonicBalance<'_>, omega: f64) -> HbSolu
 #[test]
 fn the_thermal_schur_complement_equals_the_dense_one() {
     let settings = StudySettings {
-        order: 1,
+        harmonic: HarmonicSettings {
+            order: 1,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let problem = SweepProblem::new(&settings).expect("problem");
@@ -71,12 +77,19 @@ fn the_thermal_schur_complement_equals_the_dense_one() {
 #[test]
 fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
     let settings = StudySettings {
-        flow_l_min: 10.0,
+        operating: OperatingSettings {
+            flow_l_min: 10.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let problem = SweepProblem::new(&settings).expect("problem");
-    let hb =
-        HarmonicBalance::new(&problem.system, &problem.basis, settings.aft_samples).expect("hb");
+    let hb = HarmonicBalance::new(
+        &problem.system,
+        &problem.basis,
+        settings.harmonic.aft_samples,
+    )
+    .expect("hb");
     let sol = point(&problem, &hb, 400.0);
     let slow = slow_exponents(&hb, &sol).expect("slow exponents");
     let top = slow
@@ -86,7 +99,8 @@ fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
     assert!(top.im == 0.0 && top.re < 0.0, "slowest exponent {top}");
 
     // second method: the product over the whole coupled state (mechanical and thermal)
-    let method = stability_method(&settings, &problem.system, settings.omega_start).expect("m");
+    let method =
+        stability_method(&settings, &problem.system, settings.sweep.omega_start).expect("m");
     let full = method.multipliers(&problem.system, &sol).expect("product");
     let mu = full
         .multipliers
@@ -107,9 +121,15 @@ fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
 /// 582 rad/s (docs/calibration.md).
 fn fold_pair_branch() -> StudySettings {
     StudySettings {
-        flow_l_min: 10.0,
-        omega_start: 570.0,
-        omega_end: 595.0,
+        operating: OperatingSettings {
+            flow_l_min: 10.0,
+            ..Default::default()
+        },
+        sweep: SweepSettings {
+            omega_start: 570.0,
+            omega_end: 595.0,
+            ..Default::default()
+        },
         model: Some(
             concat!(
                 env!("CARGO_MANIFEST_DIR"),

@@ -2,7 +2,7 @@
 
 use clap::Parser;
 use tmrotor::cli::{Cli, Command};
-use tmrotor::sweep::StudySettings;
+use tmrotor::sweep::{StudySettings, SweepSettings};
 use tmrotor::truncation::{self, TruncationOptions};
 
 /// Orders 1 and 2 at ω = 400 rad/s, each reached by continuation over a short range: the
@@ -13,8 +13,11 @@ use tmrotor::truncation::{self, TruncationOptions};
 #[test]
 fn dual_rotor_residual_falls_from_order_one_to_two() {
     let settings = StudySettings {
-        omega_start: 398.0,
-        omega_end: 402.0,
+        sweep: SweepSettings {
+            omega_start: 398.0,
+            omega_end: 402.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let opts = TruncationOptions {
@@ -85,11 +88,14 @@ fn command_line_defaults_are_the_paper_points() {
     assert_eq!(o.omegas_rad_s, vec![400.0, 484.0, 530.0, 584.0]);
     assert_eq!(o.dynamic_nodes, vec![8, 14]);
     assert_eq!(o.thermal_nodes, vec![41, 58]);
-    assert_eq!((s.flow_l_min, s.cooling_temp_c), (2.0, 25.0));
-    assert!(!s.stability);
+    assert_eq!(
+        (s.operating.flow_l_min, s.operating.cooling_temp_c),
+        (2.0, 25.0)
+    );
+    assert!(!s.floquet.stability);
     let (s, o) = resolve(&["--flow", "20", "--orders", "2, 3", "--omega", "450"]).expect("ok");
     assert_eq!(
-        (s.flow_l_min, o.orders, o.omegas_rad_s),
+        (s.operating.flow_l_min, o.orders, o.omegas_rad_s),
         (20.0, vec![2, 3], vec![450.0])
     );
 }
@@ -121,8 +127,11 @@ fn bad_command_line_input_names_the_option() {
     }
     // a downward study range (from a study file) is refused by the study itself
     let down = StudySettings {
-        omega_start: 700.0,
-        omega_end: 300.0,
+        sweep: SweepSettings {
+            omega_start: 700.0,
+            omega_end: 300.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let msg = truncation::run(&down, &TruncationOptions::default(), |_| {})
@@ -131,8 +140,11 @@ fn bad_command_line_input_names_the_option() {
     assert!(msg.contains("traced upwards"), "{msg}");
     // a node the model does not have is reported by the study itself
     let settings = StudySettings {
-        omega_start: 398.0,
-        omega_end: 402.0,
+        sweep: SweepSettings {
+            omega_start: 398.0,
+            omega_end: 402.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let opts = TruncationOptions {
@@ -164,8 +176,11 @@ fn a_stalled_target_is_reported_at_the_nearest_converged_speed() {
             )
             .into(),
         ),
-        omega_start: 470.0,
-        omega_end: 500.0,
+        sweep: SweepSettings {
+            omega_start: 470.0,
+            omega_end: 500.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let opts = TruncationOptions {

@@ -178,12 +178,12 @@ fn run_settings(entry: &ManifestEntry, run: Option<&RunInfo>) -> Option<StudySet
 fn run_label(entry: &ManifestEntry, run: Option<&RunInfo>) -> String {
     match run_settings(entry, run) {
         Some(s) => {
-            let base = if s.thermal {
+            let base = if s.operating.thermal {
                 format!(
                     "{}: flow {} L/min, cooling {} °C",
                     entry.name,
-                    tick(&s.flow_l_min),
-                    tick(&s.cooling_temp_c)
+                    tick(&s.operating.flow_l_min),
+                    tick(&s.operating.cooling_temp_c)
                 )
             } else {
                 format!("{}: no thermal coupling", entry.name)

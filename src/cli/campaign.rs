@@ -246,14 +246,22 @@ fn dry_run(
             p.position,
             p.run.name,
             what(p),
-            s.flow_l_min,
-            s.cooling_temp_c,
-            s.ambient_temp_c,
-            s.order,
-            s.omega_start,
-            s.omega_end,
-            if s.thermal { "" } else { ", no thermal" },
-            if s.stability { "" } else { ", no stability" },
+            s.operating.flow_l_min,
+            s.operating.cooling_temp_c,
+            s.operating.ambient_temp_c,
+            s.harmonic.order,
+            s.sweep.omega_start,
+            s.sweep.omega_end,
+            if s.operating.thermal {
+                ""
+            } else {
+                ", no thermal"
+            },
+            if s.floquet.stability {
+                ""
+            } else {
+                ", no stability"
+            },
             match s.set_summary() {
                 set if set.is_empty() => String::new(),
                 set => format!("; set {set}"),

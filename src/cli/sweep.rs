@@ -50,13 +50,13 @@ impl StudyArgs {
             s.model = self.model.clone();
         }
         if let Some(v) = self.flow_l_min {
-            s.flow_l_min = v;
+            s.operating.flow_l_min = v;
         }
         if let Some(v) = self.cooling_temp_c {
-            s.cooling_temp_c = v;
+            s.operating.cooling_temp_c = v;
         }
         if let Some(v) = self.ambient_temp_c {
-            s.ambient_temp_c = v;
+            s.operating.ambient_temp_c = v;
         }
         s.set.extend(self.set.iter().cloned());
         Ok(s)
@@ -125,40 +125,40 @@ impl SweepArgs {
     pub fn settings(&self) -> anyhow::Result<StudySettings> {
         let mut s = self.base.settings()?;
         if let Some(v) = self.order {
-            s.order = v;
+            s.harmonic.order = v;
         }
         if let Some(r) = &self.omega {
-            (s.omega_start, s.omega_end) = parse_range("--omega", r)?;
+            (s.sweep.omega_start, s.sweep.omega_end) = parse_range("--omega", r)?;
         }
         if let Some(v) = self.ds_max {
-            s.ds_max = v;
+            s.sweep.ds_max = v;
         }
         if let Some(v) = self.max_points {
-            s.max_points = v;
+            s.sweep.max_points = v;
         }
         if self.no_thermal {
-            s.thermal = false;
+            s.operating.thermal = false;
         }
         if self.no_stability {
-            s.stability = false;
+            s.floquet.stability = false;
         }
         if let Some(m) = &self.stability_method {
-            s.stability_method = match m.as_str() {
+            s.floquet.stability_method = match m.as_str() {
                 "sip" => crate::sweep::StabilityChoice::Sip,
                 _ => crate::sweep::StabilityChoice::ExpSip,
             };
         }
         if let Some(v) = self.sip_intervals {
-            s.sip_intervals = v;
+            s.floquet.sip_intervals = v;
         }
         if let Some(m) = &self.interval_map {
-            s.interval_map = match m.as_str() {
+            s.floquet.interval_map = match m.as_str() {
                 "strang" => crate::stability::IntervalMap::Strang,
                 _ => crate::stability::IntervalMap::Exponential,
             };
         }
         if let Some(v) = self.reduction_cutoff {
-            s.reduction_cutoff_rad_s = v;
+            s.floquet.reduction_cutoff_rad_s = v;
         }
         Ok(s)
     }
@@ -224,9 +224,9 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     if log {
         eprintln!(
             "sweep: ω {} → {} rad/s, order {}, writing {} (as {} until the run ends)",
-            settings.omega_start,
-            settings.omega_end,
-            settings.order,
+            settings.sweep.omega_start,
+            settings.sweep.omega_end,
+            settings.harmonic.order,
             args.output.display(),
             sink.path().display()
         );

@@ -79,14 +79,14 @@ impl TruncationArgs {
     pub fn resolve(&self) -> anyhow::Result<(StudySettings, TruncationOptions)> {
         let mut s = self.base.settings()?;
         if let Some(r) = &self.range {
-            (s.omega_start, s.omega_end) = parse_range("--range", r)?;
-            if s.omega_end <= s.omega_start {
+            (s.sweep.omega_start, s.sweep.omega_end) = parse_range("--range", r)?;
+            if s.sweep.omega_end <= s.sweep.omega_start {
                 anyhow::bail!(
                     "--range {r:?}: END must exceed START (the branch is traced upwards)"
                 );
             }
         }
-        s.stability = false;
+        s.floquet.stability = false;
         let orders: Vec<u32> = parse_list("--orders", &self.orders, "a whole number")?;
         if let Some(k) = orders.iter().find(|&&k| k == 0 || k > 12) {
             anyhow::bail!(
@@ -96,8 +96,8 @@ impl TruncationArgs {
         }
         let omegas: Vec<f64> = parse_list("--omega", &self.omega, "a number (rad/s)")?;
         let (lo, hi) = (
-            s.omega_start.min(s.omega_end),
-            s.omega_start.max(s.omega_end),
+            s.sweep.omega_start.min(s.sweep.omega_end),
+            s.sweep.omega_start.max(s.sweep.omega_end),
         );
         if let Some(w) = omegas
             .iter()
@@ -155,8 +155,8 @@ pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Resu
                 p.order,
                 p.order_index + 1,
                 p.n_orders,
-                settings.omega_start,
-                settings.omega_end
+                settings.sweep.omega_start,
+                settings.sweep.omega_end
             ));
         }
         for w in &p.crossed {

@@ -123,7 +123,7 @@ impl CoupledRederive {
         let mut settings = StudySettings::from_run(run)?;
         let model = Model::from_str(&run.model_text, &run.model_name)?;
         if let Some(n) = sip_intervals {
-            settings.sip_intervals = n;
+            settings.floquet.sip_intervals = n;
         }
         Ok(Self {
             problem: SweepProblem::with_model(&settings, model)?,
@@ -161,10 +161,14 @@ impl StabilityRederive for CoupledRederive {
     fn floquet(&self, point: &PointRecord) -> Result<FloquetResult, DeriveError> {
         let s = &self.problem.settings;
         let derive_err = |e: String| DeriveError::Model(e);
-        let method = stability_method(s, &self.problem.system, s.omega_start)
+        let method = stability_method(s, &self.problem.system, s.sweep.omega_start)
             .map_err(|e| derive_err(e.to_string()))?;
-        let hb = HarmonicBalance::new(&self.problem.system, &self.problem.basis, s.aft_samples)
-            .map_err(|e| derive_err(e.to_string()))?;
+        let hb = HarmonicBalance::new(
+            &self.problem.system,
+            &self.problem.basis,
+            s.harmonic.aft_samples,
+        )
+        .map_err(|e| derive_err(e.to_string()))?;
         crate::stability::assess(
             method.as_ref(),
             &hb,
@@ -189,7 +193,7 @@ impl CoupledRederive {
         let s = &self.problem.settings;
         let derive_err = |e: StabilityError| DeriveError::Model(e.to_string());
         let method =
-            stability_method(s, &self.problem.system, s.omega_start).map_err(derive_err)?;
+            stability_method(s, &self.problem.system, s.sweep.omega_start).map_err(derive_err)?;
         method
             .multipliers(&self.problem.system, &self.solution(point))
             .map_err(derive_err)

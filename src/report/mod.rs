@@ -205,8 +205,10 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
             .as_ref()
             .map(StudySettings::set_summary)
             .unwrap_or_default(),
-        flow_l_min: study.as_ref().map_or(f64::NAN, |s| s.flow_l_min),
-        cooling_c: study.as_ref().map_or(f64::NAN, |s| s.cooling_temp_c),
+        flow_l_min: study.as_ref().map_or(f64::NAN, |s| s.operating.flow_l_min),
+        cooling_c: study
+            .as_ref()
+            .map_or(f64::NAN, |s| s.operating.cooling_temp_c),
         points: pts.len(),
         complete: rec.complete,
         peaks,
