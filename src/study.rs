@@ -741,7 +741,7 @@ mod tests {
         s.sweep.omega_end = s.sweep.omega_start;
         assert!(
             check_settings(&s)
-                .unwrap_err()
+                .expect_err("refused")
                 .to_string()
                 .contains("omega_end")
         );
@@ -749,13 +749,18 @@ mod tests {
         s.harmonic.order = 13;
         assert!(
             check_settings(&s)
-                .unwrap_err()
+                .expect_err("refused")
                 .to_string()
                 .contains("order")
         );
         let mut s = StudySettings::default();
         s.floquet.sip_intervals = 511;
-        assert!(check_settings(&s).unwrap_err().to_string().contains("even"));
+        assert!(
+            check_settings(&s)
+                .expect_err("refused")
+                .to_string()
+                .contains("even")
+        );
         assert!(check_settings(&StudySettings::default()).is_ok());
     }
 }

@@ -511,3 +511,47 @@ fn all_value_problems_are_reported_at_once_with_their_lines() {
         "{msg}"
     );
 }
+
+/// Structural problems of single elements (a shaft on a missing node, a duplicate disk id,
+/// a bearing of an unknown material) do not stop the checks either: they come out with the
+/// value problems, each with its line, and the whole-model checks they would spoil (every
+/// node has mass, every rotor is held) are left out.
+#[test]
+fn structural_problems_of_elements_are_reported_together_with_their_lines() {
+    let density = BUILTIN_TOML
+        .lines()
+        .find(|l| l.trim_start().starts_with("density_kg_m3"))
+        .expect("a density line");
+    let text = BUILTIN_TOML
+        .replacen(density, "density_kg_m3 = -7800.0", 1)
+        .replacen("nodes = [1, 2]", "nodes = [1, 999]", 1)
+        .replacen("id = \"LPT\"", "id = \"LPC\"", 1)
+        .replacen("material = \"bearing\"", "material = \"unobtainium\"", 1);
+    // the last line so written (the duplicate id is the second `id = "LPC"`)
+    let line = |needle: &str| {
+        text.lines()
+            .enumerate()
+            .filter(|(_, l)| *l == needle)
+            .last()
+            .expect("edited")
+            .0
+            + 1
+    };
+    let e = reject(&text);
+    let msg = e.to_string();
+    let lines: Vec<&str> = msg.lines().collect();
+    assert_eq!(lines.len(), 4, "{msg}");
+    for (expected, needle) in [
+        ("materials[0].density_kg_m3", "density_kg_m3 = -7800.0"),
+        ("shafts[0].nodes[1]", "nodes = [1, 999]"),
+        ("disks[1].id", "id = \"LPC\""),
+        ("bearings[0].material", "material = \"unobtainium\""),
+    ] {
+        let want = format!("{FILE}:{}: {expected}", line(needle));
+        assert!(
+            lines.iter().any(|l| l.starts_with(&want)),
+            "no line starts with {want:?}:\n{msg}"
+        );
+    }
+    assert!(msg.contains("999") && msg.contains("unobtainium"), "{msg}");
+}

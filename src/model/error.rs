@@ -22,8 +22,9 @@ pub enum ModelError {
         path: String,
         kind: InvalidKind,
     },
-    /// Several problems of one file, each on its own line (the value checks that do not
-    /// depend on each other are all reported at once; at least two).
+    /// Several problems of one file, each on its own line (the value checks, and the
+    /// structural checks of each shaft, disk, support and bearing, are all reported at
+    /// once; at least two).
     #[error("{}", errors.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n"))]
     Several { errors: Vec<ModelError> },
     /// The model is valid but a numerical step of the assembly failed.

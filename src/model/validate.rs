@@ -4,7 +4,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use super::error::{InvalidKind, ModelError};
-use super::file::{ModelFile, SpeedRatioSpec};
+use super::file::{BearingSpec, DiskSpec, ModelFile, ShaftSpec, SpeedRatioSpec, SupportSpec};
 use crate::bearing::ContactLaw;
 use crate::hb::Ratio;
 
@@ -270,6 +270,10 @@ struct Validator<'a> {
     /// Problems of single values ([`Validator::positive`], [`Validator::non_negative`]):
     /// they do not stop the checks, so a file's value problems are all reported at once.
     found: std::cell::RefCell<Vec<ModelError>>,
+    /// An element (shaft, disk, support, bearing) was refused for its structure: the
+    /// checks of the whole model (every node has mass, the rotors are held) are skipped,
+    /// as they would only report its consequences.
+    refused: std::cell::Cell<bool>,
 }
 
 type VResult<T> = Result<T, ModelError>;
@@ -309,6 +313,7 @@ impl<'a> Validator<'a> {
         Self {
             file,
             found: std::cell::RefCell::new(Vec::new()),
+            refused: std::cell::Cell::new(false),
         }
     }
 
@@ -366,13 +371,22 @@ impl<'a> Validator<'a> {
         let mut seen = BTreeSet::new();
         for (i, id) in ids.enumerate() {
             if !seen.insert(id) {
-                return Err(self.err(
+                self.keep(Err(self.err(
                     format!("{section}[{i}].id"),
                     InvalidKind::DuplicateId(format!("\"{id}\"")),
-                ));
+                )));
             }
         }
         Ok(())
+    }
+
+    /// Records the structural problem of one element, if any; the checks go on with the
+    /// next element.
+    fn keep(&self, r: VResult<()>) {
+        if let Err(e) = r {
+            self.refused.set(true);
+            self.found.borrow_mut().push(e);
+        }
     }
 
     fn node(&self, nodes: &[u32], path: impl Into<String>, id: u32) -> VResult<usize> {
@@ -382,11 +396,12 @@ impl<'a> Validator<'a> {
     }
 
     fn material(&self, spec: &ModelFile, path: impl Into<String>, id: &str) -> VResult<()> {
-        if spec.materials.iter().any(|m| m.id == id) {
-            Ok(())
-        } else {
-            Err(self.err(path, InvalidKind::UnknownMaterial(id.to_string())))
+        if !spec.materials.iter().any(|m| m.id == id) {
+            self.keep(Err(
+                self.err(path, InvalidKind::UnknownMaterial(id.to_string()))
+            ));
         }
+        Ok(())
     }
 
     fn check(&self, spec: ModelFile) -> VResult<Model> {
@@ -400,7 +415,7 @@ impl<'a> Validator<'a> {
 
         // Shaft elements.
         let mut pairs = BTreeSet::new();
-        for (i, s) in spec.shafts.iter().enumerate() {
+        let mut shaft = |i: usize, s: &ShaftSpec| -> VResult<()> {
             let p = |f: &str| format!("shafts[{i}].{f}");
             if s.nodes.len() != 2 {
                 return Err(self.err(
@@ -452,11 +467,15 @@ impl<'a> Validator<'a> {
             self.material(&spec, p("material"), &s.material)?;
             has_mass[a] = true;
             has_mass[b] = true;
+            Ok(())
+        };
+        for (i, s) in spec.shafts.iter().enumerate() {
+            self.keep(shaft(i, s));
         }
 
         // Disks.
         self.unique("disks", spec.disks.iter().map(|d| d.id.as_str()))?;
-        for (i, d) in spec.disks.iter().enumerate() {
+        let mut disk = |i: usize, d: &DiskSpec| -> VResult<()> {
             let p = |f: &str| format!("disks[{i}].{f}");
             let n = self.node(&nodes, p("node"), d.node)?;
             self.positive(p("mass_kg"), d.mass_kg)?;
@@ -475,8 +494,14 @@ impl<'a> Validator<'a> {
             if d.diametral_inertia_kg_m2 > 0.0 {
                 has_mass[n] = true;
             }
+            Ok(())
+        };
+        for (i, d) in spec.disks.iter().enumerate() {
+            self.keep(disk(i, d));
         }
-        if let Some(n) = has_mass.iter().position(|&m| !m) {
+        if let Some(n) = has_mass.iter().position(|&m| !m)
+            && !self.refused.get()
+        {
             return Err(self.err(
                 format!("rotors[{}].nodes", node_rotor[n]),
                 InvalidKind::BadConnection(format!(
@@ -488,7 +513,7 @@ impl<'a> Validator<'a> {
 
         // Supports.
         self.unique("supports", spec.supports.iter().map(|s| s.id.as_str()))?;
-        for (i, s) in spec.supports.iter().enumerate() {
+        let support = |i: usize, s: &SupportSpec| -> VResult<()> {
             let p = |f: &str| format!("supports[{i}].{f}");
             self.node(&nodes, p("node"), s.node)?;
             if let Some(t) = s.to_node {
@@ -515,11 +540,16 @@ impl<'a> Validator<'a> {
             self.non_negative(
                 p("rotational_stiffness_n_m_rad"),
                 s.rotational_stiffness_n_m_rad,
-            )?;
+            )
+        };
+        for (i, s) in spec.supports.iter().enumerate() {
+            self.keep(support(i, s));
         }
 
         self.bearings(&spec, &nodes)?;
-        self.held_to_ground(&spec, &nodes)?;
+        if !self.refused.get() {
+            self.held_to_ground(&spec, &nodes)?;
+        }
 
         Ok(Model {
             source: self.file.to_string(),
@@ -672,136 +702,142 @@ impl<'a> Validator<'a> {
     fn bearings(&self, spec: &ModelFile, nodes: &[u32]) -> VResult<()> {
         self.unique("bearings", spec.bearings.iter().map(|b| b.id.as_str()))?;
         for (i, b) in spec.bearings.iter().enumerate() {
-            let p = |f: &str| format!("bearings[{i}].{f}");
-            self.node(nodes, p("inner_node"), b.inner_node)?;
-            if let Some(o) = b.outer_node {
-                self.node(nodes, p("outer_node"), o)?;
-                if o == b.inner_node {
-                    return Err(self.err(
-                        p("outer_node"),
-                        InvalidKind::BadConnection(format!(
-                            "inner and outer ring on the same node {o}"
-                        )),
-                    ));
-                }
+            self.keep(self.bearing(spec, nodes, i, b));
+        }
+        Ok(())
+    }
+
+    /// One bearing: its nodes, materials, geometry and contact data.
+    fn bearing(&self, spec: &ModelFile, nodes: &[u32], i: usize, b: &BearingSpec) -> VResult<()> {
+        let p = |f: &str| format!("bearings[{i}].{f}");
+        self.node(nodes, p("inner_node"), b.inner_node)?;
+        if let Some(o) = b.outer_node {
+            self.node(nodes, p("outer_node"), o)?;
+            if o == b.inner_node {
+                return Err(self.err(
+                    p("outer_node"),
+                    InvalidKind::BadConnection(format!(
+                        "inner and outer ring on the same node {o}"
+                    )),
+                ));
             }
-            self.material(spec, p("material"), &b.material)?;
-            if let Some(h) = &b.housing_material {
-                self.material(spec, p("housing_material"), h)?;
-            }
-            for (f, v) in [
-                ("inner_race_diameter_m", b.inner_race_diameter_m),
-                ("outer_race_diameter_m", b.outer_race_diameter_m),
-                ("hertz_stiffness", b.hertz_stiffness),
-            ] {
+        }
+        self.material(spec, p("material"), &b.material)?;
+        if let Some(h) = &b.housing_material {
+            self.material(spec, p("housing_material"), h)?;
+        }
+        for (f, v) in [
+            ("inner_race_diameter_m", b.inner_race_diameter_m),
+            ("outer_race_diameter_m", b.outer_race_diameter_m),
+            ("hertz_stiffness", b.hertz_stiffness),
+        ] {
+            self.positive(p(f), v)?;
+        }
+        // the geometry record: checked where given
+        for (f, v) in [
+            ("bore_diameter_m", b.bore_diameter_m),
+            ("pitch_diameter_m", b.pitch_diameter_m),
+            ("outside_diameter_m", b.outside_diameter_m),
+            ("element_diameter_m", b.element_diameter_m),
+            ("width_m", b.width_m),
+        ] {
+            if let Some(v) = v {
                 self.positive(p(f), v)?;
             }
-            // the geometry record: checked where given
-            for (f, v) in [
-                ("bore_diameter_m", b.bore_diameter_m),
-                ("pitch_diameter_m", b.pitch_diameter_m),
-                ("outside_diameter_m", b.outside_diameter_m),
-                ("element_diameter_m", b.element_diameter_m),
-                ("width_m", b.width_m),
-            ] {
-                if let Some(v) = v {
-                    self.positive(p(f), v)?;
-                }
-            }
-            if let Some(r) = b.shaft_inner_radius_m {
-                self.non_negative(p("shaft_inner_radius_m"), r)?;
-            }
-            // Radial order of the diameters given: bore < inner race < pitch < outer race
-            // < outside.
-            let order: Vec<(&str, f64)> = [
-                ("bore_diameter_m", b.bore_diameter_m),
-                ("inner_race_diameter_m", Some(b.inner_race_diameter_m)),
-                ("pitch_diameter_m", b.pitch_diameter_m),
-                ("outer_race_diameter_m", Some(b.outer_race_diameter_m)),
-                ("outside_diameter_m", b.outside_diameter_m),
-            ]
-            .into_iter()
-            .filter_map(|(f, v)| v.map(|v| (f, v)))
-            .collect();
-            for w in order.windows(2) {
-                if w[0].1 >= w[1].1 {
-                    return Err(self.err(
-                        p(w[0].0),
-                        InvalidKind::DiameterOrder {
-                            inner_m: w[0].1,
-                            outer_m: w[1].1,
-                        },
-                    ));
-                }
-            }
-            if !(3..=1000).contains(&b.element_count) {
+        }
+        if let Some(r) = b.shaft_inner_radius_m {
+            self.non_negative(p("shaft_inner_radius_m"), r)?;
+        }
+        // Radial order of the diameters given: bore < inner race < pitch < outer race
+        // < outside.
+        let order: Vec<(&str, f64)> = [
+            ("bore_diameter_m", b.bore_diameter_m),
+            ("inner_race_diameter_m", Some(b.inner_race_diameter_m)),
+            ("pitch_diameter_m", b.pitch_diameter_m),
+            ("outer_race_diameter_m", Some(b.outer_race_diameter_m)),
+            ("outside_diameter_m", b.outside_diameter_m),
+        ]
+        .into_iter()
+        .filter_map(|(f, v)| v.map(|v| (f, v)))
+        .collect();
+        for w in order.windows(2) {
+            if w[0].1 >= w[1].1 {
                 return Err(self.err(
-                    p("element_count"),
-                    InvalidKind::OutOfRange {
-                        value: f64::from(b.element_count),
-                        reason: "a radial bearing has 3 to 1000 rolling elements".into(),
+                    p(w[0].0),
+                    InvalidKind::DiameterOrder {
+                        inner_m: w[0].1,
+                        outer_m: w[1].1,
                     },
                 ));
             }
-            self.non_negative(p("initial_clearance_m"), b.initial_clearance_m)?;
-            if b.initial_clearance_m > 1e-3 {
+        }
+        if !(3..=1000).contains(&b.element_count) {
+            return Err(self.err(
+                p("element_count"),
+                InvalidKind::OutOfRange {
+                    value: f64::from(b.element_count),
+                    reason: "a radial bearing has 3 to 1000 rolling elements".into(),
+                },
+            ));
+        }
+        self.non_negative(p("initial_clearance_m"), b.initial_clearance_m)?;
+        if b.initial_clearance_m > 1e-3 {
+            return Err(self.err(
+                p("initial_clearance_m"),
+                InvalidKind::OutOfRange {
+                    value: b.initial_clearance_m,
+                    reason: "radial clearances of rolling bearings are micrometres to a few \
+                         tenths of a millimetre (at most 1e-3 m here)"
+                        .into(),
+                },
+            ));
+        }
+        match (b.kind, b.roller_length_m) {
+            (ContactLaw::Roller, None) => {
                 return Err(self.err(
-                    p("initial_clearance_m"),
-                    InvalidKind::OutOfRange {
-                        value: b.initial_clearance_m,
-                        reason: "radial clearances of rolling bearings are micrometres to a few \
-                             tenths of a millimetre (at most 1e-3 m here)"
-                            .into(),
-                    },
+                    p("roller_length_m"),
+                    InvalidKind::MissingKey("`roller_length_m` (required for rollers)".into()),
                 ));
             }
-            match (b.kind, b.roller_length_m) {
-                (ContactLaw::Roller, None) => {
-                    return Err(self.err(
-                        p("roller_length_m"),
-                        InvalidKind::MissingKey("`roller_length_m` (required for rollers)".into()),
-                    ));
-                }
-                (ContactLaw::Ball, Some(_)) => {
-                    return Err(self.err(
-                        p("roller_length_m"),
-                        InvalidKind::Conflict("a ball bearing has no roller length".into()),
-                    ));
-                }
-                (_, Some(v)) => self.positive(p("roller_length_m"), v)?,
-                _ => {}
-            }
-            for (f, v) in [
-                ("housing_radius_m", b.housing_radius_m),
-                ("housing_length_m", b.housing_length_m),
-                ("housing_part_length_m", b.housing_part_length_m),
-                ("outer_shaft_radius_m", b.outer_shaft_radius_m),
-                ("linear_stiffness_n_m", b.linear_stiffness_n_m),
-                ("linearization_load_n", b.linearization_load_n),
-            ] {
-                if let Some(v) = v {
-                    self.positive(p(f), v)?;
-                }
-            }
-            if b.linear_stiffness_n_m.is_some() && b.linearization_load_n.is_some() {
+            (ContactLaw::Ball, Some(_)) => {
                 return Err(self.err(
-                    p("linearization_load_n"),
-                    InvalidKind::Conflict(
-                        "give linear_stiffness_n_m or linearization_load_n, not both".into(),
-                    ),
+                    p("roller_length_m"),
+                    InvalidKind::Conflict("a ball bearing has no roller length".into()),
                 ));
             }
-            if !spec.gravity.enabled
-                && b.linear_stiffness_n_m.is_none()
-                && b.linearization_load_n.is_none()
-            {
-                return Err(self.err(
-                format!("bearings[{i}]"),
+            (_, Some(v)) => self.positive(p("roller_length_m"), v)?,
+            _ => {}
+        }
+        for (f, v) in [
+            ("housing_radius_m", b.housing_radius_m),
+            ("housing_length_m", b.housing_length_m),
+            ("housing_part_length_m", b.housing_part_length_m),
+            ("outer_shaft_radius_m", b.outer_shaft_radius_m),
+            ("linear_stiffness_n_m", b.linear_stiffness_n_m),
+            ("linearization_load_n", b.linearization_load_n),
+        ] {
+            if let Some(v) = v {
+                self.positive(p(f), v)?;
+            }
+        }
+        if b.linear_stiffness_n_m.is_some() && b.linearization_load_n.is_some() {
+            return Err(self.err(
+                p("linearization_load_n"),
                 InvalidKind::Conflict(
-                    "with gravity off the linearised stiffness cannot come from the static gravity load: give linear_stiffness_n_m or linearization_load_n".into(),
+                    "give linear_stiffness_n_m or linearization_load_n, not both".into(),
                 ),
             ));
-            }
+        }
+        if !spec.gravity.enabled
+            && b.linear_stiffness_n_m.is_none()
+            && b.linearization_load_n.is_none()
+        {
+            return Err(self.err(
+            format!("bearings[{i}]"),
+            InvalidKind::Conflict(
+                "with gravity off the linearised stiffness cannot come from the static gravity load: give linear_stiffness_n_m or linearization_load_n".into(),
+            ),
+        ));
         }
         Ok(())
     }
