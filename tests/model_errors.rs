@@ -555,3 +555,57 @@ fn structural_problems_of_elements_are_reported_together_with_their_lines() {
     }
     assert!(msg.contains("999") && msg.contains("unobtainium"), "{msg}");
 }
+
+/// The `[thermal]` table reports its value problems at once, each with the line of the
+/// model file it is on, and a missing key with the line of its table's header.
+#[test]
+fn thermal_problems_carry_their_lines() {
+    let run = |text: &str| {
+        let model = Model::from_str(text, FILE).expect("mechanical part valid");
+        tmrotor::coupled::CoupledRotor::new(
+            &model,
+            &tmrotor::coupled::StudyOverrides::default(),
+            tmrotor::coupled::CouplingOptions::default(),
+        )
+        .err()
+        .expect("thermal table refused")
+        .to_string()
+    };
+    let line =
+        |text: &str, needle: &str| text.lines().position(|l| l == needle).expect("in file") + 1;
+
+    let text = BUILTIN_TOML
+        .replacen("nu0_mm2_s = 25.0", "nu0_mm2_s = -25.0", 1)
+        .replacen(
+            "specific_heat_j_kg_k = 1870.0",
+            "specific_heat_j_kg_k = 0.0",
+            1,
+        );
+    let msg = run(&text);
+    let lines: Vec<&str> = msg.lines().collect();
+    assert_eq!(lines.len(), 2, "{msg}");
+    assert!(
+        lines[0].starts_with(&format!(
+            "{FILE}:{}: thermal.viscosity.nu0_mm2_s: ",
+            line(&text, "nu0_mm2_s = -25.0")
+        )),
+        "{msg}"
+    );
+    assert!(
+        lines[1].starts_with(&format!(
+            "{FILE}:{}: thermal.lubricant.specific_heat_j_kg_k: ",
+            line(&text, "specific_heat_j_kg_k = 0.0")
+        )),
+        "{msg}"
+    );
+
+    let text = BUILTIN_TOML.replacen("nu0_mm2_s = 25.0\n", "", 1);
+    let msg = run(&text);
+    assert_eq!(
+        msg,
+        format!(
+            "{FILE}:{}: thermal.viscosity: missing field `nu0_mm2_s`",
+            line(&text, "[thermal.viscosity]")
+        )
+    );
+}

@@ -245,7 +245,8 @@ impl CoupledRotor {
         let assembly = Assembly::new(model)?;
         let network = match (options.thermal, model.thermal()) {
             (true, Some(table)) => {
-                let mut spec = ThermalSpec::from_table(table, &model.source)?;
+                let mut spec = ThermalSpec::from_table(table, &model.source)
+                    .map_err(|e| e.with_lines(&model.text))?;
                 apply_overrides(&mut spec, study)?;
                 same_contact_laws(model, &spec)?;
                 same_speed_ratios(model, &spec)?;

@@ -133,7 +133,7 @@ fn position(item: &Item, sel: &str, at: &str) -> Result<usize, String> {
 /// The 1-based line of the value at `path` in `text` (a path as the validator's errors
 /// write it, e.g. `bearings[0].initial_clearance_m`), or of the deepest key of the path
 /// that exists; `None` when the text does not parse or no key of the path is found.
-pub(super) fn line_of(text: &str, path: &str) -> Option<usize> {
+pub(crate) fn line_of(text: &str, path: &str) -> Option<usize> {
     use toml_edit::TableLike;
     let doc = toml_edit::Document::parse(text).ok()?;
     let steps = parse_path(path).ok()?;

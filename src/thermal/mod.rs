@@ -73,13 +73,19 @@ pub enum ThermalError {
     /// with the line where the text is the file's) and why.
     #[error("{file}: {message}")]
     Parse { file: String, message: String },
-    /// A value is out of range or inconsistent.
-    #[error("{file}: {path}: {reason}")]
+    /// A value is out of range or inconsistent; `line` is the line of `path` in the model
+    /// file, where known.
+    #[error("{file}:{}{path}: {reason}", line.map(|l| format!("{l}: ")).unwrap_or_else(|| " ".into()))]
     Invalid {
         file: String,
+        line: Option<usize>,
         path: String,
         reason: String,
     },
+    /// Several problems of the table, each on its own line (the value checks are all
+    /// reported at once; at least two).
+    #[error("{}", errors.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n"))]
+    Several { errors: Vec<ThermalError> },
     /// The steady-state Newton iteration did not converge.
     #[error(
         "thermal steady state did not converge after {iterations} iterations (residual {residual_w:.3e} W)"
@@ -95,4 +101,28 @@ pub enum ThermalError {
         expected: usize,
         got: usize,
     },
+}
+
+impl ThermalError {
+    /// The error with the line of each problem's field path in `text`, the text of the
+    /// model file the `[thermal]` table came from.
+    pub fn with_lines(self, text: &str) -> Self {
+        match self {
+            Self::Invalid {
+                file,
+                line: None,
+                path,
+                reason,
+            } => Self::Invalid {
+                line: crate::model::set::line_of(text, &path),
+                file,
+                path,
+                reason,
+            },
+            Self::Several { errors } => Self::Several {
+                errors: errors.into_iter().map(|e| e.with_lines(text)).collect(),
+            },
+            other => other,
+        }
+    }
 }

@@ -363,6 +363,7 @@ impl ThermalNetwork {
                                 .iter()
                                 .find(|h| &h.name == name)
                                 .ok_or_else(|| ThermalError::Invalid {
+                                    line: None,
                                     file: "<thermal spec>".into(),
                                     path: format!("thermal.bearings.{}.housing", b.name),
                                     reason: format!("no housing named {name:?}"),
@@ -391,6 +392,7 @@ impl ThermalNetwork {
                     }
                     (None, None) => {
                         return Err(ThermalError::Invalid {
+                            line: None,
                             file: "<thermal spec>".into(),
                             path: format!("thermal.bearings.{}.housing", b.name),
                             reason: "no outer-ring seat".into(),

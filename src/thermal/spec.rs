@@ -221,6 +221,7 @@ pub struct ThermalSpec {
 fn invalid(file: &str, path: String, reason: impl Into<String>) -> ThermalError {
     ThermalError::Invalid {
         file: file.to_string(),
+        line: None,
         path,
         reason: reason.into(),
     }
@@ -273,24 +274,45 @@ impl ThermalSpec {
     /// error keeps its position.
     fn parse(text: &str, file: &str, lines: bool) -> Result<Self, ThermalError> {
         let spec: ThermalSpec = toml::from_str(text).map_err(|e| {
-            let message = if lines {
-                format!("[thermal]: {}", e.to_string().trim_end())
-            } else {
-                let reason = e.message().trim_end();
-                // a missing field's span is its table's, not a key's
-                let field = e
-                    .span()
-                    .filter(|_| !reason.starts_with("missing field"))
-                    .map(|span| crate::model::validate::path_at(text, span.start).1)
-                    .filter(|p| !p.is_empty());
-                match field {
-                    Some(path) => format!("thermal.{path}: {reason}"),
-                    None => format!("[thermal]: {reason}"),
+            if lines {
+                return ThermalError::Parse {
+                    file: file.to_string(),
+                    message: format!("[thermal]: {}", e.to_string().trim_end()),
+                };
+            }
+            let reason = e.message().trim_end();
+            let at = |offset: usize| crate::model::validate::path_at(text, offset).1;
+            match e.span() {
+                // a missing field's span is its table's: the table is named (its line is
+                // found from the model file's text, see `ThermalError::with_lines`)
+                Some(span) if reason.starts_with("missing field") => {
+                    // the root table's span is the whole text
+                    let table = if span.start == 0 {
+                        String::new()
+                    } else {
+                        at(span.start)
+                    };
+                    ThermalError::Invalid {
+                        file: file.to_string(),
+                        line: None,
+                        path: if table.is_empty() {
+                            "thermal".to_string()
+                        } else {
+                            format!("thermal.{table}")
+                        },
+                        reason: reason.to_string(),
+                    }
                 }
-            };
-            ThermalError::Parse {
-                file: file.to_string(),
-                message,
+                Some(span) if !at(span.start).is_empty() => ThermalError::Invalid {
+                    file: file.to_string(),
+                    line: None,
+                    path: format!("thermal.{}", at(span.start)),
+                    reason: reason.to_string(),
+                },
+                _ => ThermalError::Parse {
+                    file: file.to_string(),
+                    message: format!("[thermal]: {reason}"),
+                },
             }
         })?;
         spec.validate(file)?;
@@ -325,14 +347,30 @@ impl ThermalSpec {
         self
     }
 
-    /// Checks ranges and the node layout; errors name `thermal.<path>`.
+    /// Checks ranges and the node layout; errors name `thermal.<path>`. Every value out
+    /// of its range is reported (as [`ThermalError::Several`] when there are more); a
+    /// problem of the node layout stops the checks.
     pub fn validate(&self, file: &str) -> Result<(), ThermalError> {
+        let mut found = Vec::new();
+        let result = self.check(file, &mut found);
+        if let Err(e) = result {
+            found.push(e);
+        }
+        match found.len() {
+            0 => Ok(()),
+            1 => Err(found.remove(0)),
+            _ => Err(ThermalError::Several { errors: found }),
+        }
+    }
+
+    /// [`Self::validate`]: value problems go to `found`, a layout problem is the error.
+    fn check(&self, file: &str, found: &mut Vec<ThermalError>) -> Result<(), ThermalError> {
         let p = |s: &str| format!("thermal.{s}");
         if self.n_nodes == 0 {
             return Err(invalid(file, p("n_nodes"), "must be > 0"));
         }
-        finite(file, p("ambient_temp_c"), self.ambient_temp_c)?;
-        finite(file, p("cooling_temp_c"), self.cooling_temp_c)?;
+        found.extend(finite(file, p("ambient_temp_c"), self.ambient_temp_c).err());
+        found.extend(finite(file, p("cooling_temp_c"), self.cooling_temp_c).err());
         if !non_negative(self.flow_l_min) {
             return Err(invalid(
                 file,
@@ -340,33 +378,45 @@ impl ThermalSpec {
                 format!("must be >= 0, got {}", self.flow_l_min),
             ));
         }
-        positive(file, p("min_contact_load_n"), self.min_contact_load_n)?;
-        positive(file, p("viscosity.nu0_mm2_s"), self.viscosity.nu0_mm2_s)?;
-        finite(file, p("viscosity.ref_temp_c"), self.viscosity.ref_temp_c)?;
-        finite(file, p("viscosity.beta_per_k"), self.viscosity.beta_per_k)?;
+        found.extend(positive(file, p("min_contact_load_n"), self.min_contact_load_n).err());
+        found.extend(positive(file, p("viscosity.nu0_mm2_s"), self.viscosity.nu0_mm2_s).err());
+        found.extend(finite(file, p("viscosity.ref_temp_c"), self.viscosity.ref_temp_c).err());
+        found.extend(finite(file, p("viscosity.beta_per_k"), self.viscosity.beta_per_k).err());
         let l = &self.lubricant;
-        positive(file, p("lubricant.density_kg_m3"), l.density_kg_m3)?;
-        positive(
-            file,
-            p("lubricant.specific_heat_j_kg_k"),
-            l.specific_heat_j_kg_k,
-        )?;
-        positive(
-            file,
-            p("lubricant.conductivity_w_m_k"),
-            l.conductivity_w_m_k,
-        )?;
-        positive(file, p("lubricant.diffusivity_m2_s"), l.diffusivity_m2_s)?;
-        positive(
-            file,
-            p("air.kinematic_viscosity_m2_s"),
-            self.air.kinematic_viscosity_m2_s,
-        )?;
-        positive(
-            file,
-            p("air.conductivity_w_m_k"),
-            self.air.conductivity_w_m_k,
-        )?;
+        found.extend(positive(file, p("lubricant.density_kg_m3"), l.density_kg_m3).err());
+        found.extend(
+            positive(
+                file,
+                p("lubricant.specific_heat_j_kg_k"),
+                l.specific_heat_j_kg_k,
+            )
+            .err(),
+        );
+        found.extend(
+            positive(
+                file,
+                p("lubricant.conductivity_w_m_k"),
+                l.conductivity_w_m_k,
+            )
+            .err(),
+        );
+        found.extend(positive(file, p("lubricant.diffusivity_m2_s"), l.diffusivity_m2_s).err());
+        found.extend(
+            positive(
+                file,
+                p("air.kinematic_viscosity_m2_s"),
+                self.air.kinematic_viscosity_m2_s,
+            )
+            .err(),
+        );
+        found.extend(
+            positive(
+                file,
+                p("air.conductivity_w_m_k"),
+                self.air.conductivity_w_m_k,
+            )
+            .err(),
+        );
         if !non_negative(self.air.housing_h_w_m2_k) {
             return Err(invalid(file, p("air.housing_h_w_m2_k"), "must be >= 0"));
         }
@@ -375,11 +425,11 @@ impl ThermalSpec {
             ("shaft", &self.materials.shaft),
         ] {
             let q = |f: &str| p(&format!("materials.{name}.{f}"));
-            positive(file, q("density_kg_m3"), m.density_kg_m3)?;
-            positive(file, q("specific_heat_j_kg_k"), m.specific_heat_j_kg_k)?;
-            positive(file, q("conductivity_w_m_k"), m.conductivity_w_m_k)?;
-            positive(file, q("expansion_per_k"), m.expansion_per_k)?;
-            positive(file, q("modulus_pa"), m.modulus_pa)?;
+            found.extend(positive(file, q("density_kg_m3"), m.density_kg_m3).err());
+            found.extend(positive(file, q("specific_heat_j_kg_k"), m.specific_heat_j_kg_k).err());
+            found.extend(positive(file, q("conductivity_w_m_k"), m.conductivity_w_m_k).err());
+            found.extend(positive(file, q("expansion_per_k"), m.expansion_per_k).err());
+            found.extend(positive(file, q("modulus_pa"), m.modulus_pa).err());
             if !(m.poisson > -1.0 && m.poisson < 0.5) {
                 return Err(invalid(file, q("poisson"), "must lie in (-1, 0.5)"));
             }
@@ -407,12 +457,12 @@ impl ThermalSpec {
         };
         for (k, s) in self.shafts.iter().enumerate() {
             let q = |f: &str| p(&format!("shafts[{k}].{f}"));
-            finite(file, q("speed_ratio"), s.speed_ratio)?;
+            found.extend(finite(file, q("speed_ratio"), s.speed_ratio).err());
             if !non_negative(s.inner_diameter_m) {
                 return Err(invalid(file, q("inner_diameter_m"), "must be >= 0"));
             }
-            positive(file, q("outer_diameter_m"), s.outer_diameter_m)?;
-            positive(file, q("length_m"), s.length_m)?;
+            found.extend(positive(file, q("outer_diameter_m"), s.outer_diameter_m).err());
+            found.extend(positive(file, q("length_m"), s.length_m).err());
             if s.inner_diameter_m >= s.outer_diameter_m {
                 return Err(invalid(
                     file,
@@ -438,9 +488,9 @@ impl ThermalSpec {
                     format!("{} is not a shaft node", d.shaft_node),
                 ));
             }
-            positive(file, q("mass_kg"), d.mass_kg)?;
-            positive(file, q("polar_inertia_kg_m2"), d.polar_inertia_kg_m2)?;
-            positive(file, q("bore_diameter_m"), d.bore_diameter_m)?;
+            found.extend(positive(file, q("mass_kg"), d.mass_kg).err());
+            found.extend(positive(file, q("polar_inertia_kg_m2"), d.polar_inertia_kg_m2).err());
+            found.extend(positive(file, q("bore_diameter_m"), d.bore_diameter_m).err());
             let r_b = 0.5 * d.bore_diameter_m;
             if 2.0 * d.polar_inertia_kg_m2 / d.mass_kg <= 2.0 * r_b * r_b {
                 return Err(invalid(
@@ -455,8 +505,8 @@ impl ThermalSpec {
             claim(h.seat_node, q("seat_node"))?;
             claim(h.flank_nodes[0], q("flank_nodes[0]"))?;
             claim(h.flank_nodes[1], q("flank_nodes[1]"))?;
-            positive(file, q("bore_diameter_m"), h.bore_diameter_m)?;
-            positive(file, q("seat_length_m"), h.seat_length_m)?;
+            found.extend(positive(file, q("bore_diameter_m"), h.bore_diameter_m).err());
+            found.extend(positive(file, q("seat_length_m"), h.seat_length_m).err());
             if h.radius_m <= 0.5 * h.bore_diameter_m {
                 return Err(invalid(file, q("radius_m"), "must exceed the bore radius"));
             }
@@ -537,7 +587,7 @@ impl ThermalSpec {
                 ("f_l", b.f_l),
                 ("f_v", b.f_v),
             ] {
-                positive(file, q(f), v)?;
+                found.extend(positive(file, q(f), v).err());
             }
             if !non_negative(b.cage_mass_kg) {
                 return Err(invalid(file, q("cage_mass_kg"), "must be >= 0"));
