@@ -1,3 +1,7 @@
+//! The `tmrotor` command: parses the command line and hands it to [`tmrotor::cli::run`];
+//! the exit codes are mapped in one place, [`tmrotor::cli::exit_code`] (see
+//! `docs/user-guide.md`).
+
 use clap::Parser;
 
 /// mimalloc keeps freed memory for reuse: the Newton solves allocate and drop matrices of a

@@ -316,7 +316,7 @@ pub struct ContinuationOptions {
     /// branch by about `|κ| ds²/2`, and on the default sweep the tangent turns by 6–10°
     /// per step; the curvature term removes that leading error (on the default sweep
     /// 3.3 corrector iterations per point instead of 3.8, see `docs/speed-history.md`,
-    /// "Four versions back"). The prediction is put back onto the step's hyperplane
+    /// "2026-11-24, aea6e76"). The prediction is put back onto the step's hyperplane
     /// `τ·(X − X_prev) = ds`; the check of the corrected point's distance from the linear
     /// predictor is unchanged. The same switch selects the predictor of the searches
     /// inside a step (folds, Neimark–Sacker and period-doubling points): the cubic

@@ -176,7 +176,7 @@ pub struct ExpSip {
     /// kernels on column blocks: the same arithmetic in another order (the monodromy
     /// matrices agree to rounding, test
     /// `panels_equal_the_column_blocks_on_the_dual_rotor`). Default `true`: see
-    /// `docs/speed-history.md`, "Two versions back".
+    /// `docs/speed-history.md`, "2026-11-24, c63bfea".
     pub panels: bool,
     /// The kicks act on the directions the fluctuation uses (exponential map, modal
     /// coordinates; see `kick_basis`): per field, the directions of its gathered rows and
