@@ -113,10 +113,14 @@ fn spec_errors_name_the_field_path() {
     let table: toml::Table = toml::from_str(&text).expect("toml");
     let s = ThermalSpec::from_table(&table, "model.toml").expect("parses from a table");
     assert_eq!(s.bearings.len(), 4);
-    assert!(matches!(
-        ThermalSpec::from_table(&toml::Table::new(), "model.toml"),
-        Err(ThermalError::Parse { .. })
-    ));
+    // a missing key names its table (here the `[thermal]` table itself)
+    match ThermalSpec::from_table(&toml::Table::new(), "model.toml") {
+        Err(ThermalError::Invalid { path, reason, .. }) => {
+            assert_eq!(path, "thermal");
+            assert!(reason.starts_with("missing field"), "{reason}");
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]
