@@ -95,6 +95,7 @@
 //! wait for the points' stability (see [`pipeline`]); the sweep uses it.
 
 pub mod csv;
+pub mod fold;
 pub mod pipeline;
 
 pub use pipeline::DriveEnd;
@@ -379,6 +380,9 @@ pub enum ContinuationError {
     Hb(#[from] HbError),
     #[error(transparent)]
     Solve(#[from] SolveError),
+    /// The fold-curve continuation ([`fold`]) failed.
+    #[error("fold curve: {0}")]
+    Fold(String),
 }
 
 /// Whether the branch segment from speed `from` to speed `to` crosses `omega`. Half-open,
