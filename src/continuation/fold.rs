@@ -24,8 +24,9 @@
 //! previous point, so the bordered matrices stay well conditioned along the curve.
 //!
 //! A cusp, where a pair of folds is born or dies, is where the curve's projection onto
-//! (ω, p) reverses: the ω- and `p`-components of the unit tangent change sign together. It is located by the quadratic through
-//! the three points around the sign change.
+//! (ω, p) reverses: the ω- and `p`-components of the unit tangent change sign together.
+//! Its arclength is where the linear interpolation of `dp/ds` vanishes, its (ω, p) the
+//! quadratics through the three points around the sign change evaluated there.
 //!
 //! The second parameter enters through a [`Family`]: the system at each value of `p`.
 
@@ -158,6 +159,12 @@ struct Evaluation {
     /// Right and left null vectors (normalised, for the next bordering).
     v: Vec<f64>,
     w: Vec<f64>,
+}
+
+/// `x` divided by its 2-norm.
+fn unit(x: Vec<f64>) -> Vec<f64> {
+    let s = x.iter().map(|y| y * y).sum::<f64>().sqrt();
+    x.into_iter().map(|y| y / s).collect()
 }
 
 fn err(what: impl Into<String>) -> ContinuationError {
@@ -299,10 +306,6 @@ impl Extended<'_> {
         });
         let mut f = r;
         f.push(g);
-        let unit = |x: Vec<f64>| {
-            let s = x.iter().map(|y| y * y).sum::<f64>().sqrt();
-            x.into_iter().map(|y| y / s).collect::<Vec<_>>()
-        };
         Ok(Evaluation {
             f,
             jac,
@@ -412,10 +415,6 @@ pub fn continue_fold(
     drop(system);
     let generic: Vec<f64> = (0..n).map(|k| 1.0 + 0.1 * k as f64).collect();
     let (v, _, w) = Extended::bordered(&j0, &generic, &generic)?;
-    let unit = |x: Vec<f64>| {
-        let s = x.iter().map(|y| y * y).sum::<f64>().sqrt();
-        x.into_iter().map(|y| y / s).collect::<Vec<_>>()
-    };
     let (b, c) = (unit(w), unit(v));
     // Correct onto the curve at fixed p (the tangent constraint along p only).
     let mut z: Vec<f64> = a0.to_vec();
