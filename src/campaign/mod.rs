@@ -55,6 +55,7 @@
 //!   paper's (amplitude of node 8, clearances, temperatures).
 
 pub mod figures;
+pub mod map;
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

@@ -80,6 +80,27 @@ pub enum CampaignCommand {
         #[command(flatten)]
         figures: crate::cli::FigureArgs,
     },
+    /// Operating map of a campaign over one parameter: the runs' saddle-node,
+    /// Neimark–Sacker and period-doubling points joined into curves in (parameter, ω),
+    /// fold-pair ends (cusps) bracketed, and the speeds where two or more stable responses
+    /// coexist or none is stable; CSVs and a figure (see `examples/paper_map.toml`).
+    Map {
+        /// The campaign's output directory (holds manifest.toml).
+        dir: PathBuf,
+        /// Where the files go (default: DIR/map).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// The map's parameter: a settings key (`flow_l_min`) or `set.<path>` for a value
+        /// of the model file (default: the one numeric setting that differs between runs).
+        #[arg(long)]
+        param: Option<String>,
+        /// Largest ω distance (rad/s) of two points joined into a curve (default: 25 % of
+        /// the swept ω range).
+        #[arg(long, value_name = "RAD_S")]
+        tolerance: Option<f64>,
+        #[command(flatten)]
+        figures: crate::cli::FigureArgs,
+    },
 }
 
 fn report(figures: &CampaignFigures, out: &mut impl std::io::Write) -> std::io::Result<()> {
@@ -87,6 +108,68 @@ fn report(figures: &CampaignFigures, out: &mut impl std::io::Write) -> std::io::
         writeln!(out, "note: {note}")?;
     }
     for path in &figures.written {
+        writeln!(out, "wrote {}", path.display())?;
+    }
+    Ok(())
+}
+
+/// `campaign map DIR`: the map's files, then a line per curve and per fold-pair end.
+fn map(
+    dir: &std::path::Path,
+    map_dir: Option<&std::path::Path>,
+    param: &Option<String>,
+    tolerance: Option<f64>,
+    figures: &crate::cli::FigureArgs,
+    out: &mut impl std::io::Write,
+) -> anyhow::Result<()> {
+    use crate::campaign::map::{MapOptions, operating_map};
+    if let Some(t) = tolerance
+        && !(t.is_finite() && t > 0.0)
+    {
+        anyhow::bail!("--tolerance {t}: must be a positive number of rad/s");
+    }
+    let options = MapOptions {
+        param: param.clone(),
+        omega_tolerance: tolerance,
+        output: figures.output()?,
+        ..MapOptions::default()
+    };
+    let map_dir = map_dir.map_or_else(|| dir.join("map"), std::path::Path::to_path_buf);
+    let (m, files) = operating_map(dir, &map_dir, &options)?;
+    for note in &files.notes {
+        writeln!(out, "note: {note}")?;
+    }
+    writeln!(
+        out,
+        "map over {}: {} runs, {} curves, {} fold-pair ends",
+        m.param,
+        m.slices.len(),
+        m.curves.len(),
+        m.pair_ends.len()
+    )?;
+    for c in &m.curves {
+        let (first, last) = (c.points[0], c.points[c.points.len() - 1]);
+        writeln!(
+            out,
+            "  curve {:>2} {:<15} {} = {} … {}, ω = {:.2} … {:.2} rad/s ({})",
+            c.id,
+            crate::stability::BifurcationKind::label(c.kind),
+            m.param,
+            first.0,
+            last.0,
+            first.1,
+            last.1,
+            crate::cli::sweep::plural(c.points.len(), "point", "points")
+        )?;
+    }
+    for e in &m.pair_ends {
+        writeln!(
+            out,
+            "  fold pair near ω = {:.2} rad/s at {} = {}, gone at {}: a cusp between",
+            e.omega, m.param, e.p_with, e.p_without
+        )?;
+    }
+    for path in &files.written {
         writeln!(out, "wrote {}", path.display())?;
     }
     Ok(())
@@ -144,8 +227,18 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         report(&figures, out)?;
         return Ok(());
     }
+    if let Some(CampaignCommand::Map {
+        dir,
+        out: map_dir,
+        param,
+        tolerance,
+        figures,
+    }) = &args.command
+    {
+        return map(dir, map_dir.as_deref(), param, *tolerance, figures, out);
+    }
     let file = args.file.as_ref().ok_or_else(|| {
-        anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`)")
+        anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`, `map DIR`)")
     })?;
     let shard = args.shard.as_deref().map(parse_shard).transpose()?;
     if args.dry_run {

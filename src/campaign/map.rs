@@ -1,0 +1,780 @@
+//! Operating maps: the bifurcations of a campaign's sweeps over one parameter `p` (a flow
+//! rate, a cooling temperature, any value of the model file) joined into curves in (p, ω),
+//! with the regions where several stable responses coexist or none is stable
+//! (`tmrotor campaign map DIR`).
+//!
+//! Method: location on a parameter grid with tracking. Each run of the campaign is one
+//! sweep in ω at one value of `p`; its saddle-node, Neimark–Sacker and period-doubling
+//! points are located on the branch to the ω resolution of the sweep. Points of one kind
+//! at neighbouring values of `p` are joined into a curve when they are nearest to each
+//! other (greedy, closest pairs first) and closer than a tolerance
+//! ([`MapOptions::omega_tolerance`], default 25 % of the swept ω range; points are
+//! joined in order of ω, so two curves never cross between neighbouring values). Two saddle-nodes
+//! that follow each other along a branch bound a hysteresis interval (a fold pair); where
+//! a pair is present at one value of `p` and both its curves end before the next, the pair
+//! dies (or is born) between the two values: a cusp lies in that interval, reported with
+//! the bracket and the pair's mean ω. Why a grid and not continuation of the curves: on
+//! the coupled rotor (2 346 harmonic-balance unknowns at order 3) the dense extended
+//! systems of [`crate::continuation::fold`] would cost several large factorizations per
+//! step, while the grid reuses the campaign's parallel, resumable sweeps, and every curve
+//! point is a located bifurcation of a sweep. Between grid values the curves are straight
+//! lines: a finer grid, or a second campaign over a narrower range, refines them.
+//!
+//! Coexisting responses: at each `p` the ω axis is cut at the ω of every branch point;
+//! each branch segment over an interval counts as a stable response when both its ends
+//! are stable, unstable when either is not. Intervals with two
+//! or more stable responses (hysteresis) and cells with none (every response unstable) are
+//! drawn as bands; the counts are in `map_regions.csv`.
+
+use std::path::{Path, PathBuf};
+
+use plotters::style::RGBColor;
+
+use super::CampaignError;
+use super::figures::read_manifest_file;
+use crate::figure::{self, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Series};
+use crate::record::read_recording;
+use crate::stability::BifurcationKind;
+
+/// What [`operating_map`] reads and draws.
+#[derive(Clone, Debug)]
+pub struct MapOptions {
+    /// The parameter (a settings key such as `flow_l_min`, or `set.<path>` for a value of
+    /// the model file); `None`: the one numeric setting that differs between the runs.
+    pub param: Option<String>,
+    /// Largest ω distance (rad/s) of two points joined into a curve; `None`: 25 % of the
+    /// swept ω range.
+    pub omega_tolerance: Option<f64>,
+    pub output: figure::Output,
+    pub size: (u32, u32),
+}
+
+impl Default for MapOptions {
+    fn default() -> Self {
+        Self {
+            param: None,
+            omega_tolerance: None,
+            output: figure::Output::default(),
+            size: (1200, 800),
+        }
+    }
+}
+
+/// One sweep of the map: the value of the parameter, its located bifurcations in branch
+/// order, and its branch as (ω, stable) in branch order.
+#[derive(Clone, Debug)]
+pub struct MapSlice {
+    pub run: String,
+    pub p: f64,
+    pub bifurcations: Vec<(BifurcationKind, f64)>,
+    pub branch: Vec<(f64, Option<bool>)>,
+}
+
+/// A curve of one kind of bifurcation through the slices, as (p, ω) in order of `p`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MapCurve {
+    pub id: usize,
+    pub kind: BifurcationKind,
+    pub points: Vec<(f64, f64)>,
+}
+
+/// A fold pair present at one grid value and gone at the next: a cusp lies between.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairEnd {
+    /// The grid value where the pair exists.
+    pub p_with: f64,
+    /// The neighbouring grid value where it does not.
+    pub p_without: f64,
+    /// The pair's mean ω where it exists (rad/s).
+    pub omega: f64,
+}
+
+/// A run of ω cells at one `p` with the same numbers of stable and unstable responses.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Region {
+    pub p: f64,
+    pub omega_from: f64,
+    pub omega_to: f64,
+    pub stable: usize,
+    pub unstable: usize,
+}
+
+/// The map built from the slices.
+#[derive(Clone, Debug)]
+pub struct OperatingMap {
+    pub param: String,
+    pub slices: Vec<MapSlice>,
+    pub curves: Vec<MapCurve>,
+    pub pair_ends: Vec<PairEnd>,
+    pub regions: Vec<Region>,
+}
+
+/// Builds the map from slices (any order; sorted by `p`): curves by kind, fold-pair ends
+/// and coexistence regions (see the module docs).
+pub fn build_map(
+    param: &str,
+    mut slices: Vec<MapSlice>,
+    omega_tolerance: Option<f64>,
+) -> OperatingMap {
+    slices.sort_by(|a, b| a.p.total_cmp(&b.p));
+    let omegas = || {
+        slices
+            .iter()
+            .flat_map(|s| s.branch.iter().map(|b| b.0))
+            .filter(|w| w.is_finite())
+    };
+    let lo = omegas().fold(f64::INFINITY, f64::min);
+    let hi = omegas().fold(f64::NEG_INFINITY, f64::max);
+    let tol = omega_tolerance.unwrap_or(0.25 * (hi - lo).abs().max(1e-12));
+    // Curves: per slice, the curve id of each bifurcation (same index as `bifurcations`).
+    let mut curves: Vec<MapCurve> = Vec::new();
+    let mut ids_prev: Vec<usize> = Vec::new();
+    let mut prev: Option<&MapSlice> = None;
+    let mut ids_of: Vec<Vec<usize>> = Vec::new();
+    for s in &slices {
+        let mut ids = vec![usize::MAX; s.bifurcations.len()];
+        if let Some(ps) = prev {
+            match_points(ps, s, tol, &ids_prev, &mut ids);
+        }
+        for (j, (kind, omega)) in s.bifurcations.iter().enumerate() {
+            if ids[j] == usize::MAX {
+                ids[j] = curves.len();
+                curves.push(MapCurve {
+                    id: curves.len(),
+                    kind: *kind,
+                    points: Vec::new(),
+                });
+            }
+            curves[ids[j]].points.push((s.p, *omega));
+        }
+        ids_of.push(ids.clone());
+        ids_prev = ids;
+        prev = Some(s);
+    }
+    let pair_ends = pair_ends(&slices, &ids_of);
+    let regions = slices.iter().flat_map(|s| regions(s, lo, hi)).collect();
+    OperatingMap {
+        param: param.to_string(),
+        slices,
+        curves,
+        pair_ends,
+        regions,
+    }
+}
+
+/// Joins the bifurcations of `cur` to those of `prev` (curve ids `ids_prev`), kind by
+/// kind: the matching in order of ω (so curves never cross between two slices) with the
+/// least total distance, each joined pair within `tol`, a point left unjoined costing
+/// `tol` (dynamic programming over the two sorted lists).
+fn match_points(prev: &MapSlice, cur: &MapSlice, tol: f64, ids_prev: &[usize], ids: &mut [usize]) {
+    for kind in [
+        BifurcationKind::SaddleNode,
+        BifurcationKind::NeimarkSacker,
+        BifurcationKind::PeriodDoubling,
+    ] {
+        let of = |s: &MapSlice| {
+            let mut v: Vec<(usize, f64)> = s
+                .bifurcations
+                .iter()
+                .enumerate()
+                .filter(|(_, (k, _))| *k == kind)
+                .map(|(i, (_, w))| (i, *w))
+                .collect();
+            v.sort_by(|a, b| a.1.total_cmp(&b.1));
+            v
+        };
+        let (a, b) = (of(prev), of(cur));
+        let (n, m) = (a.len(), b.len());
+        // cost[i][j]: best matching of a[..i] with b[..j]
+        let mut cost = vec![vec![0.0f64; m + 1]; n + 1];
+        for i in 0..=n {
+            for j in 0..=m {
+                if i == 0 || j == 0 {
+                    cost[i][j] = (i + j) as f64 * tol;
+                    continue;
+                }
+                let d = (a[i - 1].1 - b[j - 1].1).abs();
+                let mut best = (cost[i - 1][j] + tol).min(cost[i][j - 1] + tol);
+                if d <= tol {
+                    best = best.min(cost[i - 1][j - 1] + d);
+                }
+                cost[i][j] = best;
+            }
+        }
+        let (mut i, mut j) = (n, m);
+        while i > 0 && j > 0 {
+            let d = (a[i - 1].1 - b[j - 1].1).abs();
+            if d <= tol && cost[i][j] == cost[i - 1][j - 1] + d {
+                ids[b[j - 1].0] = ids_prev[a[i - 1].0];
+                i -= 1;
+                j -= 1;
+            } else if cost[i][j] == cost[i - 1][j] + tol {
+                i -= 1;
+            } else {
+                j -= 1;
+            }
+        }
+    }
+}
+
+/// Fold pairs that end between a slice and a neighbour: the saddle-nodes of the slice
+/// whose curves have no point at the neighbour, taken in branch order two by two (a pair
+/// nested in another ends as a pair of its own).
+fn pair_ends(slices: &[MapSlice], ids_of: &[Vec<usize>]) -> Vec<PairEnd> {
+    let mut out = Vec::new();
+    for (k, s) in slices.iter().enumerate() {
+        for n in [k.checked_sub(1), Some(k + 1)].into_iter().flatten() {
+            let Some(other) = ids_of.get(n) else { continue };
+            let ending: Vec<f64> = s
+                .bifurcations
+                .iter()
+                .enumerate()
+                .filter(|(i, (kind, _))| {
+                    *kind == BifurcationKind::SaddleNode && !other.contains(&ids_of[k][*i])
+                })
+                .map(|(_, (_, w))| *w)
+                .collect();
+            for pair in ending.chunks_exact(2) {
+                out.push(PairEnd {
+                    p_with: s.p,
+                    p_without: slices[n].p,
+                    omega: 0.5 * (pair[0] + pair[1]),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The coexistence regions of one slice over `[lo, hi]`: the counts are constant between
+/// the ω of consecutive branch points, so they are taken at the middle of each interval
+/// between the sorted ω of all points, and equal neighbours merged.
+fn regions(s: &MapSlice, lo: f64, hi: f64) -> Vec<Region> {
+    let mut cuts: Vec<f64> = s
+        .branch
+        .iter()
+        .map(|b| b.0)
+        .filter(|w| w.is_finite() && *w > lo && *w < hi)
+        .collect();
+    cuts.push(lo);
+    cuts.push(hi);
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let mut out: Vec<Region> = Vec::new();
+    for w2 in cuts.windows(2) {
+        let w = 0.5 * (w2[0] + w2[1]);
+        let (mut stable, mut unstable) = (0, 0);
+        for seg in s.branch.windows(2) {
+            let (a, b) = (seg[0], seg[1]);
+            if (a.0 - w) * (b.0 - w) > 0.0 || a.0 == b.0 {
+                continue;
+            }
+            match (a.1, b.1) {
+                (Some(true), Some(true)) => stable += 1,
+                (Some(false), _) | (_, Some(false)) => unstable += 1,
+                _ => {}
+            }
+        }
+        match out.last_mut() {
+            Some(r) if r.stable == stable && r.unstable == unstable => r.omega_to = w2[1],
+            _ => out.push(Region {
+                p: s.p,
+                omega_from: w2[0],
+                omega_to: w2[1],
+                stable,
+                unstable,
+            }),
+        }
+    }
+    out
+}
+
+/// The numeric settings of a manifest entry as (key, value): the flat keys, and the
+/// model-file values as `set.<path>`.
+fn numeric_settings(settings: &toml::Table) -> Vec<(String, f64)> {
+    let number = |v: &toml::Value| match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    };
+    let mut out = Vec::new();
+    for (k, v) in settings {
+        if k == "set" {
+            if let toml::Value::Table(t) = v {
+                for (path, v) in t {
+                    if let Some(x) = number(v) {
+                        out.push((format!("set.{path}"), x));
+                    }
+                }
+            }
+        } else if let Some(x) = number(v) {
+            out.push((k.clone(), x));
+        }
+    }
+    out
+}
+
+/// Reads a campaign directory's manifest and recordings into slices over `param` (or the
+/// one numeric setting that differs between the runs). Errors name the manifest or the
+/// recording; a run without a recording is left out with a note.
+pub fn read_slices(
+    dir: &Path,
+    param: Option<&str>,
+) -> Result<(String, Vec<MapSlice>, Vec<String>), CampaignError> {
+    let manifest_path = dir.join("manifest.toml");
+    let manifest = read_manifest_file(&manifest_path)?;
+    let file_err = |reason: String| CampaignError::File {
+        file: manifest_path.display().to_string(),
+        reason,
+    };
+    let settings: Vec<Vec<(String, f64)>> = manifest
+        .runs
+        .iter()
+        .map(|r| numeric_settings(&r.settings))
+        .collect();
+    let param = match param {
+        Some(p) => p.to_string(),
+        None => {
+            let mut varying: Vec<String> = Vec::new();
+            if let Some(first) = settings.first() {
+                for (k, v) in first {
+                    let differs = settings.iter().any(|s| {
+                        s.iter()
+                            .find(|(k2, _)| k2 == k)
+                            .is_none_or(|(_, v2)| v2 != v)
+                    });
+                    if differs {
+                        varying.push(k.clone());
+                    }
+                }
+            }
+            match varying.len() {
+                1 => varying.remove(0),
+                0 => {
+                    return Err(file_err(
+                        "no numeric setting differs between the runs: a map needs runs over \
+                         one parameter (a [grid] with one key)"
+                            .into(),
+                    ));
+                }
+                _ => {
+                    return Err(file_err(format!(
+                        "several settings differ between the runs ({}): choose the map's \
+                         parameter with --param",
+                        varying.join(", ")
+                    )));
+                }
+            }
+        }
+    };
+    let mut slices = Vec::new();
+    let mut notes = Vec::new();
+    for (entry, s) in manifest.runs.iter().zip(&settings) {
+        let Some(&(_, p)) = s.iter().find(|(k, _)| *k == param) else {
+            return Err(file_err(format!(
+                "run {} has no numeric setting {param:?}",
+                entry.name
+            )));
+        };
+        let file = if entry.recording.is_empty() {
+            format!("{}.mcap", entry.name)
+        } else {
+            entry.recording.clone()
+        };
+        let path = dir.join(&file);
+        if !path.exists() {
+            notes.push(format!(
+                "run {} has no recording ({} missing): left out of the map",
+                entry.name,
+                path.display()
+            ));
+            continue;
+        }
+        let rec = read_recording(&path).map_err(|error| CampaignError::Recording {
+            run: entry.name.clone(),
+            status: entry.status.clone(),
+            error,
+        })?;
+        if !rec.complete {
+            notes.push(format!(
+                "run {}: the recording is incomplete; mapped as far as it goes",
+                entry.name
+            ));
+        }
+        let mut bifs: Vec<_> = rec.bifurcations.iter().collect();
+        bifs.sort_by(|a, b| a.arc_length.total_cmp(&b.arc_length));
+        slices.push(MapSlice {
+            run: entry.name.clone(),
+            p,
+            bifurcations: bifs.iter().map(|b| (b.kind, b.omega_rad_s)).collect(),
+            branch: rec
+                .points
+                .iter()
+                .map(|q| (q.omega_rad_s, q.stable))
+                .collect(),
+        });
+    }
+    if slices.is_empty() {
+        return Err(file_err("no run has a recording to map".into()));
+    }
+    Ok((param, slices, notes))
+}
+
+/// The files written by [`write_map`] and its notes.
+#[derive(Clone, Debug, Default)]
+pub struct MapFiles {
+    pub written: Vec<PathBuf>,
+    pub notes: Vec<String>,
+}
+
+/// Reads `dir` and writes `map_curves.csv`, `map_pair_ends.csv`, `map_regions.csv` and
+/// the figure `operating_map` into `out`.
+pub fn operating_map(
+    dir: &Path,
+    out: &Path,
+    options: &MapOptions,
+) -> Result<(OperatingMap, MapFiles), CampaignError> {
+    let (param, slices, notes) = read_slices(dir, options.param.as_deref())?;
+    let map = build_map(&param, slices, options.omega_tolerance);
+    let mut files = write_map(&map, out, options)?;
+    files.notes.splice(0..0, notes);
+    Ok((map, files))
+}
+
+fn kind_colour(kind: BifurcationKind) -> RGBColor {
+    match kind {
+        BifurcationKind::SaddleNode => RGBColor(20, 20, 20),
+        BifurcationKind::NeimarkSacker => RGBColor(214, 96, 0),
+        BifurcationKind::PeriodDoubling => RGBColor(118, 42, 131),
+    }
+}
+
+/// Column name of the parameter: the key with anything but letters, digits and `_`
+/// replaced by `_`.
+fn param_column(param: &str) -> String {
+    param
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Writes the CSVs and the figure of `map` into `out` (created if missing).
+pub fn write_map(
+    map: &OperatingMap,
+    out: &Path,
+    options: &MapOptions,
+) -> Result<MapFiles, CampaignError> {
+    figure::ensure_dir(out).map_err(|source| CampaignError::Io {
+        path: out.display().to_string(),
+        source,
+    })?;
+    let mut files = MapFiles::default();
+    let pc = param_column(&map.param);
+    let mut write = |name: &str, text: String| -> Result<(), CampaignError> {
+        let path = out.join(name);
+        crate::record::output::write_atomic(&path, text.as_bytes()).map_err(|source| {
+            CampaignError::Io {
+                path: path.display().to_string(),
+                source,
+            }
+        })?;
+        files.written.push(path);
+        Ok(())
+    };
+    let mut text = format!("curve,kind,{pc},omega_rad_s\n");
+    for c in &map.curves {
+        for (p, w) in &c.points {
+            text += &format!("{},{},{p},{w}\n", c.id, c.kind.key());
+        }
+    }
+    write("map_curves.csv", text)?;
+    let mut text = format!("{pc}_with_pair,{pc}_without_pair,omega_rad_s\n");
+    for e in &map.pair_ends {
+        text += &format!("{},{},{}\n", e.p_with, e.p_without, e.omega);
+    }
+    write("map_pair_ends.csv", text)?;
+    let mut text =
+        format!("{pc},omega_from_rad_s,omega_to_rad_s,stable_responses,unstable_responses\n");
+    for r in &map.regions {
+        text += &format!(
+            "{},{},{},{},{}\n",
+            r.p, r.omega_from, r.omega_to, r.stable, r.unstable
+        );
+    }
+    write("map_regions.csv", text)?;
+
+    let fig = map_figure(map, options.size);
+    let written = figure::write_figure(&out.join("operating_map"), &fig, &options.output)?;
+    files.written.extend(written.files);
+    if figure::font().is_none() {
+        files.notes.push(
+            "no TrueType font found (set TMROTOR_FONT to a .ttf file): the figure has no text"
+                .into(),
+        );
+    }
+    Ok(files)
+}
+
+/// The axis label of a parameter: the study's own names for its keys, else the key.
+fn param_description(param: &str) -> String {
+    match param {
+        "flow_l_min" => "lubricant flow rate per bearing q_l (L/min)".into(),
+        "cooling_temp_c" => "lubricant cooling temperature T_L∞ (°C)".into(),
+        "ambient_temp_c" => "ambient temperature T_∞ (°C)".into(),
+        other => other.to_string(),
+    }
+}
+
+const HYSTERESIS: RGBColor = RGBColor(158, 202, 225);
+const NONE_STABLE: RGBColor = RGBColor(244, 165, 130);
+
+/// One panel of the map over `x_range` and `y_range`.
+fn map_panel(
+    map: &OperatingMap,
+    title: String,
+    x_range: (f64, f64),
+    y_range: (f64, f64),
+    size: (u32, u32),
+) -> Chart {
+    let mut chart = Chart {
+        title,
+        title_px: 16,
+        font_px: 14,
+        x_desc: param_description(&map.param),
+        y_desc: "speed ω (rad/s)".into(),
+        x_range: Some(x_range),
+        y_range: Some(y_range),
+        ..Chart::default()
+    };
+    // bands as thick vertical strokes at each swept value
+    let visible = map
+        .slices
+        .iter()
+        .filter(|s| s.p >= x_range.0 && s.p <= x_range.1)
+        .count()
+        .max(1) as u32;
+    let band_px = (size.0 / (6 * visible)).clamp(3, 24);
+    for r in &map.regions {
+        let colour = match (r.stable, r.unstable) {
+            (s, _) if s >= 2 => HYSTERESIS,
+            (0, u) if u > 0 => NONE_STABLE,
+            _ => continue,
+        };
+        chart.series.push(Series {
+            width: band_px,
+            ..Series::new(vec![(r.p, r.omega_from), (r.p, r.omega_to)], colour)
+        });
+    }
+    for c in &map.curves {
+        let colour = kind_colour(c.kind);
+        let line = match c.kind {
+            BifurcationKind::SaddleNode => LineStyle::Solid,
+            _ => LineStyle::Dashed,
+        };
+        chart.series.push(Series {
+            line,
+            ..Series::new(c.points.clone(), colour)
+        });
+        chart.series.push(Series {
+            line: LineStyle::Points,
+            width: 3,
+            ..Series::new(c.points.clone(), colour)
+        });
+    }
+    for e in &map.pair_ends {
+        chart.markers.push(figure::Marker {
+            x: 0.5 * (e.p_with + e.p_without),
+            y: e.omega,
+            label: "cusp".into(),
+            colour: kind_colour(BifurcationKind::SaddleNode),
+        });
+    }
+    chart
+}
+
+/// ω against the parameter: the bands of each swept value (blue: two or more stable
+/// responses; red: none stable), the curves by kind, the fold-pair ends.
+fn map_figure(map: &OperatingMap, size: (u32, u32)) -> Figure {
+    let (plo, phi) = figure::data_range(map.slices.iter().map(|s| s.p));
+    let (wlo, whi) = figure::data_range(
+        map.slices
+            .iter()
+            .flat_map(|s| s.branch.iter().map(|b| b.0))
+            .filter(|w| w.is_finite()),
+    );
+    let mut panels = vec![map_panel(
+        map,
+        "all swept values".into(),
+        (plo, phi),
+        (wlo, whi),
+        size,
+    )];
+    // A second panel on the bifurcations and the swept values beside them, when they
+    // cover only part of the map.
+    let bif_ps: Vec<f64> = map
+        .curves
+        .iter()
+        .flat_map(|c| c.points.iter().map(|q| q.0))
+        .collect();
+    if !bif_ps.is_empty() {
+        let (blo, bhi) = figure::data_range(bif_ps.iter().copied());
+        let ps: Vec<f64> = map.slices.iter().map(|s| s.p).collect();
+        let below = ps
+            .iter()
+            .copied()
+            .filter(|p| *p < blo)
+            .reduce(f64::max)
+            .unwrap_or(blo);
+        let above = ps
+            .iter()
+            .copied()
+            .filter(|p| *p > bhi)
+            .reduce(f64::min)
+            .unwrap_or(bhi);
+        let (zlo, zhi) = figure::data_range(
+            map.curves
+                .iter()
+                .flat_map(|c| c.points.iter().map(|q| q.1))
+                .chain(map.pair_ends.iter().map(|e| e.omega)),
+        );
+        let margin = (0.1 * (zhi - zlo)).max(0.02 * (whi - wlo));
+        if above - below < 0.7 * (phi - plo) || zhi - zlo < 0.5 * (whi - wlo) {
+            panels.push(map_panel(
+                map,
+                "where the bifurcations are".into(),
+                (below, above),
+                (zlo - margin, zhi + margin),
+                size,
+            ));
+        }
+    }
+    let mut legend = vec![];
+    for kind in [
+        BifurcationKind::SaddleNode,
+        BifurcationKind::NeimarkSacker,
+        BifurcationKind::PeriodDoubling,
+    ] {
+        if map.curves.iter().any(|c| c.kind == kind) {
+            legend.push(LegendEntry {
+                sample: LegendSample::Line(
+                    kind_colour(kind),
+                    if kind == BifurcationKind::SaddleNode {
+                        LineStyle::Solid
+                    } else {
+                        LineStyle::Dashed
+                    },
+                ),
+                text: format!("{} points", kind.label()),
+            });
+        }
+    }
+    legend.push(LegendEntry {
+        sample: LegendSample::Line(HYSTERESIS, LineStyle::Solid),
+        text: "two or more stable responses".into(),
+    });
+    legend.push(LegendEntry {
+        sample: LegendSample::Line(NONE_STABLE, LineStyle::Solid),
+        text: "no stable response".into(),
+    });
+    if !map.pair_ends.is_empty() {
+        legend.push(LegendEntry {
+            sample: LegendSample::Marker(kind_colour(BifurcationKind::SaddleNode)),
+            text: "cusp: a fold pair ends between two swept values".into(),
+        });
+    }
+    Figure {
+        title: format!("Operating map over {}", map.param),
+        panels,
+        legend,
+        legend_at: LegendAt::Right,
+        size,
+        ..Figure::default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn slice(p: f64, bifs: &[(BifurcationKind, f64)], branch: &[(f64, bool)]) -> MapSlice {
+        MapSlice {
+            run: format!("p{p}"),
+            p,
+            bifurcations: bifs.to_vec(),
+            branch: branch.iter().map(|&(w, s)| (w, Some(s))).collect(),
+        }
+    }
+
+    /// A fold pair that narrows with p and is gone at the last value: two curves, one
+    /// pair end between the last two values, and hysteresis cells where the branch folds
+    /// back.
+    #[test]
+    fn a_fold_pair_is_tracked_and_its_end_bracketed() {
+        use BifurcationKind::SaddleNode as SN;
+        let folded = |p: f64, a: f64, b: f64| {
+            slice(
+                p,
+                &[(SN, b), (SN, a)],
+                &[
+                    (0.0, true),
+                    (b, true),
+                    (b - 0.1, false),
+                    (a + 0.1, false),
+                    (a, true),
+                    (10.0, true),
+                ],
+            )
+        };
+        let slices = vec![
+            folded(1.0, 4.0, 6.0),
+            folded(2.0, 4.5, 5.5),
+            slice(3.0, &[], &[(0.0, true), (10.0, true)]),
+        ];
+        let map = build_map("q", slices, None);
+        assert_eq!(map.curves.len(), 2, "{:?}", map.curves);
+        assert_eq!(map.curves[0].points, vec![(1.0, 6.0), (2.0, 5.5)]);
+        assert_eq!(map.curves[1].points, vec![(1.0, 4.0), (2.0, 4.5)]);
+        assert_eq!(
+            map.pair_ends,
+            vec![PairEnd {
+                p_with: 2.0,
+                p_without: 3.0,
+                omega: 5.0
+            }]
+        );
+        // at p = 1, ω = 4.5 is covered by three segments: 0→6 (stable), 5.9→4.1
+        // (unstable), 4→10 (stable)
+        let r = map
+            .regions
+            .iter()
+            .find(|r| r.p == 1.0 && r.omega_from <= 4.5 && 4.5 <= r.omega_to)
+            .expect("a region");
+        assert_eq!((r.stable, r.unstable), (2, 1), "{r:?}");
+        assert!(
+            map.regions
+                .iter()
+                .filter(|r| r.p == 3.0)
+                .all(|r| r.stable == 1)
+        );
+    }
+
+    /// Points of different kinds are never joined, nor points further apart than the
+    /// tolerance.
+    #[test]
+    fn kinds_and_distances_keep_curves_apart() {
+        use BifurcationKind::{NeimarkSacker as NS, SaddleNode as SN};
+        let slices = vec![
+            slice(1.0, &[(SN, 5.0)], &[(0.0, true), (10.0, true)]),
+            slice(2.0, &[(NS, 5.0)], &[(0.0, true), (10.0, true)]),
+            slice(3.0, &[(NS, 9.0)], &[(0.0, true), (10.0, true)]),
+        ];
+        let map = build_map("q", slices, Some(1.0));
+        assert_eq!(map.curves.len(), 3, "{:?}", map.curves);
+    }
+}
