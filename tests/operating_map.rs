@@ -3,7 +3,7 @@
 //! the closed form of the one-harmonic Duffing balance; and `tmrotor campaign map` on a
 //! campaign of the coupled rotor.
 
-use tmrotor::campaign::map::{MapSlice, build_map};
+use tmrotor::campaign::map::{MapSlice, build_map, pairs_near, refine_pair_end};
 use tmrotor::continuation::fold::{FoldOptions, continue_fold};
 use tmrotor::continuation::{Continuation, ContinuationOptions};
 use tmrotor::hb::{Basis, HarmonicBalance};
@@ -42,6 +42,7 @@ fn slice(force: f64) -> (MapSlice, Vec<(f64, Vec<f64>)>) {
         MapSlice {
             run: format!("F{force}"),
             p: force,
+            settings: toml::Table::new(),
             bifurcations: bifs
                 .iter()
                 .filter_map(|b| Some((b.bifurcation?, b.solution.omega)))
@@ -261,4 +262,38 @@ fn campaign_map_joins_the_recorded_saddle_nodes_of_the_coupled_rotor() {
         err.contains("manifest.toml") && err.contains("q9") && err.contains("nope"),
         "{err}"
     );
+}
+
+/// Bisection of a fold pair's end on Duffing (H = 1): from the grid's bracket
+/// (0.045, 0.06), twelve bisections leave a bracket 1/4096 as wide that still holds the
+/// closed-form cusp F_c = 0.054054 (measured: 0.0540527–0.0540564), the pair's Ω at the
+/// cusp's to 1e-4 (measured 3e-6).
+#[test]
+fn bisection_closes_in_on_the_closed_form_cusp() {
+    let slices = vec![slice(0.045).0, slice(0.06).0];
+    let map = build_map("force", slices, None);
+    assert_eq!(map.pair_ends.len(), 1, "{:?}", map.pair_ends);
+    let end = &map.pair_ends[0];
+    let pairs = |f: f64, omega: f64| -> Result<Vec<f64>, String> {
+        let (s, _) = slice(f);
+        Ok(pairs_near(&s.bifurcations, omega, 0.2))
+    };
+    let done = refine_pair_end(end, 1, 12, pairs).expect("refined");
+    let b = 3f64.sqrt() * C;
+    let omega_c = (b + (b * b + 4.0).sqrt()) / 2.0;
+    let q = 0.75 * K3;
+    let s = 1.0 - omega_c * omega_c;
+    let u = -2.0 * s / (3.0 * q);
+    let f_c = (u * ((s + q * u).powi(2) + (C * omega_c).powi(2))).sqrt();
+    eprintln!(
+        "bracket ({}, {}) after {} bisections, Ω = {:.6}; closed-form cusp F = {f_c:.6}, Ω = {omega_c:.6}",
+        done.p_without, done.p_with, done.refined, done.omega
+    );
+    assert_eq!(done.refined, 12);
+    assert!((done.p_with - done.p_without).abs() < 0.015 / 4000.0);
+    assert!(
+        done.p_without < f_c && f_c < done.p_with,
+        "the cusp outside the bracket: {done:?}"
+    );
+    assert!((done.omega - omega_c).abs() < 1e-4, "{done:?}");
 }

@@ -37,7 +37,7 @@ use crate::record::read_recording;
 use crate::stability::BifurcationKind;
 
 /// What [`operating_map`] reads and draws.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct MapOptions {
     /// The parameter (a settings key such as `flow_l_min`, or `set.<path>` for a value of
     /// the model file); `None`: the one numeric setting that differs between the runs.
@@ -45,8 +45,22 @@ pub struct MapOptions {
     /// Largest ω distance (rad/s) of two points joined into a curve; `None`: 25 % of the
     /// swept ω range.
     pub omega_tolerance: Option<f64>,
+    /// Bisection sweeps per fold-pair end (0: the grid's brackets; each halves one).
+    pub refine: usize,
+    /// Hears of each refined fold-pair end.
+    pub progress: &'static (dyn Fn(&PairEnd) + Sync),
     pub output: figure::Output,
     pub size: (u32, u32),
+}
+
+impl std::fmt::Debug for MapOptions {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("MapOptions")
+            .field("param", &self.param)
+            .field("omega_tolerance", &self.omega_tolerance)
+            .field("refine", &self.refine)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Default for MapOptions {
@@ -54,6 +68,8 @@ impl Default for MapOptions {
         Self {
             param: None,
             omega_tolerance: None,
+            refine: 0,
+            progress: &|_| {},
             output: figure::Output::default(),
             size: (1200, 800),
         }
@@ -66,6 +82,9 @@ impl Default for MapOptions {
 pub struct MapSlice {
     pub run: String,
     pub p: f64,
+    /// The run's settings as the manifest lists them (empty when the slice is not from a
+    /// campaign): what [`refine_pair_ends`] sweeps again.
+    pub settings: toml::Table,
     pub bifurcations: Vec<(BifurcationKind, f64)>,
     pub branch: Vec<(f64, Option<bool>)>,
 }
@@ -87,6 +106,10 @@ pub struct PairEnd {
     pub p_without: f64,
     /// The pair's mean ω where it exists (rad/s).
     pub omega: f64,
+    /// The run (slice) where it exists.
+    pub run: String,
+    /// Bisection sweeps that narrowed the bracket ([`refine_pair_ends`]); 0: the grid's.
+    pub refined: usize,
 }
 
 /// A run of ω cells at one `p` with the same numbers of stable and unstable responses.
@@ -117,14 +140,7 @@ pub fn build_map(
     omega_tolerance: Option<f64>,
 ) -> OperatingMap {
     slices.sort_by(|a, b| a.p.total_cmp(&b.p));
-    let omegas = || {
-        slices
-            .iter()
-            .flat_map(|s| s.branch.iter().map(|b| b.0))
-            .filter(|w| w.is_finite())
-    };
-    let lo = omegas().fold(f64::INFINITY, f64::min);
-    let hi = omegas().fold(f64::NEG_INFINITY, f64::max);
+    let (lo, hi) = omega_span(&slices);
     let tol = omega_tolerance.unwrap_or(0.25 * (hi - lo).abs().max(1e-12));
     // Curves: per slice, the curve id of each bifurcation (same index as `bifurcations`).
     let mut curves: Vec<MapCurve> = Vec::new();
@@ -217,6 +233,20 @@ fn match_points(prev: &MapSlice, cur: &MapSlice, tol: f64, ids_prev: &[usize], i
     }
 }
 
+/// The smallest and largest ω of the slices' branches.
+fn omega_span(slices: &[MapSlice]) -> (f64, f64) {
+    let omegas = || {
+        slices
+            .iter()
+            .flat_map(|s| s.branch.iter().map(|b| b.0))
+            .filter(|w| w.is_finite())
+    };
+    (
+        omegas().fold(f64::INFINITY, f64::min),
+        omegas().fold(f64::NEG_INFINITY, f64::max),
+    )
+}
+
 /// Fold pairs that end between a slice and a neighbour: the saddle-nodes of the slice
 /// whose curves have no point at the neighbour, taken in branch order two by two (a pair
 /// nested in another ends as a pair of its own).
@@ -239,6 +269,8 @@ fn pair_ends(slices: &[MapSlice], ids_of: &[Vec<usize>]) -> Vec<PairEnd> {
                     p_with: s.p,
                     p_without: slices[n].p,
                     omega: 0.5 * (pair[0] + pair[1]),
+                    run: s.run.clone(),
+                    refined: 0,
                 });
             }
         }
@@ -406,6 +438,7 @@ pub fn read_slices(
         slices.push(MapSlice {
             run: entry.name.clone(),
             p,
+            settings: entry.settings.clone(),
             bifurcations: bifs.iter().map(|b| (b.kind, b.omega_rad_s)).collect(),
             branch: rec
                 .points
@@ -427,6 +460,136 @@ pub struct MapFiles {
     pub notes: Vec<String>,
 }
 
+/// Narrows the bracket of a fold pair's end by `steps` bisections. `pairs_near(p, ω)`
+/// computes the branch at `p` around ω and returns the mean ω of each fold pair near ω;
+/// the pair is present at `p` when there are at least `n_with` of them, the number beside
+/// it where the bracket has it (a pair nested in another ends while the outer one goes on).
+/// The bracket keeps a value with the pair and one without; with one pair, its ω follows
+/// the value with it. A pair narrower than the sweep resolves counts as absent, so the
+/// bracket can end short of the cusp on the side with the pair.
+pub fn refine_pair_end<E>(
+    end: &PairEnd,
+    n_with: usize,
+    steps: usize,
+    pairs_near: impl Fn(f64, f64) -> Result<Vec<f64>, E>,
+) -> Result<PairEnd, E> {
+    let mut out = end.clone();
+    for _ in 0..steps {
+        let mid = 0.5 * (out.p_with + out.p_without);
+        let found = pairs_near(mid, out.omega)?;
+        if found.len() >= n_with.max(1) {
+            out.p_with = mid;
+            if let [only] = found[..] {
+                out.omega = only;
+            }
+        } else {
+            out.p_without = mid;
+        }
+        out.refined += 1;
+    }
+    Ok(out)
+}
+
+/// The mean ω of each fold pair (two saddle-nodes in a row along the branch) within
+/// `window` of `omega`, from bifurcations in branch order.
+pub fn pairs_near(bifurcations: &[(BifurcationKind, f64)], omega: f64, window: f64) -> Vec<f64> {
+    let folds: Vec<f64> = bifurcations
+        .iter()
+        .filter(|(k, _)| *k == BifurcationKind::SaddleNode)
+        .map(|(_, w)| *w)
+        .collect();
+    folds
+        .chunks_exact(2)
+        .map(|w| 0.5 * (w[0] + w[1]))
+        .filter(|m| (m - omega).abs() <= window)
+        .collect()
+}
+
+/// Refines every fold-pair end of `map` by `steps` bisections (see [`refine_pair_end`]),
+/// each a sweep without stability over ω ± `window` of the run that has the pair, with the
+/// parameter set to the bisection's value; the pair ends are refined in parallel.
+/// `progress` hears of each finished end.
+pub fn refine_pair_ends(
+    map: &mut OperatingMap,
+    steps: usize,
+    window: f64,
+    progress: &(dyn Fn(&PairEnd) + Sync),
+) -> Result<(), CampaignError> {
+    use rayon::prelude::*;
+    let param = map.param.clone();
+    let refined: Vec<PairEnd> =
+        map.pair_ends
+            .par_iter()
+            .map(|end| {
+                let slice = map
+                    .slices
+                    .iter()
+                    .find(|s| s.run == end.run)
+                    .ok_or_else(|| CampaignError::File {
+                        file: end.run.clone(),
+                        reason: "the run of a fold pair is not in the map".into(),
+                    })?;
+                let n_with = pairs_near(&slice.bifurcations, end.omega, 0.5 * window).len();
+                let sweep = |p: f64, omega: f64| -> Result<Vec<f64>, CampaignError> {
+                    let bifs = sweep_window(&slice.settings, &param, p, omega, window).map_err(
+                        |reason| CampaignError::Invalid {
+                            file: "manifest.toml".into(),
+                            run: format!("{} at {param} = {p}", slice.run),
+                            reason,
+                        },
+                    )?;
+                    Ok(pairs_near(&bifs, omega, 0.5 * window))
+                };
+                let done = refine_pair_end(end, n_with, steps, sweep)?;
+                progress(&done);
+                Ok(done)
+            })
+            .collect::<Result<_, CampaignError>>()?;
+    map.pair_ends = refined;
+    Ok(())
+}
+
+/// The located bifurcations, in branch order, of a sweep without stability over
+/// `omega ± window` of the run with `settings` and the parameter set to `p`.
+fn sweep_window(
+    settings: &toml::Table,
+    param: &str,
+    p: f64,
+    omega: f64,
+    window: f64,
+) -> Result<Vec<(BifurcationKind, f64)>, String> {
+    use crate::sweep::{StudySettings, SweepProblem};
+    let mut table = settings.clone();
+    match param.strip_prefix("set.") {
+        Some(path) => {
+            let set = table
+                .entry("set")
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            match set {
+                toml::Value::Table(t) => {
+                    t.insert(path.to_string(), toml::Value::Float(p));
+                }
+                _ => return Err("the run's `set` is not a table".into()),
+            }
+        }
+        None => {
+            table.insert(param.to_string(), toml::Value::Float(p));
+        }
+    }
+    table.insert("omega_start".into(), toml::Value::Float(omega - window));
+    table.insert("omega_end".into(), toml::Value::Float(omega + window));
+    table.insert("stability".into(), toml::Value::Boolean(false));
+    let settings = StudySettings::from_table(&table).map_err(|e| e.to_string())?;
+    let problem = SweepProblem::new(&settings).map_err(|e| e.to_string())?;
+    let mut sink = crate::record::MemorySink::new();
+    problem
+        .run(&mut sink, None, |_| {})
+        .map_err(|e| e.to_string())?;
+    let mut bifs = sink.bifurcations;
+    bifs.sort_by(|a, b| a.arc_length.total_cmp(&b.arc_length));
+    Ok(bifs.iter().map(|b| (b.kind, b.omega_rad_s)).collect())
+}
+
 /// Reads `dir` and writes `map_curves.csv`, `map_pair_ends.csv`, `map_regions.csv` and
 /// the figure `operating_map` into `out`.
 pub fn operating_map(
@@ -435,7 +598,11 @@ pub fn operating_map(
     options: &MapOptions,
 ) -> Result<(OperatingMap, MapFiles), CampaignError> {
     let (param, slices, notes) = read_slices(dir, options.param.as_deref())?;
-    let map = build_map(&param, slices, options.omega_tolerance);
+    let mut map = build_map(&param, slices, options.omega_tolerance);
+    if options.refine > 0 {
+        let (lo, hi) = omega_span(&map.slices);
+        refine_pair_ends(&mut map, options.refine, 0.05 * (hi - lo), options.progress)?;
+    }
     let mut files = write_map(&map, out, options)?;
     files.notes.splice(0..0, notes);
     Ok((map, files))
@@ -494,9 +661,12 @@ pub fn write_map(
         }
     }
     write("map_curves.csv", text)?;
-    let mut text = format!("{pc}_with_pair,{pc}_without_pair,omega_rad_s\n");
+    let mut text = format!("{pc}_with_pair,{pc}_without_pair,omega_rad_s,run,bisections\n");
     for e in &map.pair_ends {
-        text += &format!("{},{},{}\n", e.p_with, e.p_without, e.omega);
+        text += &format!(
+            "{},{},{},{},{}\n",
+            e.p_with, e.p_without, e.omega, e.run, e.refined
+        );
     }
     write("map_pair_ends.csv", text)?;
     let mut text =
@@ -706,6 +876,7 @@ mod tests {
         MapSlice {
             run: format!("p{p}"),
             p,
+            settings: toml::Table::new(),
             bifurcations: bifs.to_vec(),
             branch: branch.iter().map(|&(w, s)| (w, Some(s))).collect(),
         }
@@ -745,7 +916,9 @@ mod tests {
             vec![PairEnd {
                 p_with: 2.0,
                 p_without: 3.0,
-                omega: 5.0
+                omega: 5.0,
+                run: "p2".into(),
+                refined: 0,
             }]
         );
         // at p = 1, ω = 4.5 is covered by three segments: 0→6 (stable), 5.9→4.1

@@ -98,6 +98,11 @@ pub enum CampaignCommand {
         /// the swept ω range).
         #[arg(long, value_name = "RAD_S")]
         tolerance: Option<f64>,
+        /// Narrow each fold-pair end by N bisections of the bracket, each a sweep without
+        /// stability over ω ± 5 % of the swept range of the run with the pair (default 0:
+        /// the grid's brackets).
+        #[arg(long, value_name = "N", default_value_t = 0)]
+        refine: usize,
         #[command(flatten)]
         figures: crate::cli::FigureArgs,
     },
@@ -117,23 +122,15 @@ fn report(figures: &CampaignFigures, out: &mut impl std::io::Write) -> std::io::
 fn map(
     dir: &std::path::Path,
     map_dir: Option<&std::path::Path>,
-    param: &Option<String>,
-    tolerance: Option<f64>,
-    figures: &crate::cli::FigureArgs,
+    options: crate::campaign::map::MapOptions,
     out: &mut impl std::io::Write,
 ) -> anyhow::Result<()> {
-    use crate::campaign::map::{MapOptions, operating_map};
-    if let Some(t) = tolerance
+    use crate::campaign::map::operating_map;
+    if let Some(t) = options.omega_tolerance
         && !(t.is_finite() && t > 0.0)
     {
         anyhow::bail!("--tolerance {t}: must be a positive number of rad/s");
     }
-    let options = MapOptions {
-        param: param.clone(),
-        omega_tolerance: tolerance,
-        output: figures.output()?,
-        ..MapOptions::default()
-    };
     let map_dir = map_dir.map_or_else(|| dir.join("map"), std::path::Path::to_path_buf);
     let (m, files) = operating_map(dir, &map_dir, &options)?;
     for note in &files.notes {
@@ -163,9 +160,17 @@ fn map(
         )?;
     }
     for e in &m.pair_ends {
+        let how = if e.refined == 0 {
+            String::new()
+        } else {
+            format!(
+                " (after {})",
+                crate::cli::sweep::plural(e.refined, "bisection", "bisections")
+            )
+        };
         writeln!(
             out,
-            "  fold pair near ω = {:.2} rad/s at {} = {}, gone at {}: a cusp between",
+            "  fold pair near ω = {:.2} rad/s at {} = {}, gone at {}: a cusp between{how}",
             e.omega, m.param, e.p_with, e.p_without
         )?;
     }
@@ -232,10 +237,24 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
         out: map_dir,
         param,
         tolerance,
+        refine,
         figures,
     }) = &args.command
     {
-        return map(dir, map_dir.as_deref(), param, *tolerance, figures, out);
+        let options = crate::campaign::map::MapOptions {
+            param: param.clone(),
+            omega_tolerance: *tolerance,
+            refine: *refine,
+            progress: &|e| {
+                eprintln!(
+                    "fold pair near ω = {:.2} rad/s: present at {}, gone at {} ({} bisections)",
+                    e.omega, e.p_with, e.p_without, e.refined
+                )
+            },
+            output: figures.output()?,
+            ..Default::default()
+        };
+        return map(dir, map_dir.as_deref(), options, out);
     }
     let file = args.file.as_ref().ok_or_else(|| {
         anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`, `map DIR`)")
