@@ -855,7 +855,7 @@ fn map_figure(map: &OperatingMap, size: (u32, u32)) -> Figure {
     if !map.pair_ends.is_empty() {
         legend.push(LegendEntry {
             sample: LegendSample::Marker(kind_colour(BifurcationKind::SaddleNode)),
-            text: "cusp: a fold pair ends between two swept values".into(),
+            text: "cusp: a fold pair ends inside the bracket (grid or bisection)".into(),
         });
     }
     Figure {
