@@ -42,6 +42,7 @@ fn slice(force: f64) -> (MapSlice, Vec<(f64, Vec<f64>)>) {
         MapSlice {
             run: format!("F{force}"),
             p: force,
+            recording: String::new(),
             settings: toml::Table::new(),
             bifurcations: bifs
                 .iter()
@@ -249,6 +250,60 @@ fn campaign_map_joins_the_recorded_saddle_nodes_of_the_coupled_rotor() {
         assert_eq!((inside[3], inside[4]), (2.0, 1.0), "q = {q}: {inside:?}");
     }
 
+    // the MCAP file holds the same map, read back by this crate and by the official
+    // Python readers
+    let mcap_path = mapdir.join("operating_map.mcap");
+    let back = tmrotor::campaign::map::read_map_mcap(&mcap_path).expect("map recording");
+    assert_eq!(back.param, "flow_l_min");
+    assert_eq!(back.slices.len(), 3);
+    let from_mcap: usize = back.curves.iter().map(|c| c.points.len()).sum();
+    assert_eq!(from_mcap, rows.len());
+    for c in &back.curves {
+        for &(p, w) in &c.points {
+            assert!(
+                rows.iter()
+                    .any(|r| r.0 == c.kind.key() && r.1 == p && r.2 == w),
+                "curve {} point ({p}, {w}) not in the CSV",
+                c.id
+            );
+        }
+    }
+    assert_eq!(back.regions.len(), regions.lines().count() - 1);
+    if let Some(python) = python() {
+        let script = r#"
+import sys
+from mcap.reader import make_reader
+from mcap_protobuf.decoder import DecoderFactory
+counts = {}
+points = 0
+with open(sys.argv[1], "rb") as f:
+    reader = make_reader(f, decoder_factories=[DecoderFactory()])
+    for schema, channel, message, proto in reader.iter_decoded_messages():
+        counts[channel.topic] = counts.get(channel.topic, 0) + 1
+        if channel.topic == "/map/curves":
+            points += len(proto.omega_rad_s)
+print(counts.get("/map/info", 0), counts.get("/map/curves", 0), points, counts.get("/map/regions", 0))
+"#;
+        let out = std::process::Command::new(python)
+            .args(["-c", script, mcap_path.to_str().expect("utf8")])
+            .output()
+            .expect("python");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            String::from_utf8_lossy(&out.stdout).trim(),
+            format!(
+                "1 {} {} {}",
+                back.curves.len(),
+                rows.len(),
+                back.regions.len()
+            )
+        );
+    }
+
     let out = run(&[
         "campaign",
         "map",
@@ -296,4 +351,17 @@ fn bisection_closes_in_on_the_closed_form_cusp() {
         "the cusp outside the bracket: {done:?}"
     );
     assert!((done.omega - omega_c).abs() < 1e-4, "{done:?}");
+}
+
+/// The Python with the official MCAP readers (`TMROTOR_PYTHON`); required under `CI=true`.
+fn python() -> Option<String> {
+    match std::env::var("TMROTOR_PYTHON") {
+        Ok(p) if !p.is_empty() => Some(p),
+        _ => {
+            let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
+            assert!(!ci, "CI=true but TMROTOR_PYTHON is not set");
+            eprintln!("skipped the Python reader: TMROTOR_PYTHON is not set");
+            None
+        }
+    }
 }

@@ -56,7 +56,7 @@ pub fn bifurcation_to_pb(kind: Option<BifurcationKind>) -> pb::BifurcationType {
     }
 }
 
-fn bifurcation_from_pb(value: i32) -> Result<Option<BifurcationKind>, String> {
+pub fn bifurcation_from_pb(value: i32) -> Result<Option<BifurcationKind>, String> {
     match pb::BifurcationType::try_from(value) {
         Ok(pb::BifurcationType::None) => Ok(None),
         Ok(pb::BifurcationType::SaddleNode) => Ok(Some(BifurcationKind::SaddleNode)),

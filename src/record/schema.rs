@@ -51,11 +51,17 @@ pub const THERMAL_FORCES: SchemaEntry = schema!(
 pub const FLOQUET: SchemaEntry = schema!("tmrotor.v1.Floquet", "tmrotor/v1/floquet.proto");
 pub const BIFURCATION: SchemaEntry =
     schema!("tmrotor.v1.Bifurcation", "tmrotor/v1/bifurcation.proto");
+pub const MAP_INFO: SchemaEntry = schema!("tmrotor.v1.MapInfo", "tmrotor/v1/operating_map.proto");
+pub const MAP_CURVE: SchemaEntry = schema!("tmrotor.v1.MapCurve", "tmrotor/v1/operating_map.proto");
+pub const MAP_PAIR_END: SchemaEntry =
+    schema!("tmrotor.v1.MapPairEnd", "tmrotor/v1/operating_map.proto");
+pub const MAP_REGION: SchemaEntry =
+    schema!("tmrotor.v1.MapRegion", "tmrotor/v1/operating_map.proto");
 pub const SCENE_UPDATE: SchemaEntry = schema!("foxglove.SceneUpdate", "foxglove/SceneUpdate.proto");
 pub const LOG: SchemaEntry = schema!("foxglove.Log", "foxglove/Log.proto");
 
-/// Every schema a recording may contain.
-pub const ALL_SCHEMAS: [SchemaEntry; 12] = [
+/// Every schema a recording or an operating map may contain.
+pub const ALL_SCHEMAS: [SchemaEntry; 16] = [
     RUN_INFO,
     POINT_SUMMARY,
     HARMONICS,
@@ -68,6 +74,10 @@ pub const ALL_SCHEMAS: [SchemaEntry; 12] = [
     BIFURCATION,
     SCENE_UPDATE,
     LOG,
+    MAP_INFO,
+    MAP_CURVE,
+    MAP_PAIR_END,
+    MAP_REGION,
 ];
 
 /// A topic of a recording: name, message type, meaning (see `schemas/README.md`).
@@ -153,6 +163,35 @@ pub const ALL_TOPICS: [Topic; 12] = [
     TOPIC_BIFURCATIONS,
     TOPIC_SCENE,
     TOPIC_LOG,
+];
+
+pub const TOPIC_MAP_INFO: Topic = Topic {
+    name: "/map/info",
+    schema: MAP_INFO,
+    meaning: "operating map: the parameter, the tolerance, the runs and their values (once)",
+};
+pub const TOPIC_MAP_CURVES: Topic = Topic {
+    name: "/map/curves",
+    schema: MAP_CURVE,
+    meaning: "a curve of one kind of bifurcation in (parameter, ω), one message per curve",
+};
+pub const TOPIC_MAP_PAIR_ENDS: Topic = Topic {
+    name: "/map/pair_ends",
+    schema: MAP_PAIR_END,
+    meaning: "fold pairs present at one value and gone at the other (a cusp between)",
+};
+pub const TOPIC_MAP_REGIONS: Topic = Topic {
+    name: "/map/regions",
+    schema: MAP_REGION,
+    meaning: "ω intervals per value with the numbers of stable and unstable responses",
+};
+
+/// Every topic of an operating map (`operating_map.mcap`).
+pub const MAP_TOPICS: [Topic; 4] = [
+    TOPIC_MAP_INFO,
+    TOPIC_MAP_CURVES,
+    TOPIC_MAP_PAIR_ENDS,
+    TOPIC_MAP_REGIONS,
 ];
 
 /// Names of the MCAP metadata records and attachments.
