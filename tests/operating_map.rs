@@ -269,6 +269,43 @@ fn campaign_map_joins_the_recorded_saddle_nodes_of_the_coupled_rotor() {
         }
     }
     assert_eq!(back.regions.len(), regions.lines().count() - 1);
+    // replay reads it as a map: info, and export gives back the same CSVs
+    let replay = |args: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_replay"))
+            .args(args)
+            .output()
+            .expect("run replay")
+    };
+    let info = replay(&["info", mcap_path.to_str().expect("utf8")]);
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(
+        info.status.success(),
+        "{}",
+        String::from_utf8_lossy(&info.stderr)
+    );
+    assert!(
+        text.contains("(operating map)") && text.contains("flow_l_min = 9, 10, 11"),
+        "{text}"
+    );
+    let exported = dir.path().join("exported");
+    let export = replay(&[
+        "export",
+        mcap_path.to_str().expect("utf8"),
+        "--out",
+        exported.to_str().expect("utf8"),
+    ]);
+    assert!(
+        export.status.success(),
+        "{}",
+        String::from_utf8_lossy(&export.stderr)
+    );
+    for f in ["map_curves.csv", "map_pair_ends.csv", "map_regions.csv"] {
+        assert_eq!(
+            std::fs::read_to_string(exported.join(f)).expect("exported"),
+            std::fs::read_to_string(mapdir.join(f)).expect("written"),
+            "{f}"
+        );
+    }
     if let Some(python) = python() {
         let script = r#"
 import sys

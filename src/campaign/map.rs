@@ -834,17 +834,10 @@ pub fn read_map_mcap(path: &Path) -> Result<OperatingMap, CampaignError> {
     Ok(map)
 }
 
-/// Writes the CSVs and the figure of `map` into `out` (created if missing).
-pub fn write_map(
-    map: &OperatingMap,
-    out: &Path,
-    options: &MapOptions,
-) -> Result<MapFiles, CampaignError> {
-    figure::ensure_dir(out).map_err(|source| CampaignError::Io {
-        path: out.display().to_string(),
-        source,
-    })?;
-    let mut files = MapFiles::default();
+/// Writes `map_curves.csv`, `map_pair_ends.csv` and `map_regions.csv` of `map` into `out`
+/// (which must exist); returns their paths.
+pub fn write_map_csvs(map: &OperatingMap, out: &Path) -> Result<Vec<PathBuf>, CampaignError> {
+    let mut written = Vec::new();
     let pc = param_column(&map.param);
     let mut write = |name: &str, text: String| -> Result<(), CampaignError> {
         let path = out.join(name);
@@ -854,7 +847,7 @@ pub fn write_map(
                 source,
             }
         })?;
-        files.written.push(path);
+        written.push(path);
         Ok(())
     };
     let mut text = format!("curve,kind,{pc},omega_rad_s\n");
@@ -881,6 +874,23 @@ pub fn write_map(
         );
     }
     write("map_regions.csv", text)?;
+    Ok(written)
+}
+
+/// Writes the CSVs, the MCAP file and the figure of `map` into `out` (created if missing).
+pub fn write_map(
+    map: &OperatingMap,
+    out: &Path,
+    options: &MapOptions,
+) -> Result<MapFiles, CampaignError> {
+    figure::ensure_dir(out).map_err(|source| CampaignError::Io {
+        path: out.display().to_string(),
+        source,
+    })?;
+    let mut files = MapFiles {
+        written: write_map_csvs(map, out)?,
+        notes: Vec::new(),
+    };
     let mcap_path = out.join("operating_map.mcap");
     write_map_mcap(map, &mcap_path)?;
     files.written.push(mcap_path);

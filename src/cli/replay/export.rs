@@ -45,3 +45,18 @@ pub fn run(rec: &Recording, dir: &Path, out: &mut dyn Write) -> anyhow::Result<(
 fn write_file(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     write_atomic(path, bytes).with_context(|| format!("cannot write {}", path.display()))
 }
+
+/// `replay export` of an operating map: its three CSVs (as `tmrotor campaign map` writes
+/// them) into `dir`, created if missing.
+pub fn map(
+    map: &crate::campaign::map::OperatingMap,
+    dir: &Path,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    crate::figure::ensure_dir(dir)
+        .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
+    for path in crate::campaign::map::write_map_csvs(map, dir)? {
+        writeln!(out, "{}", path.display())?;
+    }
+    Ok(())
+}

@@ -173,3 +173,52 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     Ok(())
 }
+
+/// Prints a summary of an operating map (`tmrotor campaign map`).
+pub fn map(
+    file: &std::path::Path,
+    map: &crate::campaign::map::OperatingMap,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    writeln!(out, "file:        {} (operating map)", file.display())?;
+    writeln!(out, "parameter:   {}", map.param)?;
+    let values: Vec<String> = map.slices.iter().map(|s| s.p.to_string()).collect();
+    writeln!(
+        out,
+        "runs:        {} ({} = {})",
+        map.slices.len(),
+        map.param,
+        values.join(", ")
+    )?;
+    writeln!(
+        out,
+        "tolerance:   {} rad/s between joined points",
+        map.omega_tolerance
+    )?;
+    writeln!(out, "curves:      {}", map.curves.len())?;
+    for c in &map.curves {
+        let (Some(first), Some(last)) = (c.points.first(), c.points.last()) else {
+            continue;
+        };
+        writeln!(
+            out,
+            "  {:>2} {:<15} {} … {}, ω = {:.2} … {:.2} rad/s",
+            c.id,
+            c.kind.label(),
+            first.0,
+            last.0,
+            first.1,
+            last.1
+        )?;
+    }
+    writeln!(out, "fold-pair ends: {}", map.pair_ends.len())?;
+    for e in &map.pair_ends {
+        writeln!(
+            out,
+            "  near ω = {:.2} rad/s: present at {}, gone at {} ({} bisections)",
+            e.omega, e.p_with, e.p_without, e.refined
+        )?;
+    }
+    writeln!(out, "regions:     {}", map.regions.len())?;
+    Ok(())
+}

@@ -26,7 +26,7 @@ pub mod recover;
 pub mod stability;
 
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -152,12 +152,35 @@ pub fn open_with(
     Ok(rec)
 }
 
+/// The operating map in `file` (`tmrotor campaign map` writes them), when reading it as a
+/// recording failed with `error` because it has the map's topics instead of a run;
+/// otherwise `error` itself.
+fn operating_map(
+    file: &Path,
+    error: anyhow::Error,
+) -> anyhow::Result<crate::campaign::map::OperatingMap> {
+    let is_map = matches!(
+        error.downcast_ref::<crate::record::ReadError>(),
+        Some(crate::record::ReadError::Foreign { reason, .. }) if reason.contains("/map/info")
+    );
+    if !is_map {
+        return Err(error);
+    }
+    Ok(crate::campaign::map::read_map_mcap(file)?)
+}
+
 /// Runs a parsed command line, writing results to `out` and notes to `err`.
 pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<()> {
     match cli.command {
-        Command::Info { file } => info::run(&open(&file, err)?, out),
+        Command::Info { file } => match open(&file, err) {
+            Ok(rec) => info::run(&rec, out),
+            Err(e) => info::map(&file, &operating_map(&file, e)?, out),
+        },
         Command::Branch { file, csv } => branch::run(&open(&file, err)?, csv, out),
-        Command::Export { file, out: dir } => export::run(&open(&file, err)?, &dir, out),
+        Command::Export { file, out: dir } => match open(&file, err) {
+            Ok(rec) => export::run(&rec, &dir, out),
+            Err(e) => export::map(&operating_map(&file, e)?, &dir, out),
+        },
         Command::Orbit {
             file,
             point,
