@@ -97,6 +97,7 @@
 pub mod csv;
 pub mod fold;
 pub mod pipeline;
+pub mod switch;
 
 pub use pipeline::DriveEnd;
 
@@ -383,6 +384,9 @@ pub enum ContinuationError {
     /// The fold-curve continuation ([`fold`]) failed.
     #[error("fold curve: {0}")]
     Fold(String),
+    /// Branch switching ([`switch`]) found no start on the new branch.
+    #[error("branch switching: {0}")]
+    Switch(String),
 }
 
 /// Whether the branch segment from speed `from` to speed `to` crosses `omega`. Half-open,

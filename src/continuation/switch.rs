@@ -1,0 +1,228 @@
+//! Branch switching at a period doubling: from a located period-doubling point of a
+//! branch, a start on the period-doubled branch that bifurcates there.
+//!
+//! Method. At a period doubling of a `T`-periodic orbit a Floquet multiplier is −1: the
+//! linearisation has a solution with `p(t + T) = −p(t)`, made of the odd multiples of
+//! half the orbit's fundamental frequency `ν₀/2`. The `T`-periodic basis has no such
+//! harmonics, so the branch does not see the bifurcation. [`doubled_basis`] adds, for
+//! every harmonic `h` of the basis, `h − ν₀/2` and `h + ν₀/2`; in that basis the
+//! `T`-periodic solution is the same (its new coefficients are zero), and the
+//! harmonic-balance Jacobian `∂R/∂A` at the period doubling is singular, its null vector
+//! the half-order mode. By the symmetry `t → t + T` the Jacobian does not couple the
+//! orbit's own harmonics with the new ones, so the null vector is found by inverse
+//! iteration on the new coefficients. The period-doubled branch leaves the bifurcation
+//! tangent to that mode with an amplitude growing as `√|ω − ω_PD|` (Kuznetsov,
+//! *Elements of Applied Bifurcation Theory*, 3rd ed., Springer 2004, §4.4; Seydel,
+//! *Practical Bifurcation and Stability Analysis*, 3rd ed., Springer 2010, §7.6): a Newton
+//! solve at `ω_PD ± δ` from the orbit plus a multiple of the mode, on both sides and with
+//! both signs, is kept when its half-order part does not vanish (it has not fallen back
+//! onto the `T`-periodic orbit).
+
+use faer::Mat;
+use faer::linalg::solvers::Solve;
+
+use super::ContinuationError;
+use crate::hb::newton::{NewtonOptions, solve_fixed};
+use crate::hb::{Basis, HarmonicBalance, HbSolution, Ratio};
+use crate::system::System;
+
+/// A start on a period-doubled branch.
+#[derive(Clone, Debug)]
+pub struct SwitchedStart {
+    /// The doubled basis ([`doubled_basis`]).
+    pub basis: Basis,
+    /// Where the start was solved (rad/s).
+    pub omega: f64,
+    /// Harmonic-balance unknowns in the doubled basis.
+    pub unknowns: Vec<f64>,
+    /// Share of the half-order harmonics in the start's coefficients (2-norm ratio).
+    pub half_order_share: f64,
+}
+
+/// Settings of [`switch_at_period_doubling`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SwitchOptions {
+    /// Distance from the period doubling at which the start is solved (rad/s, or the
+    /// unit of the continuation parameter).
+    pub delta: f64,
+    /// Amplitude of the half-order mode in the guess, relative to the largest coefficient
+    /// of the orbit.
+    pub amplitude: f64,
+    /// Smallest half-order share that counts as period-doubled.
+    pub min_share: f64,
+    /// AFT samples per period of the doubled basis (`None`: chosen from the basis).
+    pub aft_samples: Option<usize>,
+}
+
+impl Default for SwitchOptions {
+    fn default() -> Self {
+        Self {
+            delta: 1e-3,
+            amplitude: 0.05,
+            min_share: 1e-4,
+            aft_samples: None,
+        }
+    }
+}
+
+fn value(r: Ratio) -> f64 {
+    f64::from(r.num) / f64::from(r.den)
+}
+
+/// The basis with, for every harmonic `h`, also `h − ν₀/2` and `h + ν₀/2` (`ν₀` the
+/// fundamental of `basis`, `1/base_den` of ω), sorted by frequency.
+pub fn doubled_basis(basis: &Basis) -> Result<Basis, ContinuationError> {
+    let den = 2 * basis.base_den();
+    let mut all: Vec<Ratio> = Vec::new();
+    for h in basis.harmonics() {
+        // h = m/den in the finer unit
+        let m = h.num * (den / h.den);
+        for k in [m.saturating_sub(1), m, m + 1] {
+            if k > 0 {
+                let r = reduce(k, den);
+                if !all.contains(&r) {
+                    all.push(r);
+                }
+            }
+        }
+    }
+    all.sort_by(|a, b| value(*a).total_cmp(&value(*b)));
+    Basis::new(all).map_err(|e| ContinuationError::Switch(format!("doubled basis: {e}")))
+}
+
+fn reduce(num: u32, den: u32) -> Ratio {
+    let mut g = (num, den);
+    while g.1 != 0 {
+        g = (g.1, g.0 % g.1);
+    }
+    Ratio {
+        num: num / g.0,
+        den: den / g.0,
+    }
+}
+
+/// Coefficients of `from` (layout `[a0, a_1..a_H, b_1..b_H]` per DoF) in the basis `to`,
+/// which holds every harmonic of `from`; harmonics `to` adds are zero.
+pub fn embed(coeffs: &[f64], from: &Basis, to: &Basis) -> Vec<f64> {
+    let (nf, nt) = (from.n_coeffs(), to.n_coeffs());
+    let (hf, ht) = (from.n_harmonics(), to.n_harmonics());
+    let index: Vec<Option<usize>> = from
+        .harmonics()
+        .iter()
+        .map(|h| to.harmonics().iter().position(|g| g == h))
+        .collect();
+    let n_dof = coeffs.len() / nf;
+    let mut out = vec![0.0; n_dof * nt];
+    for d in 0..n_dof {
+        let (src, dst) = (
+            &coeffs[d * nf..(d + 1) * nf],
+            &mut out[d * nt..(d + 1) * nt],
+        );
+        dst[0] = src[0];
+        for (k, j) in index.iter().enumerate() {
+            if let Some(j) = *j {
+                dst[1 + j] = src[1 + k];
+                dst[1 + ht + j] = src[1 + hf + k];
+            }
+        }
+    }
+    out
+}
+
+/// The indices of the coefficients of the harmonics of `to` that `from` lacks.
+fn new_coefficients(from: &Basis, to: &Basis, n_dof: usize) -> Vec<usize> {
+    let (nt, ht) = (to.n_coeffs(), to.n_harmonics());
+    let new: Vec<usize> = (0..ht)
+        .filter(|&j| !from.harmonics().contains(&to.harmonics()[j]))
+        .collect();
+    (0..n_dof)
+        .flat_map(|d| {
+            new.iter()
+                .flat_map(move |&j| [d * nt + 1 + j, d * nt + 1 + ht + j])
+        })
+        .collect()
+}
+
+fn norm(x: &[f64]) -> f64 {
+    x.iter().map(|v| v * v).sum::<f64>().sqrt()
+}
+
+/// A start on the period-doubled branch at the located period doubling `pd` of a branch
+/// of `system` on `basis` (see the module docs). Errors when no start with a half-order
+/// part is found on either side.
+pub fn switch_at_period_doubling(
+    system: &dyn System,
+    basis: &Basis,
+    pd: &HbSolution,
+    opts: &SwitchOptions,
+) -> Result<SwitchedStart, ContinuationError> {
+    let doubled = doubled_basis(basis)?;
+    let hb = HarmonicBalance::new(system, &doubled, opts.aft_samples)?;
+    let a0 = embed(&pd.unknowns(), basis, &doubled);
+    let n = a0.len();
+    let n_dof = n / doubled.n_coeffs();
+    let half = new_coefficients(basis, &doubled, n_dof);
+
+    // the half-order mode: inverse iteration on the new coefficients
+    let mut r = vec![0.0; n];
+    let parts = hb.residual_jacobian(&a0, pd.omega, &mut r)?;
+    let dense = hb.dense_jacobian(&parts);
+    let lu = Mat::from_fn(n, n, |i, j| dense[i * n + j]).partial_piv_lu();
+    let mut v = vec![0.0; n];
+    for (k, &i) in half.iter().enumerate() {
+        v[i] = 1.0 + 0.37 * k as f64;
+    }
+    for _ in 0..4 {
+        let x = lu.solve(Mat::from_fn(n, 1, |i, _| v[i]));
+        let mut next = vec![0.0; n];
+        for &i in &half {
+            next[i] = x[(i, 0)];
+        }
+        let s = norm(&next);
+        if !(s.is_finite() && s > 0.0) {
+            return Err(ContinuationError::Switch(
+                "no half-order mode (singular Jacobian)".into(),
+            ));
+        }
+        v = next.into_iter().map(|y| y / s).collect();
+    }
+
+    let scale = a0.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-300);
+    let share = |a: &[f64]| {
+        let h: f64 = half.iter().map(|&i| a[i] * a[i]).sum::<f64>().sqrt();
+        h / norm(a).max(1e-300)
+    };
+    let newton = NewtonOptions::default();
+    let mut best: Option<SwitchedStart> = None;
+    for side in [1.0, -1.0] {
+        for sign in [1.0, -1.0] {
+            let omega = pd.omega + side * opts.delta;
+            let guess: Vec<f64> = a0
+                .iter()
+                .zip(&v)
+                .map(|(a, m)| a + sign * opts.amplitude * scale * m)
+                .collect();
+            let Ok((a, _)) = solve_fixed(&hb, omega, &guess, &newton) else {
+                continue;
+            };
+            let s = share(&a);
+            if s >= opts.min_share && best.as_ref().is_none_or(|b| s > b.half_order_share) {
+                best = Some(SwitchedStart {
+                    basis: doubled.clone(),
+                    omega,
+                    unknowns: a,
+                    half_order_share: s,
+                });
+            }
+        }
+        if best.is_some() {
+            break;
+        }
+    }
+    best.ok_or_else(|| {
+        ContinuationError::Switch(format!(
+            "period doubling at {}: no period-doubled solution within {} of it",
+            pd.omega, opts.delta
+        ))
+    })
+}
