@@ -111,30 +111,13 @@ fn the_h1_fold_curve_is_the_closed_form_and_has_its_cusp() {
     assert!((cusp.p - f_c).abs() < 1e-3 * f_c, "{cusp:?}");
 }
 
-/// The ω of the curve's points at parameter `p`: each crossing of `p` interpolated
-/// linearly, sorted.
-fn crossings(c: &FoldCurve, p: f64) -> Vec<f64> {
-    let mut out: Vec<f64> = c
-        .points
-        .windows(2)
-        .filter(|w| (w[0].p - p) * (w[1].p - p) <= 0.0 && w[0].p != w[1].p)
-        .map(|w| {
-            let t = (p - w[0].p) / (w[1].p - w[0].p);
-            w[0].omega + t * (w[1].omega - w[0].omega)
-        })
-        .collect();
-    out.sort_by(f64::total_cmp);
-    out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    out
-}
-
 #[test]
 fn the_h3_fold_curve_passes_through_the_saddle_nodes_of_other_sweeps() {
     let c = curve(3);
     for force in [0.1, 0.3] {
         let mut swept: Vec<f64> = sweep_folds(3, force).into_iter().map(|f| f.0).collect();
         swept.sort_by(f64::total_cmp);
-        let on_curve = crossings(&c, force);
+        let on_curve = c.omegas_at(force);
         eprintln!("F = {force}: sweep folds {swept:?}, curve {on_curve:?}");
         assert_eq!(swept.len(), on_curve.len(), "F = {force}");
         for (a, b) in swept.iter().zip(&on_curve) {
@@ -148,7 +131,7 @@ fn the_h3_fold_curve_passes_through_the_saddle_nodes_of_other_sweeps() {
 #[test]
 fn the_fold_curve_converges_with_the_order() {
     let curves = [curve(1), curve(3), curve(5)];
-    let at = |k: usize| crossings(&curves[k], 0.3);
+    let at = |k: usize| curves[k].omegas_at(0.3);
     let (h1, h3, h5) = (at(0), at(1), at(2));
     eprintln!("F = 0.3: H = 1 {h1:?}, H = 3 {h3:?}, H = 5 {h5:?}");
     assert!(h1.len() == 2 && h3.len() == 2 && h5.len() == 2);

@@ -3,6 +3,8 @@
 //! the closed form of the one-harmonic Duffing balance; and `tmrotor campaign map` on a
 //! campaign of the coupled rotor.
 
+mod common;
+
 use tmrotor::campaign::map::{MapSlice, build_map, pairs_near, refine_pair_end};
 use tmrotor::continuation::fold::{FoldOptions, continue_fold};
 use tmrotor::continuation::{Continuation, ContinuationOptions};
@@ -100,13 +102,8 @@ fn the_grid_map_agrees_with_the_continued_fold_curve_and_brackets_the_cusp() {
     for c in &fold_curves {
         for &(p, omega) in &c.points {
             let near = curve
-                .points
-                .windows(2)
-                .filter(|w| (w[0].p - p) * (w[1].p - p) <= 0.0 && w[0].p != w[1].p)
-                .map(|w| {
-                    let t = (p - w[0].p) / (w[1].p - w[0].p);
-                    w[0].omega + t * (w[1].omega - w[0].omega)
-                })
+                .omegas_at(p)
+                .into_iter()
                 .map(|w| (w - omega).abs())
                 .fold(f64::INFINITY, f64::min);
             assert!(
@@ -306,7 +303,7 @@ fn campaign_map_joins_the_recorded_saddle_nodes_of_the_coupled_rotor() {
             "{f}"
         );
     }
-    if let Some(python) = python() {
+    if let Some(python) = common::python() {
         let script = r#"
 import sys
 from mcap.reader import make_reader
@@ -388,17 +385,4 @@ fn bisection_closes_in_on_the_closed_form_cusp() {
         "the cusp outside the bracket: {done:?}"
     );
     assert!((done.omega - omega_c).abs() < 1e-4, "{done:?}");
-}
-
-/// The Python with the official MCAP readers (`TMROTOR_PYTHON`); required under `CI=true`.
-fn python() -> Option<String> {
-    match std::env::var("TMROTOR_PYTHON") {
-        Ok(p) if !p.is_empty() => Some(p),
-        _ => {
-            let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
-            assert!(!ci, "CI=true but TMROTOR_PYTHON is not set");
-            eprintln!("skipped the Python reader: TMROTOR_PYTHON is not set");
-            None
-        }
-    }
 }

@@ -9,6 +9,8 @@
 //!   multipliers above +1 changes by one at each fold, the middle segment is unstable, and
 //!   the fold the multipliers do not confirm is reported.
 
+mod common;
+
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use tmrotor::hb::{HarmonicBalance, HbSolution, NewtonOptions, newton};
@@ -198,20 +200,6 @@ fn stability_agrees_with_the_folds_of_a_branch_with_a_fold_pair() {
     assert_eq!(report.warnings.len(), sink.notes.len());
 }
 
-/// The Python interpreter with the official MCAP readers (`.ci/run` exports it), or
-/// `None` with the reason printed (a failure under `CI=true`).
-fn python() -> Option<String> {
-    match std::env::var("TMROTOR_PYTHON") {
-        Ok(p) if !p.is_empty() => Some(p),
-        _ => {
-            let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
-            assert!(!ci, "CI=true but TMROTOR_PYTHON is not set");
-            eprintln!("skipped: TMROTOR_PYTHON is not set");
-            None
-        }
-    }
-}
-
 /// `tools/check_fold_stability.py` (official MCAP readers only) on a recorded branch with a
 /// fold pair: no problem; on the same branch with the middle segment's verdicts replaced
 /// by the product's own (as versions before the fold parity recorded them): problems found
@@ -219,7 +207,9 @@ fn python() -> Option<String> {
 #[test]
 fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
     use tmrotor::record::Sink;
-    let Some(python) = python() else { return };
+    let Some(python) = common::python() else {
+        return;
+    };
     let dir = tempfile::tempdir().expect("tempdir");
     let settings = fold_pair_branch();
     let problem = SweepProblem::new(&settings).expect("problem");

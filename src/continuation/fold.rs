@@ -141,6 +141,25 @@ pub struct FoldCurve {
     pub finish: FoldFinish,
 }
 
+impl FoldCurve {
+    /// ω where the curve crosses the parameter value `p`, each crossing interpolated
+    /// linearly between its two points, sorted.
+    pub fn omegas_at(&self, p: f64) -> Vec<f64> {
+        let mut out: Vec<f64> = self
+            .points
+            .windows(2)
+            .filter(|w| (w[0].p - p) * (w[1].p - p) <= 0.0 && w[0].p != w[1].p)
+            .map(|w| {
+                let t = (p - w[0].p) / (w[1].p - w[0].p);
+                w[0].omega + t * (w[1].omega - w[0].omega)
+            })
+            .collect();
+        out.sort_by(f64::total_cmp);
+        out.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        out
+    }
+}
+
 /// The extended problem `F(A, ω, p)` on one basis.
 struct Extended<'f> {
     family: &'f dyn Family,

@@ -55,3 +55,17 @@ ambient_temp_c = 30.0
 [[runs]]
 name = "c"
 "#;
+
+/// The Python with the official MCAP readers (`TMROTOR_PYTHON`); `None` (the test says it
+/// skips that part) when it is not set, except under `CI=true`, where that fails.
+pub fn python() -> Option<String> {
+    match std::env::var("TMROTOR_PYTHON") {
+        Ok(p) if !p.is_empty() => Some(p),
+        _ => {
+            let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
+            assert!(!ci, "CI=true but TMROTOR_PYTHON is not set");
+            eprintln!("skipped: TMROTOR_PYTHON is not set");
+            None
+        }
+    }
+}
