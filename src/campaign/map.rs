@@ -148,13 +148,12 @@ pub fn build_map(
     let tol = omega_tolerance.unwrap_or(0.25 * (hi - lo).abs().max(1e-12));
     // Curves: per slice, the curve id of each bifurcation (same index as `bifurcations`).
     let mut curves: Vec<MapCurve> = Vec::new();
-    let mut ids_prev: Vec<usize> = Vec::new();
-    let mut prev: Option<&MapSlice> = None;
     let mut ids_of: Vec<Vec<usize>> = Vec::new();
-    for s in &slices {
+    for (k, s) in slices.iter().enumerate() {
         let mut ids = vec![usize::MAX; s.bifurcations.len()];
-        if let Some(ps) = prev {
-            match_points(ps, s, tol, &ids_prev, &mut ids);
+        if let (Some(prev), Some(ids_prev)) = (k.checked_sub(1).map(|i| &slices[i]), ids_of.last())
+        {
+            match_points(prev, s, tol, ids_prev, &mut ids);
         }
         for (j, (kind, omega)) in s.bifurcations.iter().enumerate() {
             if ids[j] == usize::MAX {
@@ -167,9 +166,7 @@ pub fn build_map(
             }
             curves[ids[j]].points.push((s.p, *omega));
         }
-        ids_of.push(ids.clone());
-        ids_prev = ids;
-        prev = Some(s);
+        ids_of.push(ids);
     }
     let pair_ends = pair_ends(&slices, &ids_of);
     let regions = slices.iter().flat_map(|s| regions(s, lo, hi)).collect();
@@ -663,29 +660,37 @@ pub fn write_map_mcap(map: &OperatingMap, path: &Path) -> Result<(), CampaignErr
         ))
         .create(std::io::Cursor::new(Vec::new()))
         .map_err(mcap_err)?;
-    let mut publish =
-        |topic: Topic, seq: u32, msg: &dyn Fn() -> Vec<u8>| -> Result<(), CampaignError> {
-            let schema = writer
-                .add_schema(topic.schema.name, "protobuf", topic.schema.descriptor_set)
-                .map_err(mcap_err)?;
-            let channel = writer
-                .add_channel(
-                    schema,
-                    topic.name,
-                    "protobuf",
-                    &std::collections::BTreeMap::new(),
-                )
-                .map_err(mcap_err)?;
-            let header = mcap::records::MessageHeader {
-                channel_id: channel,
-                sequence: seq,
-                log_time: u64::from(seq),
-                publish_time: u64::from(seq),
-            };
-            writer
-                .write_to_known_channel(&header, &msg())
-                .map_err(mcap_err)
+    // each topic's schema and channel registered once, at its first message
+    let mut channels: std::collections::BTreeMap<&str, u16> = std::collections::BTreeMap::new();
+    let mut publish = |topic: Topic, seq: u32, data: &[u8]| -> Result<(), CampaignError> {
+        let channel_id = match channels.get(topic.name) {
+            Some(&id) => id,
+            None => {
+                let schema = writer
+                    .add_schema(topic.schema.name, "protobuf", topic.schema.descriptor_set)
+                    .map_err(mcap_err)?;
+                let id = writer
+                    .add_channel(
+                        schema,
+                        topic.name,
+                        "protobuf",
+                        &std::collections::BTreeMap::new(),
+                    )
+                    .map_err(mcap_err)?;
+                channels.insert(topic.name, id);
+                id
+            }
         };
+        let header = mcap::records::MessageHeader {
+            channel_id,
+            sequence: seq,
+            log_time: u64::from(seq),
+            publish_time: u64::from(seq),
+        };
+        writer
+            .write_to_known_channel(&header, data)
+            .map_err(mcap_err)
+    };
     let info = pb::MapInfo {
         tool_name: "tmrotor".into(),
         tool_version: env!("CARGO_PKG_VERSION").into(),
@@ -701,7 +706,7 @@ pub fn write_map_mcap(map: &OperatingMap, path: &Path) -> Result<(), CampaignErr
             })
             .collect(),
     };
-    publish(TOPIC_MAP_INFO, 0, &|| info.encode_to_vec())?;
+    publish(TOPIC_MAP_INFO, 0, &info.encode_to_vec())?;
     for (k, c) in map.curves.iter().enumerate() {
         let msg = pb::MapCurve {
             curve: c.id as u32,
@@ -709,7 +714,7 @@ pub fn write_map_mcap(map: &OperatingMap, path: &Path) -> Result<(), CampaignErr
             value: c.points.iter().map(|q| q.0).collect(),
             omega_rad_s: c.points.iter().map(|q| q.1).collect(),
         };
-        publish(TOPIC_MAP_CURVES, k as u32, &|| msg.encode_to_vec())?;
+        publish(TOPIC_MAP_CURVES, k as u32, &msg.encode_to_vec())?;
     }
     for (k, e) in map.pair_ends.iter().enumerate() {
         let msg = pb::MapPairEnd {
@@ -719,7 +724,7 @@ pub fn write_map_mcap(map: &OperatingMap, path: &Path) -> Result<(), CampaignErr
             run: e.run.clone(),
             bisections: e.refined as u32,
         };
-        publish(TOPIC_MAP_PAIR_ENDS, k as u32, &|| msg.encode_to_vec())?;
+        publish(TOPIC_MAP_PAIR_ENDS, k as u32, &msg.encode_to_vec())?;
     }
     for (k, r) in map.regions.iter().enumerate() {
         let msg = pb::MapRegion {
@@ -729,7 +734,7 @@ pub fn write_map_mcap(map: &OperatingMap, path: &Path) -> Result<(), CampaignErr
             stable_responses: r.stable as u32,
             unstable_responses: r.unstable as u32,
         };
-        publish(TOPIC_MAP_REGIONS, k as u32, &|| msg.encode_to_vec())?;
+        publish(TOPIC_MAP_REGIONS, k as u32, &msg.encode_to_vec())?;
     }
     writer.finish().map_err(mcap_err)?;
     let bytes = writer.into_inner().into_inner();

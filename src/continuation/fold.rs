@@ -205,14 +205,13 @@ impl Extended<'_> {
             .map_err(|e| err(format!("parameter {p}: {e}")))
     }
 
-    /// Dense `∂R/∂A` and `R` at `(a, ω)` of `system`.
+    /// Dense `∂R/∂A` and `R` at `(a, ω)`.
     fn jacobian(
         &self,
-        system: &dyn System,
+        hb: &HarmonicBalance,
         a: &[f64],
         omega: f64,
     ) -> Result<(Mat<f64>, Vec<f64>), ContinuationError> {
-        let hb = self.hb(system)?;
         let n = self.n();
         let mut r = vec![0.0; n];
         let parts = hb.residual_jacobian(a, omega, &mut r)?;
@@ -246,20 +245,21 @@ impl Extended<'_> {
         Ok((v, g, w))
     }
 
-    /// `wᵀ J v` for the Jacobian of `system` at `(a, ω)`.
+    /// `wᵀ J v` for the Jacobian at `(a, ω)`, applied without assembling it.
     fn wjv(
         &self,
-        system: &dyn System,
+        hb: &HarmonicBalance,
         a: &[f64],
         omega: f64,
         v: &[f64],
         w: &[f64],
     ) -> Result<f64, ContinuationError> {
-        let (j, _) = self.jacobian(system, a, omega)?;
         let n = self.n();
-        Ok((0..n)
-            .map(|r| w[r] * (0..n).map(|k| j[(r, k)] * v[k]).sum::<f64>())
-            .sum())
+        let mut r = vec![0.0; n];
+        let parts = hb.residual_jacobian(a, omega, &mut r)?;
+        let mut jv = vec![0.0; n];
+        hb.apply_jacobian(&parts, v, &mut jv);
+        Ok(w.iter().zip(&jv).map(|(x, y)| x * y).sum())
     }
 
     /// `F` and its Jacobian at `z = (A, ω, p)`, bordered by `(b, c)`.
@@ -267,38 +267,39 @@ impl Extended<'_> {
         let n = self.n();
         let (a, omega, p) = (&z[..n], z[n], z[n + 1]);
         let system = self.system(p)?;
-        let (j, r) = self.jacobian(&*system, a, omega)?;
-        let (v, g, w) = Self::bordered(&j, b, c)?;
         let hb = self.hb(&*system)?;
+        let (j, r) = self.jacobian(&hb, a, omega)?;
+        let (v, g, w) = Self::bordered(&j, b, c)?;
         let mut r_omega = vec![0.0; n];
         hb.d_residual_d_omega(a, omega, &mut r_omega)?;
 
         // ∂R/∂p and ∂g/∂p: central differences over the family.
         let hp = 1e-6 * self.scale[n + 1];
         let (sp, sm) = (self.system(p + hp)?, self.system(p - hp)?);
+        let (hbp, hbm) = (self.hb(&*sp)?, self.hb(&*sm)?);
         let mut rp = vec![0.0; n];
         let mut rm = vec![0.0; n];
-        self.hb(&*sp)?.residual(a, omega, &mut rp)?;
-        self.hb(&*sm)?.residual(a, omega, &mut rm)?;
+        hbp.residual(a, omega, &mut rp)?;
+        hbm.residual(a, omega, &mut rm)?;
         let r_p: Vec<f64> = rp
             .iter()
             .zip(&rm)
             .map(|(x, y)| (x - y) / (2.0 * hp))
             .collect();
         let g_p =
-            -(self.wjv(&*sp, a, omega, &v, &w)? - self.wjv(&*sm, a, omega, &v, &w)?) / (2.0 * hp);
+            -(self.wjv(&hbp, a, omega, &v, &w)? - self.wjv(&hbm, a, omega, &v, &w)?) / (2.0 * hp);
         // ∂g/∂ω
         let ho = 1e-6 * omega.abs().max(1e-6);
-        let g_omega = -(self.wjv(&*system, a, omega + ho, &v, &w)?
-            - self.wjv(&*system, a, omega - ho, &v, &w)?)
+        let g_omega = -(self.wjv(&hb, a, omega + ho, &v, &w)?
+            - self.wjv(&hb, a, omega - ho, &v, &w)?)
             / (2.0 * ho);
         // ∂g/∂A = −(∂/∂ε J(A + εv))ᵀ w
         let vnorm = v.iter().map(|x| x * x).sum::<f64>().sqrt();
         let anorm = a.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-300);
         let eps = 1e-6 * anorm / vnorm.max(1e-300);
         let shifted = |s: f64| -> Vec<f64> { a.iter().zip(&v).map(|(x, y)| x + s * y).collect() };
-        let (jp, _) = self.jacobian(&*system, &shifted(eps), omega)?;
-        let (jm, _) = self.jacobian(&*system, &shifted(-eps), omega)?;
+        let (jp, _) = self.jacobian(&hb, &shifted(eps), omega)?;
+        let (jm, _) = self.jacobian(&hb, &shifted(-eps), omega)?;
         let g_a: Vec<f64> = (0..n)
             .map(|k| {
                 -(0..n)
@@ -430,7 +431,7 @@ pub fn continue_fold(
     // Bordering from the start point's Jacobian: its smallest singular direction
     // approximated by one inverse iteration from a generic vector.
     let system = ext.system(p0)?;
-    let (j0, _) = ext.jacobian(&*system, a0, omega0)?;
+    let (j0, _) = ext.jacobian(&ext.hb(&*system)?, a0, omega0)?;
     drop(system);
     let generic: Vec<f64> = (0..n).map(|k| 1.0 + 0.1 * k as f64).collect();
     let (v, _, w) = Extended::bordered(&j0, &generic, &generic)?;
