@@ -609,3 +609,62 @@ fn thermal_problems_carry_their_lines() {
         )
     );
 }
+
+/// The ROSS reference rotor with a tabulated support (`tests/fixtures/ross`), edited.
+fn table_rotor(from: &str, to: &str) -> String {
+    let text = include_str!("fixtures/ross/speed_table.toml");
+    assert!(text.contains(from), "fixture edit {from:?} not found");
+    text.replacen(from, to, 1)
+}
+
+#[test]
+fn support_table_speeds_must_increase() {
+    let e = check(
+        &table_rotor(
+            "speeds_rad_s = [200.0, 1000.0]",
+            "speeds_rad_s = [200.0, 100.0]",
+        ),
+        "supports[1].table.speeds_rad_s[1]",
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
+    );
+    assert!(e.to_string().contains("increase strictly"), "{e}");
+}
+
+#[test]
+fn support_table_needs_one_value_per_speed() {
+    let e = check(
+        &table_rotor(
+            "kxy_n_m = [1.000000e+06, 9.000000e+06]",
+            "kxy_n_m = [1.0e6, 9.0e6, 1.2e7]",
+        ),
+        "supports[1].table.kxy_n_m",
+        |k| matches!(k, InvalidKind::BadConnection(_)),
+    );
+    assert!(e.to_string().contains("3 values for 2 speeds"), "{e}");
+}
+
+#[test]
+fn support_table_and_constants_are_refused_together() {
+    let e = check(
+        &table_rotor(
+            "node = 7\n",
+            "node = 7\nstiffness_n_m = 1e7\ndamping_xy_n_s_m = 5.0\n",
+        ),
+        "supports[1].table",
+        |k| matches!(k, InvalidKind::BadConnection(_)),
+    );
+    let msg = e.to_string();
+    assert!(
+        msg.contains("stiffness_n_m") && msg.contains("damping_xy_n_s_m"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn cross_coupled_coefficients_must_be_finite() {
+    check(
+        &table_rotor("stiffness_xy_n_m = 2.000000e+06", "stiffness_xy_n_m = nan"),
+        "supports[0].stiffness_xy_n_m",
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
+    );
+}

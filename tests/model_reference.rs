@@ -68,6 +68,7 @@ fn structs() -> Vec<(&'static str, BTreeSet<&'static str>)> {
         ("shafts", fields::<mf::ShaftSpec>()),
         ("disks", fields::<mf::DiskSpec>()),
         ("supports", fields::<mf::SupportSpec>()),
+        ("supports.table", fields::<mf::SupportTableSpec>()),
         ("bearings", fields::<mf::BearingSpec>()),
         ("thermal", fields::<ts::ThermalSpec>()),
         ("thermal.viscosity", fields::<ts::ViscositySpec>()),

@@ -811,7 +811,8 @@ impl CoupledRotor {
         let mut eval = NonlinearEval::new(p, q);
         let mut x = vec![0.0; n];
         let gravity = &self.assembly.gravity;
-        let k = &self.assembly.stiffness;
+        // Tabulated supports at standstill (their lowest speed).
+        let k = &self.assembly.stiffness_at(0.0);
         let regs = [1e9, 1e8, 1e7, 1e6, 1e5, 1e4, 1e3, 0.0];
         for &k_reg in &regs {
             for _ in 0..60 {

@@ -8,7 +8,8 @@
 //! ```
 //!
 //! are brought to a well-scaled state-space form: with the Cholesky factor `M = L Lᵀ`
-//! and `y = Lᵀ q`, `ÿ + D̃ ẏ + K̃ y = 0` with `K̃ = L⁻¹(K+K_b)L⁻ᵀ` (symmetric) and
+//! and `y = Lᵀ q`, `ÿ + D̃ ẏ + K̃ y = 0` with `K̃ = L⁻¹(K+K_b)L⁻ᵀ` (symmetric unless a
+//! support is cross-coupled) and
 //! `D̃ = L⁻¹(C+ΣG)L⁻ᵀ`; the state `z = [y, S⁻¹ẏ]` with `S = diag(√K̃_ii)` gives
 //! `A = [[0, S], [−S⁻¹K̃, −S⁻¹D̃S]]`, in which every DoF's 2×2 block is nearly normal
 //! (`[[0, s_i], [−s_i, 0]]` for a diagonally dominant DoF). Rotor models mix light nodes
@@ -37,6 +38,10 @@
 //! change between grid points, then located by regula falsi (Illinois) on fresh modal
 //! solves, so the result does not depend on the grid spacing once the crossing is
 //! bracketed. The whirl reported is that of the mode at the crossing.
+
+mod unbalance;
+
+pub use unbalance::{NodeOrbit, UnbalanceResponse, unbalance_response};
 
 use faer::Mat;
 use num_complex::Complex;
@@ -108,6 +113,17 @@ impl Mode {
     pub fn frequency_hz(&self) -> f64 {
         self.frequency_rad_s / (2.0 * std::f64::consts::PI)
     }
+
+    /// Logarithmic decrement `δ = −2π Re λ / Im λ` (the decay of the amplitude over one
+    /// damped period: `ln(x_k / x_{k+1})`; negative for an unstable mode).
+    pub fn log_decrement(&self) -> f64 {
+        log_decrement(self.eigenvalue)
+    }
+}
+
+/// Logarithmic decrement of the eigenvalue `λ`: `−2π Re λ / Im λ`.
+pub fn log_decrement(lambda: Complex<f64>) -> f64 {
+    -2.0 * std::f64::consts::PI * lambda.re / lambda.im
 }
 
 /// Whirl sense of a displacement shape (node-major `[x, y, θx, θy]`).
@@ -165,7 +181,7 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
         if i < n {
             if j == i + n { scale[i] } else { 0.0 }
         } else if j < n {
-            -0.5 * (k_t[(i - n, j)] + k_t[(j, i - n)]) / scale[i - n]
+            -k_t[(i - n, j)] / scale[i - n]
         } else {
             -d_t[(i - n, j - n)] * scale[j - n] / scale[i - n]
         }

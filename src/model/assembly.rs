@@ -64,6 +64,8 @@ pub struct Unbalance {
     pub phase_rad: f64,
     /// Rotor speed / reference speed ω.
     pub speed_ratio: f64,
+    /// Id of the rotor that carries the disk.
+    pub rotor_id: String,
 }
 
 /// A bearing linearised at its operating point.
@@ -103,6 +105,61 @@ pub struct Assembly {
     pub gravity: Vec<f64>,
     /// Disk unbalances.
     pub unbalances: Vec<Unbalance>,
+    /// Supports with coefficients over speed; `stiffness` and `damping` do not hold them,
+    /// [`Self::linear_part`] adds them at each speed.
+    pub support_tables: Vec<SupportTable>,
+}
+
+/// A support whose coefficients are tabulated over the speed of its rotor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SupportTable {
+    /// Support id.
+    pub id: String,
+    /// x DoF of the support's node (y is `+1`).
+    pub dof_x: usize,
+    /// x DoF of the second node, `None` for ground.
+    pub to_dof_x: Option<usize>,
+    /// Speed ratio of the rotor that owns the node: the table's speed is
+    /// `|speed_ratio| ω`.
+    pub speed_ratio: f64,
+    /// Table speeds (rad/s), strictly increasing.
+    pub speeds_rad_s: Vec<f64>,
+    /// `[[kxx, kxy], [kyx, kyy]]`, one value per speed (N/m).
+    pub stiffness: [[Vec<f64>; 2]; 2],
+    /// `[[cxx, cxy], [cyx, cyy]]`, one value per speed (N·s/m).
+    pub damping: [[Vec<f64>; 2]; 2],
+}
+
+impl SupportTable {
+    /// Stiffness and damping at reference speed `omega`: linear interpolation in the
+    /// rotor's speed, the end values outside the table.
+    pub fn at(&self, omega: f64) -> ([[f64; 2]; 2], [[f64; 2]; 2]) {
+        let w = (self.speed_ratio * omega).abs();
+        let sp = &self.speeds_rad_s;
+        let n = sp.len();
+        let (i, f) = if n < 2 || w <= sp[0] {
+            (0, 0.0)
+        } else if w >= sp[n - 1] {
+            (n - 2, 1.0)
+        } else {
+            let i = sp.partition_point(|&s| s <= w).saturating_sub(1).min(n - 2);
+            (i, (w - sp[i]) / (sp[i + 1] - sp[i]))
+        };
+        let interp = |v: &[f64]| {
+            if n < 2 {
+                v[0]
+            } else {
+                v[i] + f * (v[i + 1] - v[i])
+            }
+        };
+        let pick = |m: &[[Vec<f64>; 2]; 2]| {
+            [
+                [interp(&m[0][0]), interp(&m[0][1])],
+                [interp(&m[1][0]), interp(&m[1][1])],
+            ]
+        };
+        (pick(&self.stiffness), pick(&self.damping))
+    }
 }
 
 fn add_plane(target: &mut DenseMatrix, idx: [usize; 4], m: &Mat4, scale: f64) {
@@ -250,17 +307,44 @@ impl Assembly {
                     mass_eccentricity_kg_m: d.mass_kg * d.eccentricity_m,
                     phase_rad: d.phase_deg.to_radians(),
                     speed_ratio: model.speed_ratio(r).value(),
+                    rotor_id: spec.rotors[r].id.clone(),
                 });
             }
         }
 
+        let mut cross: Vec<(usize, Option<usize>, [[f64; 2]; 2], [[f64; 2]; 2])> = Vec::new();
+        let mut support_tables = Vec::new();
         for s in &spec.supports {
             let a = node(s.node)?;
             let b = s.to_node.map(node).transpose()?;
-            let (k, c) = (s.stiffness_xy(), s.damping_xy());
+            let (k, c) = (s.stiffness_matrix(), s.damping_matrix());
             for (i, dir) in [Dir::X, Dir::Y].into_iter().enumerate() {
-                add_spring(&mut stiffness, dof(a, dir), b.map(|b| dof(b, dir)), k[i]);
-                add_spring(&mut dashpots, dof(a, dir), b.map(|b| dof(b, dir)), c[i]);
+                add_spring(&mut stiffness, dof(a, dir), b.map(|b| dof(b, dir)), k[i][i]);
+                add_spring(&mut dashpots, dof(a, dir), b.map(|b| dof(b, dir)), c[i][i]);
+            }
+            // Cross-coupled terms stay out of the Rayleigh damping (added below).
+            let off = |m: [[f64; 2]; 2]| [[0.0, m[0][1]], [m[1][0], 0.0]];
+            if k[0][1] != 0.0 || k[1][0] != 0.0 || c[0][1] != 0.0 || c[1][0] != 0.0 {
+                cross.push((dof(a, Dir::X), b.map(|b| dof(b, Dir::X)), off(k), off(c)));
+            }
+            if let Some(t) = &s.table {
+                let col = |v: &[f64]| {
+                    if v.is_empty() {
+                        vec![0.0; t.speeds_rad_s.len()]
+                    } else {
+                        v.to_vec()
+                    }
+                };
+                let [kxx, kxy, kyx, kyy, cxx, cxy, cyx, cyy] = t.columns().map(|(_, v)| col(v));
+                support_tables.push(SupportTable {
+                    id: s.id.clone(),
+                    dof_x: dof(a, Dir::X),
+                    to_dof_x: b.map(|b| dof(b, Dir::X)),
+                    speed_ratio: model.speed_ratio(model.rotor_of(a)).value(),
+                    speeds_rad_s: t.speeds_rad_s.clone(),
+                    stiffness: [[kxx, kxy], [kyx, kyy]],
+                    damping: [[cxx, cxy], [cyx, cyy]],
+                });
             }
             for dir in [Dir::ThetaX, Dir::ThetaY] {
                 add_spring(
@@ -280,6 +364,10 @@ impl Assembly {
             .zip(mass.data.iter().zip(stiffness.data.iter()))
         {
             *d += a0 * m + a1 * k;
+        }
+        for (ax, bx, k, c) in &cross {
+            add_spring2(&mut stiffness, *ax, *bx, k);
+            add_spring2(&mut damping, *ax, *bx, c);
         }
 
         let mut gravity = vec![0.0; n];
@@ -304,6 +392,7 @@ impl Assembly {
             bearing_stiffness: DenseMatrix::zeros(n),
             gravity,
             unbalances,
+            support_tables,
         };
         asm.linearise_bearings(model)?;
         Ok(asm)
@@ -366,7 +455,8 @@ impl Assembly {
         let mut loads: Vec<[f64; 2]> = vec![[0.0, 0.0]; spec.bearings.len()];
         if !free.is_empty() {
             let n = self.n_dof;
-            let mut base = self.stiffness.clone();
+            // Tabulated supports at standstill (their lowest speed).
+            let mut base = self.stiffness_at(0.0);
             for lb in fixed.iter().flatten() {
                 add_spring2(&mut base, lb.inner_dof_x, lb.outer_dof_x, &lb.stiffness_n_m);
             }
@@ -447,7 +537,20 @@ impl Assembly {
                 *v += s * gv;
             }
         }
+        for t in &self.support_tables {
+            add_spring2(&mut d, t.dof_x, t.to_dof_x, &t.at(omega).1);
+        }
         d
+    }
+
+    /// Stiffness of the shafts and supports at reference speed `omega` (rad/s): `K` plus
+    /// the tabulated supports at their speed.
+    pub fn stiffness_at(&self, omega: f64) -> DenseMatrix {
+        let mut k = self.stiffness.clone();
+        for t in &self.support_tables {
+            add_spring2(&mut k, t.dof_x, t.to_dof_x, &t.at(omega).0);
+        }
+        k
     }
 
     /// Linear part for the nonlinear engine: `M`, `C + Σ s_r ω G_r`, `K` (shafts and
@@ -456,7 +559,7 @@ impl Assembly {
         LinearPart::mechanical(
             self.mass.clone(),
             self.velocity_matrix(omega),
-            self.stiffness.clone(),
+            self.stiffness_at(omega),
         )
     }
 
@@ -501,5 +604,59 @@ impl Assembly {
     /// Global DoF of node `id` in direction `dir`.
     pub fn dof(&self, id: u32, dir: Dir) -> Option<usize> {
         self.node_index(id).map(|i| dof(i, dir))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn table() -> SupportTable {
+        let v = |a: f64, b: f64, c: f64| vec![a, b, c];
+        SupportTable {
+            id: "t".into(),
+            dof_x: 0,
+            to_dof_x: None,
+            speed_ratio: -2.0,
+            speeds_rad_s: vec![100.0, 200.0, 400.0],
+            stiffness: [
+                [v(1.0, 3.0, 7.0), v(0.0, -2.0, -2.0)],
+                [v(5.0, 5.0, 1.0), v(2.0, 4.0, 8.0)],
+            ],
+            damping: [
+                [v(10.0, 20.0, 40.0), v(0.0, 0.0, 0.0)],
+                [v(0.0, 0.0, 0.0), v(1.0, 1.0, 1.0)],
+            ],
+        }
+    }
+
+    /// Linear between entries in the rotor's speed |s_r ω|, end values outside.
+    #[test]
+    fn support_table_interpolates_in_the_rotor_speed() {
+        let t = table();
+        // ω = 75 → rotor speed 150: halfway between the first two entries
+        let (k, c) = t.at(75.0);
+        assert_eq!(k, [[2.0, -1.0], [5.0, 3.0]]);
+        assert_eq!(c, [[15.0, 0.0], [0.0, 1.0]]);
+        // rotor speed 300: halfway between the last two
+        assert_eq!(t.at(150.0).0, [[5.0, -2.0], [3.0, 6.0]]);
+        // below and above the table
+        assert_eq!(t.at(0.0).0, [[1.0, 0.0], [5.0, 2.0]]);
+        assert_eq!(t.at(1e4).0, [[7.0, -2.0], [1.0, 8.0]]);
+        // at an entry
+        assert_eq!(t.at(100.0).0, [[3.0, -2.0], [5.0, 4.0]]);
+    }
+
+    #[test]
+    fn a_one_entry_table_is_constant() {
+        let mut t = table();
+        t.speeds_rad_s.truncate(1);
+        for row in t.stiffness.iter_mut().chain(t.damping.iter_mut()) {
+            for v in row.iter_mut() {
+                v.truncate(1);
+            }
+        }
+        assert_eq!(t.at(0.0), t.at(1e3));
+        assert_eq!(t.at(5.0).0, [[1.0, 0.0], [5.0, 2.0]]);
     }
 }

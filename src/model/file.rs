@@ -186,9 +186,67 @@ pub struct SupportSpec {
     pub damping_xx_n_s_m: Option<f64>,
     /// Damping on y only (N·s/m), overriding `damping_n_s_m`.
     pub damping_yy_n_s_m: Option<f64>,
+    /// Cross-coupled stiffness: force on x per unit y displacement (N/m); default 0.
+    #[serde(default)]
+    pub stiffness_xy_n_m: f64,
+    /// Cross-coupled stiffness: force on y per unit x displacement (N/m); default 0.
+    #[serde(default)]
+    pub stiffness_yx_n_m: f64,
+    /// Cross-coupled damping: force on x per unit y velocity (N·s/m); default 0.
+    #[serde(default)]
+    pub damping_xy_n_s_m: f64,
+    /// Cross-coupled damping: force on y per unit x velocity (N·s/m); default 0.
+    #[serde(default)]
+    pub damping_yx_n_s_m: f64,
     /// Rotational stiffness on θx and θy (N·m/rad); default 0.
     #[serde(default)]
     pub rotational_stiffness_n_m_rad: f64,
+    /// Translational coefficients over the speed of the support's rotor, in place of the
+    /// constant ones (fluid-film bearings, seals).
+    pub table: Option<SupportTableSpec>,
+}
+
+/// `[supports.table]`: a support's eight translational coefficients at a list of speeds,
+/// interpolated linearly in between and held at the end values outside.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SupportTableSpec {
+    /// Speeds of the rotor that owns the support's `node` (rad/s), strictly increasing.
+    pub speeds_rad_s: Vec<f64>,
+    /// Coefficients at those speeds, one value per speed; an absent one is zero.
+    #[serde(default)]
+    pub kxx_n_m: Vec<f64>,
+    #[serde(default)]
+    pub kxy_n_m: Vec<f64>,
+    #[serde(default)]
+    pub kyx_n_m: Vec<f64>,
+    #[serde(default)]
+    pub kyy_n_m: Vec<f64>,
+    #[serde(default)]
+    pub cxx_n_s_m: Vec<f64>,
+    #[serde(default)]
+    pub cxy_n_s_m: Vec<f64>,
+    #[serde(default)]
+    pub cyx_n_s_m: Vec<f64>,
+    #[serde(default)]
+    pub cyy_n_s_m: Vec<f64>,
+}
+
+impl SupportTableSpec {
+    /// The eight coefficient lists with their key names, stiffness `[[xx, xy], [yx, yy]]`
+    /// first, then damping in the same order.
+    pub fn columns(&self) -> [(&'static str, &[f64]); 8] {
+        [
+            ("kxx_n_m", &self.kxx_n_m),
+            ("kxy_n_m", &self.kxy_n_m),
+            ("kyx_n_m", &self.kyx_n_m),
+            ("kyy_n_m", &self.kyy_n_m),
+            ("cxx_n_s_m", &self.cxx_n_s_m),
+            ("cxy_n_s_m", &self.cxy_n_s_m),
+            ("cyx_n_s_m", &self.cyx_n_s_m),
+            ("cyy_n_s_m", &self.cyy_n_s_m),
+        ]
+    }
 }
 
 /// `[[bearings]]`: a rolling bearing with all data of paper Tables A.1/A.2.
@@ -251,19 +309,56 @@ pub struct BearingSpec {
 }
 
 impl SupportSpec {
-    /// Stiffness on (x, y) after the per-direction overrides.
-    pub fn stiffness_xy(&self) -> [f64; 2] {
+    /// Constant translational stiffness `[[kxx, kxy], [kyx, kyy]]` (N/m) after the
+    /// per-direction overrides; the force on the node is `−K [x, y]`.
+    pub fn stiffness_matrix(&self) -> [[f64; 2]; 2] {
         [
-            self.stiffness_xx_n_m.unwrap_or(self.stiffness_n_m),
-            self.stiffness_yy_n_m.unwrap_or(self.stiffness_n_m),
+            [
+                self.stiffness_xx_n_m.unwrap_or(self.stiffness_n_m),
+                self.stiffness_xy_n_m,
+            ],
+            [
+                self.stiffness_yx_n_m,
+                self.stiffness_yy_n_m.unwrap_or(self.stiffness_n_m),
+            ],
         ]
     }
 
-    /// Damping on (x, y) after the per-direction overrides.
-    pub fn damping_xy(&self) -> [f64; 2] {
+    /// Constant translational damping `[[cxx, cxy], [cyx, cyy]]` (N·s/m) after the
+    /// per-direction overrides.
+    pub fn damping_matrix(&self) -> [[f64; 2]; 2] {
         [
-            self.damping_xx_n_s_m.unwrap_or(self.damping_n_s_m),
-            self.damping_yy_n_s_m.unwrap_or(self.damping_n_s_m),
+            [
+                self.damping_xx_n_s_m.unwrap_or(self.damping_n_s_m),
+                self.damping_xy_n_s_m,
+            ],
+            [
+                self.damping_yx_n_s_m,
+                self.damping_yy_n_s_m.unwrap_or(self.damping_n_s_m),
+            ],
         ]
+    }
+
+    /// Names of the constant translational keys given in the file (non-zero or
+    /// overridden), which a `table` replaces.
+    pub fn constant_keys_given(&self) -> Vec<&'static str> {
+        let mut out = Vec::new();
+        for (k, set) in [
+            ("stiffness_n_m", self.stiffness_n_m != 0.0),
+            ("damping_n_s_m", self.damping_n_s_m != 0.0),
+            ("stiffness_xx_n_m", self.stiffness_xx_n_m.is_some()),
+            ("stiffness_yy_n_m", self.stiffness_yy_n_m.is_some()),
+            ("damping_xx_n_s_m", self.damping_xx_n_s_m.is_some()),
+            ("damping_yy_n_s_m", self.damping_yy_n_s_m.is_some()),
+            ("stiffness_xy_n_m", self.stiffness_xy_n_m != 0.0),
+            ("stiffness_yx_n_m", self.stiffness_yx_n_m != 0.0),
+            ("damping_xy_n_s_m", self.damping_xy_n_s_m != 0.0),
+            ("damping_yx_n_s_m", self.damping_yx_n_s_m != 0.0),
+        ] {
+            if set {
+                out.push(k);
+            }
+        }
+        out
     }
 }

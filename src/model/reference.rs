@@ -61,6 +61,10 @@ pub const TABLES: &[(&str, &str)] = &[
     ),
     ("disks", "`[[disks]]`: rigid disks (Eq. 6)"),
     ("supports", "`[[supports]]`: linear spring–dashpots"),
+    (
+        "supports.table",
+        "`[supports.table]`: support coefficients over speed",
+    ),
     ("bearings", "`[[bearings]]`: rolling bearings (Eqs. 3–5)"),
     ("thermal", "`[thermal]`: the thermal network (Section 3)"),
     ("thermal.viscosity", "`[thermal.viscosity]`: Eq. 12"),

@@ -4,7 +4,9 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use super::error::{InvalidKind, ModelError};
-use super::file::{BearingSpec, DiskSpec, ModelFile, ShaftSpec, SpeedRatioSpec, SupportSpec};
+use super::file::{
+    BearingSpec, DiskSpec, ModelFile, ShaftSpec, SpeedRatioSpec, SupportSpec, SupportTableSpec,
+};
 use crate::bearing::ContactLaw;
 use crate::hb::Ratio;
 
@@ -359,6 +361,73 @@ impl<'a> Validator<'a> {
     }
 
     /// Records a problem of `path` when `v` is negative or not finite; the checks go on.
+    fn finite(&self, path: impl Into<String>, v: f64) -> VResult<()> {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(self.err(
+                path,
+                InvalidKind::OutOfRange {
+                    value: v,
+                    reason: "must be finite".into(),
+                },
+            ))
+        }
+    }
+
+    /// A support's coefficient table: speeds finite, non-negative and strictly
+    /// increasing; every coefficient list empty or one finite value per speed; no
+    /// constant translational coefficient beside it.
+    fn support_table(&self, path: &str, s: &SupportSpec, t: &SupportTableSpec) -> VResult<()> {
+        let given = s.constant_keys_given();
+        if !given.is_empty() {
+            return Err(self.err(
+                path,
+                InvalidKind::BadConnection(format!(
+                    "support {} has both a coefficient table and constant coefficients ({}); \
+                     give the translational coefficients one way",
+                    s.id,
+                    given.join(", ")
+                )),
+            ));
+        }
+        let sp = &t.speeds_rad_s;
+        if sp.is_empty() {
+            return Err(self.err(
+                format!("{path}.speeds_rad_s"),
+                InvalidKind::BadConnection("needs at least one speed".into()),
+            ));
+        }
+        for (i, &w) in sp.iter().enumerate() {
+            self.non_negative(format!("{path}.speeds_rad_s[{i}]"), w)?;
+            if i > 0 && w <= sp[i - 1] {
+                return Err(self.err(
+                    format!("{path}.speeds_rad_s[{i}]"),
+                    InvalidKind::OutOfRange {
+                        value: w,
+                        reason: format!("speeds must increase strictly (after {})", sp[i - 1]),
+                    },
+                ));
+            }
+        }
+        for (key, col) in t.columns() {
+            if !col.is_empty() && col.len() != sp.len() {
+                return Err(self.err(
+                    format!("{path}.{key}"),
+                    InvalidKind::BadConnection(format!(
+                        "has {} values for {} speeds",
+                        col.len(),
+                        sp.len()
+                    )),
+                ));
+            }
+            for (i, &v) in col.iter().enumerate() {
+                self.finite(format!("{path}.{key}[{i}]"), v)?;
+            }
+        }
+        Ok(())
+    }
+
     fn non_negative(&self, path: impl Into<String>, v: f64) -> VResult<()> {
         if !(v.is_finite() && v >= 0.0) {
             let e = self.err(path, InvalidKind::Negative(v));
@@ -537,10 +606,22 @@ impl<'a> Validator<'a> {
                     self.non_negative(p(f), v)?;
                 }
             }
+            for (f, v) in [
+                ("stiffness_xy_n_m", s.stiffness_xy_n_m),
+                ("stiffness_yx_n_m", s.stiffness_yx_n_m),
+                ("damping_xy_n_s_m", s.damping_xy_n_s_m),
+                ("damping_yx_n_s_m", s.damping_yx_n_s_m),
+            ] {
+                self.finite(p(f), v)?;
+            }
             self.non_negative(
                 p("rotational_stiffness_n_m_rad"),
                 s.rotational_stiffness_n_m_rad,
-            )
+            )?;
+            if let Some(t) = &s.table {
+                self.support_table(&p("table"), s, t)?;
+            }
+            Ok(())
         };
         for (i, s) in spec.supports.iter().enumerate() {
             self.keep(support(i, s));
