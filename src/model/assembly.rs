@@ -110,6 +110,9 @@ pub struct Assembly {
     pub support_tables: Vec<SupportTable>,
 }
 
+/// A support's cross-coupled terms: x DoFs of its nodes, stiffness, damping.
+type CrossTerms = (usize, Option<usize>, [[f64; 2]; 2], [[f64; 2]; 2]);
+
 /// A support whose coefficients are tabulated over the speed of its rotor.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SupportTable {
@@ -312,7 +315,7 @@ impl Assembly {
             }
         }
 
-        let mut cross: Vec<(usize, Option<usize>, [[f64; 2]; 2], [[f64; 2]; 2])> = Vec::new();
+        let mut cross: Vec<CrossTerms> = Vec::new();
         let mut support_tables = Vec::new();
         for s in &spec.supports {
             let a = node(s.node)?;
