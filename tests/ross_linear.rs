@@ -19,7 +19,10 @@ fn load(case: &str) -> (Assembly, Value) {
 }
 
 fn c(v: &Value) -> Complex<f64> {
-    Complex::new(v[0].as_f64().unwrap(), v[1].as_f64().unwrap())
+    Complex::new(
+        v[0].as_f64().expect("a number"),
+        v[1].as_f64().expect("a number"),
+    )
 }
 
 /// Every one of the eight lowest lateral modes matches one of ROSS's eigenvalues (ROSS's
@@ -28,15 +31,15 @@ fn c(v: &Value) -> Complex<f64> {
 fn modes_match(case: &str, tol: f64) {
     let (asm, reference) = load(case);
     let mut worst: f64 = 0.0;
-    for entry in reference["modes"].as_array().unwrap() {
-        let w = entry["speed_rad_s"].as_f64().unwrap();
+    for entry in reference["modes"].as_array().expect("a list") {
+        let w = entry["speed_rad_s"].as_f64().expect("a number");
         let ross: Vec<Complex<f64>> = entry["eigenvalues"]
             .as_array()
-            .unwrap()
+            .expect("a list")
             .iter()
             .map(c)
             .collect();
-        let ours = linear::modes(&asm, w, 8).unwrap();
+        let ours = linear::modes(&asm, w, 8).expect("modes");
         assert_eq!(ours.len(), 8);
         for m in &ours {
             let near = ross
@@ -46,7 +49,7 @@ fn modes_match(case: &str, tol: f64) {
                         .norm()
                         .total_cmp(&(*b - m.eigenvalue).norm())
                 })
-                .unwrap();
+                .expect("a reference eigenvalue");
             let rel = (near - m.eigenvalue).norm() / near.norm();
             worst = worst.max(rel);
             assert!(
@@ -77,12 +80,14 @@ fn eigenvalues_with_speed_dependent_supports_match_ross() {
 
 fn unbalance_matches(case: &str, tol: f64) {
     let (asm, reference) = load(case);
-    let rows = reference["unbalance"]["response"].as_array().unwrap();
+    let rows = reference["unbalance"]["response"]
+        .as_array()
+        .expect("a list");
     let speeds: Vec<f64> = rows
         .iter()
-        .map(|r| r["speed_rad_s"].as_f64().unwrap())
+        .map(|r| r["speed_rad_s"].as_f64().expect("a number"))
         .collect();
-    let ours = linear::unbalance_response(&asm, &speeds).unwrap();
+    let ours = linear::unbalance_response(&asm, &speeds).expect("response");
     assert_eq!(
         ours.len(),
         speeds.len(),
@@ -90,7 +95,7 @@ fn unbalance_matches(case: &str, tol: f64) {
     );
     let mut worst: f64 = 0.0;
     for (row, resp) in rows.iter().zip(&ours) {
-        let nodes = row["nodes"].as_array().unwrap();
+        let nodes = row["nodes"].as_array().expect("a list");
         let scale = nodes
             .iter()
             .flat_map(|n| [c(&n["x"]).norm(), c(&n["y"]).norm()])
