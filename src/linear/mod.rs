@@ -32,12 +32,18 @@
 //! (a straight-line orbit, e.g. a degenerate pair at zero speed, where the split into
 //! forward and backward is arbitrary).
 //!
-//! Campbell diagram: modes at a grid of speeds, sorted as above (mode `i` is the
-//! `i`-th lowest at every speed), and critical speeds where a mode's frequency crosses an
-//! excitation line `ω_exc = s_r ω` of each rotor (1× LP, 1× HP): bracketed by a sign
-//! change between grid points, then located by regula falsi (Illinois) on fresh modal
-//! solves, so the result does not depend on the grid spacing once the crossing is
-//! bracketed. The whirl reported is that of the mode at the crossing.
+//! Campbell diagram: the lowest modes at the first speed of a grid, each followed from
+//! speed to speed by its shape (the modal assurance criterion, [`mac`]), so that a mode
+//! keeps its number where it crosses another in frequency or turns from forward to
+//! backward whirl; critical speeds where a followed mode's frequency crosses an excitation
+//! line `ω_exc = s_r ω` of each rotor (1× LP, 1× HP): bracketed by a sign change between
+//! grid points, then located by regula falsi (Illinois) on fresh modal solves, so the
+//! result does not depend on the grid spacing once the crossing is bracketed. Each
+//! critical speed carries the mode's whirl and forward share at the crossing, which say
+//! whether the rotor's unbalance (a forward force) excites it.
+//!
+//! Also here: the logarithmic decrement of each mode, and the unbalance response of the
+//! linearised rotor ([`unbalance_response`]).
 
 mod unbalance;
 
@@ -227,15 +233,117 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
         });
     }
     out.sort_by(|a, b| a.undamped_rad_s.total_cmp(&b.undamped_rad_s));
+    for k in 1..out.len() {
+        let (a, b) = (out[k - 1].eigenvalue, out[k].eigenvalue);
+        if (a - b).norm() <= DEGENERATE * a.norm().max(b.norm()) {
+            let (left, right) = out.split_at_mut(k);
+            split_whirl(&mut left[k - 1], &mut right[0]);
+        }
+    }
     out.truncate(count);
     Ok(out)
+}
+
+/// A degenerate pair (equal eigenvalues: any two independent combinations are its
+/// shapes, e.g. a disk's translation at a node without tilt) rewritten as its most forward
+/// and most backward combinations, the stationary values of [`forward_share`] on the
+/// pair's plane: the 2×2 generalised Hermitian eigenproblem `F v = μ N v` with `F` the
+/// forward and `N` the total whirl energy of the translations (or slopes). The more
+/// forward one goes first.
+fn split_whirl(a: &mut Mode, b: &mut Mode) {
+    let i = Complex::new(0.0, 1.0);
+    let off = if translation_energy(&a.shape) + translation_energy(&b.shape)
+        >= slope_energy(&a.shape) + slope_energy(&b.shape)
+    {
+        0
+    } else {
+        2
+    };
+    // Hermitian forms over the pair: n[p][q] = Σ conj(u_p)·u_q, f likewise for the
+    // forward parts (X + iY)/2.
+    let shapes = [&a.shape, &b.shape];
+    let mut n = [[Complex::new(0.0, 0.0); 2]; 2];
+    let mut f = [[Complex::new(0.0, 0.0); 2]; 2];
+    for p in 0..2 {
+        for q in 0..2 {
+            for (u, v) in shapes[p].chunks_exact(4).zip(shapes[q].chunks_exact(4)) {
+                let (ux, uy, vx, vy) = (u[off], u[off + 1], v[off], v[off + 1]);
+                n[p][q] += ux.conj() * vx + uy.conj() * vy;
+                f[p][q] += (0.5 * (ux + i * uy)).conj() * (0.5 * (vx + i * vy));
+            }
+        }
+    }
+    // det(F − μN) = 0: a quadratic in μ with real roots (F, N Hermitian, N > 0).
+    let det = |m: [[Complex<f64>; 2]; 2]| m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let qa = det(n).re;
+    let qb = -(f[0][0] * n[1][1] + f[1][1] * n[0][0] - f[0][1] * n[1][0] - f[1][0] * n[0][1]).re;
+    let qc = det(f).re;
+    if qa.abs() < 1e-300 {
+        return;
+    }
+    let disc = (qb * qb - 4.0 * qa * qc).max(0.0).sqrt();
+    let roots = [(-qb + disc) / (2.0 * qa), (-qb - disc) / (2.0 * qa)];
+    let combine = |mu: f64| -> Vec<Complex<f64>> {
+        // (F − μN) v = 0: v = [m01, −m00] (or from the second row)
+        let m00 = f[0][0] - mu * n[0][0];
+        let m01 = f[0][1] - mu * n[0][1];
+        let m10 = f[1][0] - mu * n[1][0];
+        let m11 = f[1][1] - mu * n[1][1];
+        let v = if m00.norm() + m01.norm() >= m10.norm() + m11.norm() {
+            [m01, -m00]
+        } else {
+            [m11, -m10]
+        };
+        let mut w: Vec<Complex<f64>> = a
+            .shape
+            .iter()
+            .zip(&b.shape)
+            .map(|(x, y)| v[0] * x + v[1] * y)
+            .collect();
+        let pivot = w
+            .iter()
+            .copied()
+            .max_by(|p, q| p.norm().total_cmp(&q.norm()))
+            .unwrap_or(Complex::new(1.0, 0.0));
+        if pivot.norm() > 0.0 {
+            w.iter_mut().for_each(|x| *x /= pivot);
+        }
+        w
+    };
+    let (fw, bw) = (combine(roots[0]), combine(roots[1]));
+    if fw
+        .iter()
+        .chain(&bw)
+        .any(|v| !(v.re.is_finite() && v.im.is_finite()))
+    {
+        return;
+    }
+    a.shape = fw;
+    b.shape = bw;
+    a.whirl = whirl_of(&a.shape);
+    b.whirl = whirl_of(&b.shape);
+}
+
+fn translation_energy(shape: &[Complex<f64>]) -> f64 {
+    shape
+        .chunks_exact(4)
+        .map(|n| n[0].norm_sqr() + n[1].norm_sqr())
+        .sum()
+}
+
+fn slope_energy(shape: &[Complex<f64>]) -> f64 {
+    shape
+        .chunks_exact(4)
+        .map(|n| n[2].norm_sqr() + n[3].norm_sqr())
+        .sum()
 }
 
 /// Frequencies of one speed of a Campbell diagram.
 #[derive(Clone, Debug)]
 pub struct CampbellPoint {
     pub speed_rad_s: f64,
-    /// Modes sorted by frequency (shapes dropped).
+    /// The followed modes at this speed: entry `i` is the same mode at every speed (see
+    /// [`campbell`]), shapes dropped.
     pub modes: Vec<ModeSummary>,
 }
 
@@ -245,6 +353,26 @@ pub struct ModeSummary {
     pub frequency_rad_s: f64,
     pub damping_ratio: f64,
     pub whirl: Whirl,
+    /// Logarithmic decrement ([`log_decrement`]).
+    pub log_decrement: f64,
+    /// Share of forward whirl in the shape ([`forward_share`]).
+    pub forward_share: f64,
+    /// MAC of the shape with the same mode's shape at the previous speed (1 at the first
+    /// speed): how sure the following is.
+    pub mac: f64,
+}
+
+impl ModeSummary {
+    fn of(m: &Mode, mac: f64) -> Self {
+        Self {
+            frequency_rad_s: m.frequency_rad_s,
+            damping_ratio: m.damping_ratio,
+            whirl: m.whirl,
+            log_decrement: m.log_decrement(),
+            forward_share: forward_share(&m.shape),
+            mac,
+        }
+    }
 }
 
 /// A crossing of a mode with a rotor's 1× excitation line.
@@ -254,14 +382,27 @@ pub struct CriticalSpeed {
     pub rotor_id: String,
     /// Its speed ratio (the line's slope).
     pub speed_ratio: f64,
-    /// Mode number, 1-based, in order of frequency.
+    /// Mode number, 1-based: the followed mode's rank in frequency at the first speed.
     pub mode: usize,
     /// Whirl of the mode at the crossing.
     pub whirl: Whirl,
+    /// Share of forward whirl in the mode's shape at the crossing ([`forward_share`]).
+    pub forward_share: f64,
     /// Reference speed ω at the crossing (rad/s).
     pub speed_rad_s: f64,
     /// Mode frequency at the crossing (rad/s) = speed_ratio × speed_rad_s.
     pub frequency_rad_s: f64,
+}
+
+impl CriticalSpeed {
+    /// Whether the rotor's unbalance excites the mode: a rotating unbalance is a forward
+    /// force, which does work only on the forward part of a shape. A backward mode of an
+    /// isotropic rotor (share 0) is not excited; with anisotropic supports a backward mode
+    /// has some forward part and responds in proportion. Counted as excited when the
+    /// forward part dominates (share ≥ 0.5).
+    pub fn excited_by_unbalance(&self) -> bool {
+        self.forward_share >= 0.5
+    }
 }
 
 /// A Campbell diagram.
@@ -271,33 +412,192 @@ pub struct Campbell {
     pub critical_speeds: Vec<CriticalSpeed>,
 }
 
-/// Locates the root of `g(ω) = f_i(ω) − s ω` in a bracket by the Illinois variant of
-/// regula falsi (each evaluation is a modal solve), to 1e-10 relative in ω or 40
-/// evaluations; returns the speed and the mode's whirl there.
+/// Modal assurance criterion of two complex shapes: `|aᴴb|² / (aᴴa · bᴴb)`, 1 for the same
+/// shape (up to a complex factor), 0 for orthogonal ones.
+pub fn mac(a: &[Complex<f64>], b: &[Complex<f64>]) -> f64 {
+    let ab: Complex<f64> = a.iter().zip(b).map(|(x, y)| x.conj() * y).sum();
+    let aa: f64 = a.iter().map(|x| x.norm_sqr()).sum();
+    let bb: f64 = b.iter().map(|x| x.norm_sqr()).sum();
+    if aa == 0.0 || bb == 0.0 {
+        0.0
+    } else {
+        ab.norm_sqr() / (aa * bb)
+    }
+}
+
+/// Share of forward whirl in a shape (node-major `[x, y, θx, θy]`): each node's orbit
+/// `(x, y) = Re((X, Y) e^{iωt})` is a forward circle of radius `|X + iY|/2` plus a backward
+/// one of radius `|X − iY|/2`; the share is `Σ f² / Σ (f² + b²)` over the translations (or
+/// the slopes, where those carry more), 1 for a purely forward mode, 0 for a backward one.
+pub fn forward_share(shape: &[Complex<f64>]) -> f64 {
+    let i = Complex::new(0.0, 1.0);
+    let mut best = (0.0, 0.0);
+    for off in [0, 2] {
+        let (mut f, mut n) = (0.0, 0.0);
+        for node in shape.chunks_exact(4) {
+            let (px, py) = (node[off], node[off + 1]);
+            let fw = (0.5 * (px + i * py)).norm_sqr();
+            let bw = (0.5 * (px - i * py)).norm_sqr();
+            f += fw;
+            n += fw + bw;
+        }
+        if n > best.1 {
+            best = (f, n);
+        }
+    }
+    if best.1 == 0.0 { 0.5 } else { best.0 / best.1 }
+}
+
+/// Extra modes solved at each speed beyond those followed, so that a followed mode that
+/// moves up past others in frequency is still among the candidates.
+const SPARE_MODES: usize = 4;
+
+/// Relative distance of eigenvalues below which modes count as one degenerate cluster
+/// (e.g. the forward and backward translation of a disk at a node without tilt, equal at
+/// every speed), whose individual shapes are any basis of the cluster's plane.
+const DEGENERATE: f64 = 1e-5;
+
+/// Share of `shape` in the span of `basis` (orthonormal): `‖P shape‖² / ‖shape‖²`.
+fn share_in(shape: &[Complex<f64>], basis: &[Vec<Complex<f64>>]) -> f64 {
+    let nn: f64 = shape.iter().map(|x| x.norm_sqr()).sum();
+    if nn == 0.0 {
+        return 0.0;
+    }
+    basis
+        .iter()
+        .map(|q| {
+            q.iter()
+                .zip(shape)
+                .map(|(a, b)| a.conj() * b)
+                .sum::<Complex<f64>>()
+                .norm_sqr()
+        })
+        .sum::<f64>()
+        / nn
+}
+
+/// Orthonormal basis of the span of `shapes` (Gram–Schmidt).
+fn orthonormal(shapes: &[&[Complex<f64>]]) -> Vec<Vec<Complex<f64>>> {
+    let mut out: Vec<Vec<Complex<f64>>> = Vec::new();
+    for s in shapes {
+        let mut v = s.to_vec();
+        for q in &out {
+            let p: Complex<f64> = q.iter().zip(&v).map(|(a, b)| a.conj() * b).sum();
+            v.iter_mut().zip(q).for_each(|(x, y)| *x -= p * y);
+        }
+        let n = v.iter().map(|x| x.norm_sqr()).sum::<f64>().sqrt();
+        if n > 1e-12 {
+            v.iter_mut().for_each(|x| *x /= n);
+            out.push(v);
+        }
+    }
+    out
+}
+
+/// Assigns to each followed shape in `previous` one of `candidates`; returns, per followed
+/// mode, the candidate's index and the match (MAC, or the share in a degenerate cluster's
+/// span). Candidates with equal eigenvalues ([`DEGENERATE`]) form clusters, matched as a
+/// whole by the share of the old shape in their span; pairs of a followed mode and a
+/// cluster with room are taken greedily in order of decreasing match, and within a
+/// cluster its members go to its followed modes by MAC.
+fn follow(previous: &[Vec<Complex<f64>>], candidates: &[Mode]) -> Vec<(usize, f64)> {
+    let mut clusters: Vec<Vec<usize>> = Vec::new();
+    for (c, m) in candidates.iter().enumerate() {
+        match clusters.iter_mut().find(|cl| {
+            let e = candidates[cl[0]].eigenvalue;
+            (e - m.eigenvalue).norm() <= DEGENERATE * e.norm().max(m.eigenvalue.norm())
+        }) {
+            Some(cl) => cl.push(c),
+            None => clusters.push(vec![c]),
+        }
+    }
+    let spans: Vec<Vec<Vec<Complex<f64>>>> = clusters
+        .iter()
+        .map(|cl| {
+            let shapes: Vec<&[Complex<f64>]> =
+                cl.iter().map(|&c| candidates[c].shape.as_slice()).collect();
+            orthonormal(&shapes)
+        })
+        .collect();
+    let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
+    for (t, shape) in previous.iter().enumerate() {
+        for (k, span) in spans.iter().enumerate() {
+            pairs.push((share_in(shape, span), t, k));
+        }
+    }
+    pairs.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut cluster_of = vec![usize::MAX; previous.len()];
+    let mut score = vec![0.0; previous.len()];
+    let mut room: Vec<usize> = clusters.iter().map(Vec::len).collect();
+    for (v, t, k) in pairs {
+        if cluster_of[t] == usize::MAX && room[k] > 0 {
+            cluster_of[t] = k;
+            score[t] = v;
+            room[k] -= 1;
+        }
+    }
+    let mut out = vec![(usize::MAX, 0.0); previous.len()];
+    for (k, cl) in clusters.iter().enumerate() {
+        let tracks: Vec<usize> = (0..previous.len())
+            .filter(|&t| cluster_of[t] == k)
+            .collect();
+        let mut inner: Vec<(f64, usize, usize)> = Vec::new();
+        for &t in &tracks {
+            for &c in cl {
+                inner.push((mac(&previous[t], &candidates[c].shape), t, c));
+            }
+        }
+        inner.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let mut taken = vec![false; candidates.len()];
+        for (_, t, c) in inner {
+            if out[t].0 == usize::MAX && !taken[c] {
+                out[t] = (c, score[t]);
+                taken[c] = true;
+            }
+        }
+    }
+    out
+}
+
+/// The mode at `w` that continues `shape` (largest MAC among the candidates).
+fn mode_like(
+    asm: &Assembly,
+    w: f64,
+    shape: &[Complex<f64>],
+    count: usize,
+) -> Result<Option<Mode>, LinearError> {
+    let ms = modes(asm, w, count + SPARE_MODES)?;
+    Ok(ms
+        .into_iter()
+        .max_by(|a, b| mac(shape, &a.shape).total_cmp(&mac(shape, &b.shape))))
+}
+
+/// Locates the root of `g(ω) = f(ω) − s ω` for the followed mode in a bracket by the
+/// Illinois variant of regula falsi (each evaluation is a modal solve, the mode picked by
+/// MAC with the shape at the bracket's start), to 1e-10 relative in ω or 40 evaluations;
+/// returns the speed and the mode there.
 fn refine_crossing(
     asm: &Assembly,
-    i: usize,
+    shape: &[Complex<f64>],
     s: f64,
     (mut a, mut ga): (f64, f64),
     (mut b, mut gb): (f64, f64),
     count: usize,
-) -> Result<(f64, Whirl), LinearError> {
-    let eval = |w: f64| -> Result<Option<(f64, Whirl)>, LinearError> {
-        let m = modes(asm, w, count)?;
-        Ok(m.get(i).map(|m| (m.frequency_rad_s - s * w, m.whirl)))
+) -> Result<Option<(f64, Mode)>, LinearError> {
+    let eval = |w: f64| -> Result<Option<(f64, Mode)>, LinearError> {
+        Ok(mode_like(asm, w, shape, count)?.map(|m| (m.frequency_rad_s - s * w, m)))
     };
     if ga == 0.0 {
-        let whirl = eval(a)?.map_or(Whirl::Planar, |x| x.1);
-        return Ok((a, whirl));
+        return Ok(eval(a)?.map(|(_, m)| (a, m)));
     }
     let mut side = 0i8;
-    let mut best = (0.5 * (a + b), Whirl::Planar);
+    let mut best = None;
     for _ in 0..40 {
         let w = (a * gb - b * ga) / (gb - ga);
-        let Some((g, whirl)) = eval(w)? else {
+        let Some((g, m)) = eval(w)? else {
             break;
         };
-        best = (w, whirl);
+        best = Some((w, m));
         if g == 0.0 || (b - a).abs() <= 1e-10 * w.abs().max(1.0) {
             break;
         }
@@ -335,8 +635,11 @@ pub fn speed_grid(start: f64, end: f64, count: usize) -> Result<Vec<f64>, Linear
         .collect())
 }
 
-/// Campbell diagram of the lowest `count` modes over `speeds` (rad/s, increasing), with
-/// the critical speeds of every rotor's 1× line.
+/// Campbell diagram of the `count` lowest modes at the first speed, each followed over
+/// `speeds` (rad/s, increasing) by its shape: at every speed the modes are matched to the
+/// previous speed's by the modal assurance criterion ([`mac`]), so a mode keeps its number
+/// when it crosses another in frequency or changes its whirl. Critical speeds are where a
+/// followed mode crosses a rotor's 1× line, located by regula falsi on that mode.
 pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell, LinearError> {
     if speeds.len() < 2 || speeds.windows(2).any(|w| w[1] <= w[0]) {
         return Err(LinearError::BadSpeeds(
@@ -344,19 +647,33 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
         ));
     }
     let mut points = Vec::with_capacity(speeds.len());
-    for &w in speeds {
-        let ms = modes(asm, w, count)?;
+    // shapes of the followed modes at every speed
+    let mut shapes: Vec<Vec<Vec<Complex<f64>>>> = Vec::with_capacity(speeds.len());
+    for (k, &w) in speeds.iter().enumerate() {
+        let (summaries, now) = if k == 0 {
+            let ms = modes(asm, w, count)?;
+            let sum = ms.iter().map(|m| ModeSummary::of(m, 1.0)).collect();
+            (sum, ms.into_iter().map(|m| m.shape).collect::<Vec<_>>())
+        } else {
+            let previous = &shapes[k - 1];
+            let ms = modes(asm, w, previous.len() + SPARE_MODES)?;
+            let pick = follow(previous, &ms);
+            let mut sum = Vec::new();
+            let mut now = Vec::new();
+            for &(c, v) in &pick {
+                if c == usize::MAX {
+                    break;
+                }
+                sum.push(ModeSummary::of(&ms[c], v));
+                now.push(ms[c].shape.clone());
+            }
+            (sum, now)
+        };
         points.push(CampbellPoint {
             speed_rad_s: w,
-            modes: ms
-                .iter()
-                .map(|m| ModeSummary {
-                    frequency_rad_s: m.frequency_rad_s,
-                    damping_ratio: m.damping_ratio,
-                    whirl: m.whirl,
-                })
-                .collect(),
+            modes: summaries,
         });
+        shapes.push(now);
     }
     let mut critical_speeds = Vec::new();
     let mut lines: Vec<(String, f64)> = Vec::new();
@@ -367,25 +684,29 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
         }
     }
     for (rotor_id, s) in &lines {
-        for pair in points.windows(2) {
+        for (k, pair) in points.windows(2).enumerate() {
             let (p0, p1) = (&pair[0], &pair[1]);
             for i in 0..p0.modes.len().min(p1.modes.len()) {
                 let g0 = p0.modes[i].frequency_rad_s - s * p0.speed_rad_s;
                 let g1 = p1.modes[i].frequency_rad_s - s * p1.speed_rad_s;
                 if g0 == 0.0 || (g0 > 0.0) != (g1 > 0.0) {
-                    let (w, whirl) = refine_crossing(
+                    let Some((w, m)) = refine_crossing(
                         asm,
-                        i,
+                        &shapes[k][i],
                         *s,
                         (p0.speed_rad_s, g0),
                         (p1.speed_rad_s, g1),
                         count,
-                    )?;
+                    )?
+                    else {
+                        continue;
+                    };
                     critical_speeds.push(CriticalSpeed {
                         rotor_id: rotor_id.clone(),
                         speed_ratio: *s,
                         mode: i + 1,
-                        whirl,
+                        whirl: m.whirl,
+                        forward_share: forward_share(&m.shape),
                         speed_rad_s: w,
                         frequency_rad_s: s * w,
                     });
