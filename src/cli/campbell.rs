@@ -21,10 +21,17 @@ pub struct CampbellArgs {
     /// Number of modes followed (lowest first).
     #[arg(long, default_value_t = 10)]
     pub count: usize,
-    /// Write the diagram as CSV to this file
-    /// (speed_rad_s,mode,frequency_rad_s,frequency_hz,damping_ratio,whirl).
+    /// Write the diagram as CSV to this file (speed_rad_s, mode, frequency_rad_s,
+    /// frequency_hz, damping_ratio, log_decrement, whirl, forward_share, mac), one row per
+    /// speed and followed mode.
     #[arg(long)]
     pub csv: Option<PathBuf>,
+    /// Draw the diagram to FIGURE.png / FIGURE.svg (modes in their whirl's colour, 1×
+    /// lines, critical speeds circled).
+    #[arg(long, value_name = "FIGURE")]
+    pub figure: Option<PathBuf>,
+    #[command(flatten)]
+    pub figure_args: super::FigureArgs,
 }
 
 /// Parses `START:END:COUNT`.
@@ -55,22 +62,19 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let asm = Assembly::new(&model)?;
     let diagram = linear::campbell(&asm, &speeds, args.count)?;
     if let Some(path) = &args.csv {
-        let mut text =
-            String::from("speed_rad_s,mode,frequency_rad_s,frequency_hz,damping_ratio,whirl\n");
-        for p in &diagram.points {
-            for (i, m) in p.modes.iter().enumerate() {
-                text.push_str(&format!(
-                    "{:.6},{},{:.6},{:.6},{:.6},{}\n",
-                    p.speed_rad_s,
-                    i + 1,
-                    m.frequency_rad_s,
-                    m.frequency_rad_s / (2.0 * std::f64::consts::PI),
-                    m.damping_ratio,
-                    m.whirl
-                ));
-            }
+        std::fs::write(path, linear::figures::campbell_csv(&diagram))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
+    if let Some(stem) = &args.figure {
+        let fig = linear::figures::campbell_figure(
+            &diagram,
+            &format!("Campbell diagram of {}", model.spec.name),
+        );
+        let written = crate::figure::write_figure(stem, &fig, &args.figure_args.output()?)
+            .with_context(|| format!("drawing {}", stem.display()))?;
+        for f in &written.files {
+            writeln!(out, "wrote {}", f.display())?;
         }
-        std::fs::write(path, text).with_context(|| format!("writing {}", path.display()))?;
     }
     writeln!(
         out,
@@ -83,17 +87,31 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     )?;
     writeln!(
         out,
-        "{:>8}  {:>6}  {:>4}  {:>8}  {:>12}  {:>10}  {:>12}",
-        "line", "ratio", "mode", "whirl", "ω (rad/s)", "ω (rpm)", "freq (rad/s)"
+        "{:>8}  {:>6}  {:>4}  {:>8}  {:>7}  {:>9}  {:>12}  {:>10}  {:>12}",
+        "line",
+        "ratio",
+        "mode",
+        "whirl",
+        "fwd",
+        "unbalance",
+        "ω (rad/s)",
+        "ω (rpm)",
+        "freq (rad/s)"
     )?;
     for c in &diagram.critical_speeds {
         writeln!(
             out,
-            "{:>8}  {:>6.3}  {:>4}  {:>8}  {:>12.2}  {:>10.1}  {:>12.2}",
+            "{:>8}  {:>6.3}  {:>4}  {:>8}  {:>7.3}  {:>9}  {:>12.2}  {:>10.1}  {:>12.2}",
             format!("1×{}", c.rotor_id),
             c.speed_ratio,
             c.mode,
             c.whirl,
+            c.forward_share,
+            if c.excited_by_unbalance() {
+                "excites"
+            } else {
+                "–"
+            },
             c.speed_rad_s,
             c.speed_rad_s * 30.0 / std::f64::consts::PI,
             c.frequency_rad_s
@@ -101,6 +119,19 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     if diagram.critical_speeds.is_empty() {
         writeln!(out, "  (none in this range)")?;
+    } else {
+        let excited = diagram
+            .critical_speeds
+            .iter()
+            .filter(|c| c.excited_by_unbalance())
+            .count();
+        writeln!(
+            out,
+            "{excited} of {} excited by unbalance (forward share ≥ 0.5: a rotating unbalance \
+             drives only the forward part of a mode; modes are followed by shape, numbered \
+             in order of frequency at the first speed)",
+            diagram.critical_speeds.len()
+        )?;
     }
     Ok(())
 }

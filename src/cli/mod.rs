@@ -9,6 +9,7 @@ pub mod replay;
 pub mod report;
 pub mod sweep;
 pub mod truncation;
+pub mod unbalance;
 
 use clap::{Parser, Subcommand};
 
@@ -47,8 +48,11 @@ pub enum Command {
     Model(model::ModelCommand),
     /// Damped natural frequencies, damping ratios and whirl directions at one speed.
     Modes(modes::ModesArgs),
-    /// Campbell diagram and critical speeds (1× LP, 1× HP) over a speed range.
+    /// Campbell diagram and critical speeds (1× LP, 1× HP) over a speed range, modes
+    /// followed by shape; CSV and figure.
     Campbell(campbell::CampbellArgs),
+    /// Unbalance response (Bode and polar) of the linearised rotor over a speed range.
+    Unbalance(unbalance::UnbalanceArgs),
     /// The reproduction report (markdown) of a campaign directory: the paper's findings
     /// against the recordings.
     Report(report::ReportArgs),
@@ -274,6 +278,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Model(cmd)) => model::run(&cmd, &mut std::io::stdout().lock()),
         Some(Command::Modes(args)) => modes::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Campbell(args)) => campbell::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Unbalance(args)) => unbalance::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Report(args)) => report::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Truncation(args)) => truncation::run(&args, &mut std::io::stdout().lock()),
     }

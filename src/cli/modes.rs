@@ -3,6 +3,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 
+use anyhow::Context;
 use clap::Args;
 
 use crate::linear;
@@ -20,10 +21,19 @@ pub struct ModesArgs {
     /// Number of modes (lowest first).
     #[arg(long, default_value_t = 10)]
     pub count: usize,
-    /// Write CSV (mode,frequency_rad_s,frequency_hz,damping_ratio,whirl,undamped_rad_s)
-    /// instead of a table.
+    /// Write CSV (mode, frequency_rad_s, frequency_hz, damping_ratio, whirl,
+    /// undamped_rad_s, log_decrement, forward_share) instead of a table.
     #[arg(long)]
     pub csv: bool,
+    /// Write the mode shapes as CSV to this file (per mode and node: complex x, y, θx, θy,
+    /// the orbit's semi-axes and whirl).
+    #[arg(long, value_name = "FILE")]
+    pub shapes: Option<PathBuf>,
+    /// Draw the mode shapes along the shaft to FIGURE.png / FIGURE.svg.
+    #[arg(long, value_name = "FIGURE")]
+    pub figure: Option<PathBuf>,
+    #[command(flatten)]
+    pub figure_args: super::FigureArgs,
 }
 
 /// Runs `tmrotor modes`, writing to `out`.
@@ -40,18 +50,20 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if args.csv {
         writeln!(
             out,
-            "mode,frequency_rad_s,frequency_hz,damping_ratio,whirl,undamped_rad_s"
+            "mode,frequency_rad_s,frequency_hz,damping_ratio,whirl,undamped_rad_s,log_decrement,forward_share"
         )?;
         for (i, m) in modes.iter().enumerate() {
             writeln!(
                 out,
-                "{},{:.6},{:.6},{:.6},{},{:.6}",
+                "{},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.4}",
                 i + 1,
                 m.frequency_rad_s,
                 m.frequency_hz(),
                 m.damping_ratio,
                 m.whirl,
-                m.undamped_rad_s
+                m.undamped_rad_s,
+                m.log_decrement(),
+                linear::forward_share(&m.shape)
             )?;
         }
     } else {
@@ -62,19 +74,58 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         )?;
         writeln!(
             out,
-            "{:>4}  {:>14}  {:>12}  {:>9}  {:>8}",
-            "mode", "freq (rad/s)", "freq (Hz)", "ζ", "whirl"
+            "{:>4}  {:>14}  {:>12}  {:>9}  {:>9}  {:>8}",
+            "mode", "freq (rad/s)", "freq (Hz)", "ζ", "log dec", "whirl"
         )?;
         for (i, m) in modes.iter().enumerate() {
             writeln!(
                 out,
-                "{:>4}  {:>14.3}  {:>12.4}  {:>9.5}  {:>8}",
+                "{:>4}  {:>14.3}  {:>12.4}  {:>9.5}  {:>9.5}  {:>8}",
                 i + 1,
                 m.frequency_rad_s,
                 m.frequency_hz(),
                 m.damping_ratio,
+                m.log_decrement(),
                 m.whirl
             )?;
+        }
+    }
+    let axial = model.axial_positions();
+    if let Some(path) = &args.shapes {
+        std::fs::write(
+            path,
+            linear::figures::shapes_csv(&modes, model.node_ids(), &axial),
+        )
+        .with_context(|| format!("writing {}", path.display()))?;
+        eprintln!("wrote {}", path.display());
+    }
+    if let Some(stem) = &args.figure {
+        let rotors: Vec<(String, Vec<usize>)> = model
+            .spec
+            .rotors
+            .iter()
+            .map(|r| {
+                let idx = r
+                    .nodes
+                    .iter()
+                    .filter_map(|&n| model.node_index(n))
+                    .collect();
+                (r.id.clone(), idx)
+            })
+            .collect();
+        let fig = linear::figures::shapes_figure(
+            &modes,
+            &axial,
+            &rotors,
+            &format!(
+                "Mode shapes of {} at ω = {} rad/s",
+                model.spec.name, args.speed
+            ),
+        );
+        let written = crate::figure::write_figure(stem, &fig, &args.figure_args.output()?)
+            .with_context(|| format!("drawing {}", stem.display()))?;
+        for f in &written.files {
+            eprintln!("wrote {}", f.display());
         }
     }
     Ok(())

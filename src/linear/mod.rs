@@ -45,6 +45,7 @@
 //! Also here: the logarithmic decrement of each mode, and the unbalance response of the
 //! linearised rotor ([`unbalance_response`]).
 
+pub mod figures;
 mod unbalance;
 
 pub use unbalance::{NodeOrbit, UnbalanceResponse, unbalance_response};
@@ -686,13 +687,14 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
     for (rotor_id, s) in &lines {
         for (k, pair) in points.windows(2).enumerate() {
             let (p0, p1) = (&pair[0], &pair[1]);
-            for i in 0..p0.modes.len().min(p1.modes.len()) {
-                let g0 = p0.modes[i].frequency_rad_s - s * p0.speed_rad_s;
-                let g1 = p1.modes[i].frequency_rad_s - s * p1.speed_rad_s;
+            for (i, ((m0, m1), shape)) in p0.modes.iter().zip(&p1.modes).zip(&shapes[k]).enumerate()
+            {
+                let g0 = m0.frequency_rad_s - s * p0.speed_rad_s;
+                let g1 = m1.frequency_rad_s - s * p1.speed_rad_s;
                 if g0 == 0.0 || (g0 > 0.0) != (g1 > 0.0) {
                     let Some((w, m)) = refine_crossing(
                         asm,
-                        &shapes[k][i],
+                        shape,
                         *s,
                         (p0.speed_rad_s, g0),
                         (p1.speed_rad_s, g1),
