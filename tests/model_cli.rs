@@ -269,7 +269,9 @@ fn modes_and_campbell_as_a_process() {
     let mut lines = table.lines();
     assert_eq!(
         lines.next(),
-        Some("speed_rad_s,mode,frequency_rad_s,frequency_hz,damping_ratio,whirl")
+        Some(
+            "speed_rad_s,mode,frequency_rad_s,frequency_hz,damping_ratio,log_decrement,whirl,forward_share,mac"
+        )
     );
     assert_eq!(lines.count(), 9 * 4);
     let stdout = String::from_utf8_lossy(&out.stdout);
