@@ -33,7 +33,9 @@ fn modes_csv_in_process_matches_library() {
     let mut lines = text.lines();
     assert_eq!(
         lines.next(),
-        Some("mode,frequency_rad_s,frequency_hz,damping_ratio,whirl,undamped_rad_s")
+        Some(
+            "mode,frequency_rad_s,frequency_hz,damping_ratio,whirl,undamped_rad_s,log_decrement,forward_share"
+        )
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -47,6 +49,8 @@ fn modes_csv_in_process_matches_library() {
         assert!((f - m.frequency_rad_s).abs() < 1e-5);
         assert!((hz * 2.0 * std::f64::consts::PI - f).abs() < 1e-4);
         assert!(["forward", "backward", "planar"].contains(&row[4].as_str()));
+        let dec: f64 = row[6].parse().expect("number");
+        assert!((dec - m.log_decrement()).abs() < 1e-5);
     }
 }
 
