@@ -561,15 +561,18 @@ impl FloquetSettings {
     }
 }
 
-/// λ: the speed ratio of the second rotor (1 for a single rotor). Ratios are rational by
-/// model validation.
+/// λ of the basis (Eq. 34): the speed of the second spinning rotor, `|ratio|` (1 for a
+/// single rotor). The basis holds frequencies, so a counter-rotating rotor's `−6/5` needs
+/// the same `6/5 ω` harmonics as a co-rotating one's; a part that does not spin adds none.
+/// Ratios are rational by model validation.
 fn speed_ratio(model: &Model) -> Ratio {
+    let one = Ratio { num: 1, den: 1 };
     model
         .speed_ratios()
         .iter()
-        .copied()
-        .find(|r| *r != Ratio { num: 1, den: 1 })
-        .unwrap_or(Ratio { num: 1, den: 1 })
+        .filter_map(|r| r.magnitude)
+        .find(|r| *r != one)
+        .unwrap_or(one)
 }
 
 fn run_info(

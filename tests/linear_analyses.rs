@@ -243,3 +243,71 @@ fn the_commands_write_csv_and_figures() {
     let err = unbalance::run(&a, &mut Vec::new()).expect_err("refused");
     assert!(format!("{err:#}").contains("node 42"), "{err:#}");
 }
+
+fn jeffcott_with_ratio(ratio: &str) -> Assembly {
+    let text = std::fs::read_to_string(example("jeffcott_midspan_disk.toml")).expect("file");
+    let from = "speed_ratio = \"1\"\n";
+    assert!(text.contains(from));
+    let model = Model::from_str(
+        &text.replacen(from, &format!("speed_ratio = {ratio}\n"), 1),
+        "j",
+    )
+    .expect("model");
+    Assembly::new(&model).expect("assembles")
+}
+
+/// A disk turning against the reference (`speed_ratio = -1`): the gyroscopic split is the
+/// same closed form, with the whirl senses exchanged (the mode that whirls with the disk's
+/// spin, backward relative to +x → +y, stiffens); the 1× line of its unbalance crosses the
+/// mode that whirls against the spin at `Ω = √(k_θ/(J_d + J_p))`, which that unbalance
+/// does not excite; of the translation pair, the backward one (with the spin) is excited.
+#[test]
+fn counter_rotating_disk_mirrors_the_gyroscopic_split() {
+    let asm = jeffcott_with_ratio("\"-1\"");
+    let omega = 300.0;
+    let ms = linear::modes(&asm, omega, 4).expect("modes");
+    let k = jeffcott_tilt_stiffness();
+    let stiff = (omega * JP + ((omega * JP).powi(2) + 4.0 * JD * k).sqrt()) / (2.0 * JD);
+    let soft = backward_tilt(omega);
+    let find = |f: f64| {
+        ms.iter()
+            .find(|m| (m.frequency_rad_s - f).abs() < 1e-4 * f)
+            .unwrap_or_else(|| panic!("no mode at {f}: {ms:?}"))
+    };
+    assert_eq!(find(stiff).whirl, Whirl::Backward, "with the disk's spin");
+    assert_eq!(find(soft).whirl, Whirl::Forward, "against the disk's spin");
+
+    let speeds = linear::speed_grid(0.0, 300.0, 61).expect("grid");
+    let c = linear::campbell(&asm, &speeds, 4).expect("campbell");
+    let tilt_speed = (k / (JD + JP)).sqrt();
+    let tilt = c
+        .critical_speeds
+        .iter()
+        .find(|cs| (cs.speed_rad_s - tilt_speed).abs() < 1e-4 * tilt_speed)
+        .expect("the crossing of the soft tilt mode");
+    assert_eq!(tilt.speed_ratio, -1.0);
+    assert!((tilt.frequency_rad_s - tilt.speed_rad_s).abs() < 1e-12 * tilt_speed);
+    assert_eq!(tilt.whirl, Whirl::Forward);
+    assert!(!tilt.excited_by_unbalance());
+    let excited: Vec<Whirl> = c
+        .critical_speeds
+        .iter()
+        .filter(|cs| (cs.speed_rad_s - 22.2417).abs() < 0.01 && cs.excited_by_unbalance())
+        .map(|cs| cs.whirl)
+        .collect();
+    assert_eq!(excited, vec![Whirl::Backward]);
+}
+
+/// A part that does not spin (`speed_ratio = 0`): no gyroscopic split, no 1× line.
+#[test]
+fn a_part_that_does_not_spin() {
+    let asm = jeffcott_with_ratio("0");
+    let at_rest = linear::modes(&asm, 0.0, 4).expect("modes");
+    let fast = linear::modes(&asm, 1000.0, 4).expect("modes");
+    for (a, b) in at_rest.iter().zip(&fast) {
+        assert!((a.frequency_rad_s - b.frequency_rad_s).abs() < 1e-6 * a.frequency_rad_s);
+    }
+    let speeds = linear::speed_grid(0.0, 300.0, 7).expect("grid");
+    let c = linear::campbell(&asm, &speeds, 4).expect("campbell");
+    assert!(c.critical_speeds.is_empty());
+}

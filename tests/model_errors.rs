@@ -176,21 +176,42 @@ fn wrong_types_and_units() {
 
 #[test]
 fn irrational_speed_ratio() {
-    for bad in ["1.2345678", "\"sqrt(2)\"", "3.14159265", "\"7/0\"", "-1.2"] {
+    for bad in [
+        "1.2345678",
+        "\"sqrt(2)\"",
+        "3.14159265",
+        "\"7/0\"",
+        "-1.2345678",
+    ] {
         check(
             &edited("speed_ratio = \"6/5\"", &format!("speed_ratio = {bad}")),
             "rotors[1].speed_ratio",
             |k| matches!(k, InvalidKind::IrrationalRatio(_)),
         );
     }
-    for good in ["1.2", "\"1.2\"", "\"12/10\"", "1.25"] {
+    for good in [
+        "1.2",
+        "\"1.2\"",
+        "\"12/10\"",
+        "1.25",
+        "-1.2",
+        "\"-6/5\"",
+        "0",
+        "\"0\"",
+    ] {
         let m = Model::from_str(
             &edited("speed_ratio = \"6/5\"", &format!("speed_ratio = {good}")),
             FILE,
         )
         .expect("clean rational");
         let r = m.speed_ratio(1);
-        assert!((r.value() - if good == "1.25" { 1.25 } else { 1.2 }).abs() < 1e-15);
+        let want = match good {
+            "1.25" => 1.25,
+            "-1.2" | "\"-6/5\"" => -1.2,
+            "0" | "\"0\"" => 0.0,
+            _ => 1.2,
+        };
+        assert!((r.value() - want).abs() < 1e-15, "{good}: {r}");
     }
 }
 

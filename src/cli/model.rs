@@ -65,12 +65,10 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
                 .iter()
                 .enumerate()
                 .map(|(r, rot)| {
-                    let q = model.speed_ratio(r);
                     format!(
-                        "{} ({}/{}, {} nodes)",
+                        "{} ({}, {} nodes)",
                         rot.id,
-                        q.num,
-                        q.den,
+                        model.speed_ratio(r),
                         rot.nodes.len()
                     )
                 })

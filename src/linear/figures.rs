@@ -66,7 +66,7 @@ pub fn campbell_figure(c: &Campbell, title: &str) -> Figure {
     }
     for (k, (rotor, s)) in ratios.iter().enumerate() {
         chart.series.push(Series {
-            points: vec![(w0, s * w0), (w1, s * w1)],
+            points: vec![(w0, s.abs() * w0), (w1, s.abs() * w1)],
             colour: colour(k + 4),
             line: LineStyle::Dashed,
             width: 1,

@@ -381,7 +381,8 @@ impl ModeSummary {
 pub struct CriticalSpeed {
     /// The exciting rotor's id.
     pub rotor_id: String,
-    /// Its speed ratio (the line's slope).
+    /// Its speed ratio; the line's slope is its magnitude (negative: the rotor and its
+    /// unbalance turn against the reference rotor).
     pub speed_ratio: f64,
     /// Mode number, 1-based: the followed mode's rank in frequency at the first speed.
     pub mode: usize,
@@ -391,18 +392,24 @@ pub struct CriticalSpeed {
     pub forward_share: f64,
     /// Reference speed ω at the crossing (rad/s).
     pub speed_rad_s: f64,
-    /// Mode frequency at the crossing (rad/s) = speed_ratio × speed_rad_s.
+    /// Mode frequency at the crossing (rad/s) = |speed_ratio| × speed_rad_s.
     pub frequency_rad_s: f64,
 }
 
 impl CriticalSpeed {
-    /// Whether the rotor's unbalance excites the mode: a rotating unbalance is a forward
-    /// force, which does work only on the forward part of a shape. A backward mode of an
+    /// Whether the rotor's unbalance excites the mode: a rotating unbalance is a force
+    /// turning with its rotor, which does work only on the part of a shape that whirls the
+    /// same way (forward, or backward for a counter-rotating rotor). A backward mode of an
     /// isotropic rotor (share 0) is not excited; with anisotropic supports a backward mode
     /// has some forward part and responds in proportion. Counted as excited when the
     /// forward part dominates (share ≥ 0.5).
     pub fn excited_by_unbalance(&self) -> bool {
-        self.forward_share >= 0.5
+        if self.speed_ratio < 0.0 {
+            // a counter-rotating rotor's unbalance turns backward (against +x → +y)
+            self.forward_share <= 0.5
+        } else {
+            self.forward_share >= 0.5
+        }
     }
 }
 
@@ -677,14 +684,17 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
         shapes.push(now);
     }
     let mut critical_speeds = Vec::new();
+    // one 1× line per spinning speed, at the rotor's |ratio| (a counter-rotating rotor's
+    // unbalance excites at |s| ω too, turning the other way)
     let mut lines: Vec<(String, f64)> = Vec::new();
     for g in &asm.gyro {
-        let s = g.speed_ratio.value();
-        if !lines.iter().any(|(_, v)| *v == s) {
-            lines.push((g.rotor_id.clone(), s));
+        let signed = g.speed_ratio.value();
+        if signed != 0.0 && !lines.iter().any(|(_, v)| *v == signed) {
+            lines.push((g.rotor_id.clone(), signed));
         }
     }
-    for (rotor_id, s) in &lines {
+    for (rotor_id, signed) in &lines {
+        let s = &signed.abs();
         for (k, pair) in points.windows(2).enumerate() {
             let (p0, p1) = (&pair[0], &pair[1]);
             for (i, ((m0, m1), shape)) in p0.modes.iter().zip(&p1.modes).zip(&shapes[k]).enumerate()
@@ -705,7 +715,7 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
                     };
                     critical_speeds.push(CriticalSpeed {
                         rotor_id: rotor_id.clone(),
-                        speed_ratio: *s,
+                        speed_ratio: *signed,
                         mode: i + 1,
                         whirl: m.whirl,
                         forward_share: forward_share(&m.shape),

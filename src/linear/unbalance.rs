@@ -29,7 +29,7 @@ pub struct UnbalanceResponse {
     pub speed_rad_s: f64,
     /// The exciting rotor's id.
     pub rotor_id: String,
-    /// The excitation's frequency `s_r ω` (rad/s).
+    /// The excitation's frequency `|s_r| ω` (rad/s).
     pub frequency_rad_s: f64,
     /// Complex amplitudes of every DoF (node-major `[x, y, θx, θy]`; m and rad).
     pub amplitudes: Vec<Complex<f64>>,
@@ -108,7 +108,7 @@ pub fn unbalance_response(
                 .iter()
                 .filter(|u| u.rotor_id == g.rotor_id)
                 .collect();
-            if ours.is_empty() {
+            if ours.is_empty() || g.speed_ratio.value() == 0.0 {
                 continue;
             }
             let om = g.speed_ratio.value() * w;
@@ -125,7 +125,17 @@ pub fn unbalance_response(
                 f[(u.dof_y, 0)] += Complex::new(0.0, -1.0) * fx;
             }
             let x = a.partial_piv_lu().solve(&f);
-            let amplitudes: Vec<Complex<f64>> = (0..n).map(|i| x[(i, 0)]).collect();
+            // x(t) = Re(X e^{iΩt}); for a counter-rotating rotor (Ω < 0) reported as
+            // Re(conj(X) e^{i|Ω|t}), at the positive frequency |Ω|
+            let amplitudes: Vec<Complex<f64>> = (0..n)
+                .map(|i| {
+                    if om < 0.0 {
+                        x[(i, 0)].conj()
+                    } else {
+                        x[(i, 0)]
+                    }
+                })
+                .collect();
             if amplitudes
                 .iter()
                 .any(|v| !(v.re.is_finite() && v.im.is_finite()))
@@ -138,7 +148,7 @@ pub fn unbalance_response(
             out.push(UnbalanceResponse {
                 speed_rad_s: w,
                 rotor_id: g.rotor_id.clone(),
-                frequency_rad_s: om,
+                frequency_rad_s: om.abs(),
                 amplitudes,
             });
         }

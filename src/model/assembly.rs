@@ -32,9 +32,8 @@ use faer::linalg::solvers::Solve;
 
 use super::element::{Mat4, ShaftSection};
 use super::error::ModelError;
-use super::validate::{Dir, Model, dof};
+use super::validate::{Dir, Model, SpeedRatio, dof};
 use crate::bearing::HertzLaw;
-use crate::hb::Ratio;
 use crate::system::{DenseMatrix, LinearPart};
 
 /// Gyroscopic matrix of one rotor, per unit spin speed.
@@ -42,8 +41,8 @@ use crate::system::{DenseMatrix, LinearPart};
 pub struct RotorGyro {
     /// Rotor id from the model file.
     pub rotor_id: String,
-    /// Rotor speed / reference speed ω.
-    pub speed_ratio: Ratio,
+    /// Rotor speed / reference speed ω (negative: counter-rotating; zero: not spinning).
+    pub speed_ratio: SpeedRatio,
     /// `G_r` (skew-symmetric, `n × n`); the velocity term is `s_r ω G_r q̇`.
     pub matrix: DenseMatrix,
 }

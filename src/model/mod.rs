@@ -58,5 +58,6 @@ pub use error::{InvalidKind, ModelError};
 pub use file::ModelFile;
 pub use set::ModelSet;
 pub use validate::{
-    BUILTIN_NAME, BUILTIN_TOML, DOF_PER_NODE, Dir, LITERATURE_NAME, LITERATURE_TOML, Model, dof,
+    BUILTIN_NAME, BUILTIN_TOML, DOF_PER_NODE, Dir, LITERATURE_NAME, LITERATURE_TOML, Model,
+    SpeedRatio, dof,
 };

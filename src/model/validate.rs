@@ -52,7 +52,7 @@ pub struct Model {
     pub spec: ModelFile,
     nodes: Vec<u32>,
     node_rotor: Vec<usize>,
-    speed_ratios: Vec<Ratio>,
+    speed_ratios: Vec<SpeedRatio>,
     rayleigh: (f64, f64),
 }
 
@@ -227,12 +227,12 @@ impl Model {
     }
 
     /// Speed ratio of rotor `r` (index into `spec.rotors`).
-    pub fn speed_ratio(&self, r: usize) -> Ratio {
+    pub fn speed_ratio(&self, r: usize) -> SpeedRatio {
         self.speed_ratios[r]
     }
 
     /// All speed ratios, in rotor order.
-    pub fn speed_ratios(&self) -> &[Ratio] {
+    pub fn speed_ratios(&self) -> &[SpeedRatio] {
         &self.speed_ratios
     }
 
@@ -260,22 +260,92 @@ pub fn dof(node_index: usize, dir: Dir) -> usize {
 
 /// Parses a speed ratio: `"p/q"`, `"p"`, a decimal string, or a number; numbers must be a
 /// rational with denominator ≤ [`MAX_RATIO_DEN`] within 1e-9.
-pub fn parse_ratio(spec: &SpeedRatioSpec) -> Result<Ratio, InvalidKind> {
+pub fn parse_ratio(spec: &SpeedRatioSpec) -> Result<SpeedRatio, InvalidKind> {
     let bad = |s: String| InvalidKind::IrrationalRatio(s);
-    match spec {
-        SpeedRatioSpec::Number(x) => {
-            Ratio::approximate(*x, MAX_RATIO_DEN).ok_or(bad(x.to_string()))
+    let from_float = |x: f64, text: String| -> Result<SpeedRatio, InvalidKind> {
+        if x == 0.0 {
+            return Ok(SpeedRatio::ZERO);
         }
+        let magnitude = Ratio::approximate(x.abs(), MAX_RATIO_DEN).ok_or(bad(text))?;
+        Ok(SpeedRatio {
+            negative: x < 0.0,
+            magnitude: Some(magnitude),
+        })
+    };
+    match spec {
+        SpeedRatioSpec::Number(x) => from_float(*x, x.to_string()),
         SpeedRatioSpec::Text(s) => {
             let t = s.trim();
             if let Some((p, q)) = t.split_once('/') {
-                let p: u32 = p.trim().parse().map_err(|_| bad(s.clone()))?;
+                let p = p.trim();
+                let (negative, p) = match p.strip_prefix('-') {
+                    Some(rest) => (true, rest.trim()),
+                    None => (false, p),
+                };
+                let p: u32 = p.parse().map_err(|_| bad(s.clone()))?;
                 let q: u32 = q.trim().parse().map_err(|_| bad(s.clone()))?;
-                Ratio::new(p, q).map_err(|_| bad(s.clone()))
+                if q == 0 {
+                    return Err(bad(s.clone()));
+                }
+                if p == 0 {
+                    return Ok(SpeedRatio::ZERO);
+                }
+                Ok(SpeedRatio {
+                    negative,
+                    magnitude: Some(Ratio::new(p, q).map_err(|_| bad(s.clone()))?),
+                })
             } else {
                 let x: f64 = t.parse().map_err(|_| bad(s.clone()))?;
-                Ratio::approximate(x, MAX_RATIO_DEN).ok_or(bad(s.clone()))
+                from_float(x, s.clone())
             }
+        }
+    }
+}
+
+/// A rotor's speed over the reference speed ω: a rational number of either sign (negative:
+/// the rotor turns against the reference rotor, from +y towards +x; zero: a part that does
+/// not spin).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SpeedRatio {
+    /// Turning against the reference rotor.
+    pub negative: bool,
+    /// `|ratio|`; `None` for a part that does not spin.
+    pub magnitude: Option<Ratio>,
+}
+
+impl SpeedRatio {
+    /// The reference rotor's own ratio, 1.
+    pub const ONE: Self = Self {
+        negative: false,
+        magnitude: Some(Ratio { num: 1, den: 1 }),
+    };
+    /// A part that does not spin.
+    pub const ZERO: Self = Self {
+        negative: false,
+        magnitude: None,
+    };
+
+    /// The signed value.
+    pub fn value(self) -> f64 {
+        match self.magnitude {
+            None => 0.0,
+            Some(r) if self.negative => -r.value(),
+            Some(r) => r.value(),
+        }
+    }
+}
+
+impl std::fmt::Display for SpeedRatio {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.magnitude {
+            None => f.write_str("0"),
+            Some(r) => write!(
+                f,
+                "{}{}/{}",
+                if self.negative { "-" } else { "" },
+                r.num,
+                r.den
+            ),
         }
     }
 }
@@ -795,7 +865,7 @@ impl<'a> Validator<'a> {
 
     /// The rotors: unique ids, speed ratios, and each node in exactly one rotor. Returns the
     /// node ids in ascending order, the rotor of each, and the speed ratios.
-    fn rotors(&self, spec: &ModelFile) -> VResult<(Vec<u32>, Vec<usize>, Vec<Ratio>)> {
+    fn rotors(&self, spec: &ModelFile) -> VResult<(Vec<u32>, Vec<usize>, Vec<SpeedRatio>)> {
         if spec.rotors.is_empty() {
             return Err(self.err("rotors", InvalidKind::MissingKey("`rotors`".into())));
         }
