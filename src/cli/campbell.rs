@@ -62,11 +62,11 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let asm = Assembly::new(&model)?;
     let diagram = linear::campbell(&asm, &speeds, args.count)?;
     if let Some(path) = &args.csv {
-        std::fs::write(path, linear::figures::campbell_csv(&diagram))
+        std::fs::write(path, super::linear_figures::campbell_csv(&diagram))
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(stem) = &args.figure {
-        let fig = linear::figures::campbell_figure(
+        let fig = super::linear_figures::campbell_figure(
             &diagram,
             &format!("Campbell diagram of {}", model.spec.name),
         );

@@ -94,7 +94,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some(path) = &args.shapes {
         std::fs::write(
             path,
-            linear::figures::shapes_csv(&modes, model.node_ids(), &axial),
+            super::linear_figures::shapes_csv(&modes, model.node_ids(), &axial),
         )
         .with_context(|| format!("writing {}", path.display()))?;
         eprintln!("wrote {}", path.display());
@@ -113,7 +113,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 (r.id.clone(), idx)
             })
             .collect();
-        let fig = linear::figures::shapes_figure(
+        let fig = super::linear_figures::shapes_figure(
             &modes,
             &axial,
             &rotors,

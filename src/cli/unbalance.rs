@@ -58,7 +58,7 @@ pub fn run(args: &UnbalanceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some(path) = &args.csv {
         std::fs::write(
             path,
-            linear::figures::unbalance_csv(&resp, model.node_ids()),
+            super::linear_figures::unbalance_csv(&resp, model.node_ids()),
         )
         .with_context(|| format!("writing {}", path.display()))?;
     }
@@ -102,7 +102,7 @@ pub fn run(args: &UnbalanceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
     }
     if let Some(stem) = &args.figure {
-        let fig = linear::figures::unbalance_figure(
+        let fig = super::linear_figures::unbalance_figure(
             &resp,
             &nodes,
             &format!("Unbalance response of {}", model.spec.name),

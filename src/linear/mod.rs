@@ -43,9 +43,9 @@
 //! whether the rotor's unbalance (a forward force) excites it.
 //!
 //! Also here: the logarithmic decrement of each mode, and the unbalance response of the
-//! linearised rotor ([`unbalance_response`]).
+//! linearised rotor ([`unbalance_response`]). Their figures and CSVs are drawn by the
+//! commands (`cli::linear_figures`).
 
-pub mod figures;
 mod unbalance;
 
 pub use unbalance::{NodeOrbit, UnbalanceResponse, unbalance_response};

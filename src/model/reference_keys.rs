@@ -250,8 +250,8 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Optional,
         default: "1",
-        range: "a positive rational: the string \"p/q\" with positive integers p and q, or a number or decimal string (such as \"1.2\" or \"2\") within 1e-9 of a rational with denominator ≤ 100",
-        meaning: "Rotor speed divided by the reference speed ω (the HP rotor's λ = 1.2 of Appendix A is written \"6/5\").",
+        range: "a rational of either sign, or 0: the string \"p/q\" or \"-p/q\" with non-negative integers p and q > 0, or a number or decimal string (such as \"1.2\", -1.2 or \"2\") within 1e-9 of a rational with denominator ≤ 100",
+        meaning: "Rotor speed divided by the reference speed ω (the HP rotor's λ = 1.2 of Appendix A is written \"6/5\"). Negative: the rotor turns against the reference rotor (counter-rotation; gyroscopic terms, unbalance, ring and cage speeds follow the sign, the basis uses |ratio|); 0: a part that does not spin.",
     },
     Key {
         table: "rotors",

@@ -5,11 +5,11 @@ use std::fmt::Write as _;
 
 use num_complex::Complex;
 
-use super::{Campbell, Mode, UnbalanceResponse, Whirl, forward_share};
 use crate::figure::{
     Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker, Series,
 };
 use crate::figure::{PALETTE, colour};
+use crate::linear::{Campbell, Mode, NodeOrbit, UnbalanceResponse, Whirl, forward_share};
 
 const FORWARD: plotters::style::RGBColor = PALETTE[0];
 const BACKWARD: plotters::style::RGBColor = PALETTE[3];
@@ -181,7 +181,7 @@ pub fn shapes_figure(
 }
 
 fn major_axis(x: Complex<f64>, y: Complex<f64>) -> f64 {
-    super::NodeOrbit { x, y }.major_axis()
+    NodeOrbit { x, y }.major_axis()
 }
 
 /// Bode and polar plots of the unbalance response at the nodes `nodes` (DoF-order
@@ -306,7 +306,7 @@ pub fn shapes_csv(modes: &[Mode], node_ids: &[u32], axial_m: &[f64]) -> String {
     for (k, m) in modes.iter().enumerate() {
         for (i, id) in node_ids.iter().enumerate() {
             let d = &m.shape[4 * i..4 * i + 4];
-            let orbit = super::NodeOrbit { x: d[0], y: d[1] };
+            let orbit = NodeOrbit { x: d[0], y: d[1] };
             let _ = writeln!(
                 text,
                 "{},{:.6},{},{:.4},{},{:.6},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
