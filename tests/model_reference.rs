@@ -69,6 +69,7 @@ fn structs() -> Vec<(&'static str, BTreeSet<&'static str>)> {
         ("disks", fields::<mf::DiskSpec>()),
         ("supports", fields::<mf::SupportSpec>()),
         ("supports.table", fields::<mf::SupportTableSpec>()),
+        ("nonlinear", fields::<mf::NonlinearSpec>()),
         ("bearings", fields::<mf::BearingSpec>()),
         ("thermal", fields::<ts::ThermalSpec>()),
         ("thermal.viscosity", fields::<ts::ViscositySpec>()),

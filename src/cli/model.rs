@@ -86,6 +86,14 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
                 spec.supports.len(),
                 spec.bearings.len()
             )?;
+            if !spec.nonlinear.is_empty() {
+                let list: Vec<String> = spec
+                    .nonlinear
+                    .iter()
+                    .map(|e| format!("{} ({}, node {})", e.id, e.kind.label(), e.node))
+                    .collect();
+                writeln!(out, "  nonlinear: {}", list.join(", "))?;
+            }
             let (a0, a1) = model.rayleigh();
             writeln!(out, "  damping:  a0 = {a0:.4} 1/s, a1 = {a1:.4e} s")?;
             writeln!(

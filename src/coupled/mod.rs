@@ -29,16 +29,20 @@
 // Index loops mirror the matrix notation of the chain rule below.
 #![allow(clippy::needless_range_loop)]
 
+pub mod elements;
+
 use std::sync::Mutex;
 
 use thiserror::Error;
 
 use crate::bearing::{ExpansionGeometry, HertzBearing};
+use crate::model::file::NonlinearKind;
 use crate::model::{Assembly, Dir, Model, ModelError};
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 use crate::thermal::{
     BearingLoad, BearingThermalOutputs, ThermalEval, ThermalNetwork, ThermalSpec,
 };
+use elements::ElementLaw;
 
 /// Errors building a coupled model.
 #[derive(Debug, Error)]
@@ -109,6 +113,16 @@ struct CoupledBearing {
     expansion: Option<ExpansionGeometry>,
 }
 
+/// A `[[nonlinear]]` element of the coupled model.
+#[derive(Clone, Debug)]
+struct CoupledElement {
+    law: ElementLaw,
+    /// Position of its node's x in the nonlinear mechanical DoFs (y is +1).
+    a: usize,
+    /// Same for the second node, `None` for ground.
+    b: Option<usize>,
+}
+
 /// Instantaneous bearing quantities at one time (for recordings and replay).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct BearingState {
@@ -135,6 +149,7 @@ pub struct CoupledRotor {
     assembly: Assembly,
     network: Option<ThermalNetwork>,
     bearings: Vec<CoupledBearing>,
+    elements: Vec<CoupledElement>,
     nl: NonlinearDofs,
     ambient_temp_c: f64,
     frozen_clearance: bool,
@@ -256,11 +271,18 @@ impl CoupledRotor {
         };
         let ambient_temp_c = network.as_ref().map_or(25.0, |n| n.ambient_temp_c());
 
-        // Nonlinear mechanical DoFs: x, y of every bearing node.
+        // Nonlinear mechanical DoFs: x, y of every bearing node and of every node of a
+        // `[[nonlinear]]` element.
         let mut nodes: Vec<u32> = Vec::new();
         for b in &model.spec.bearings {
             nodes.push(b.inner_node);
             if let Some(o) = b.outer_node {
+                nodes.push(o);
+            }
+        }
+        for e in &model.spec.nonlinear {
+            nodes.push(e.node);
+            if let Some(o) = e.to_node {
                 nodes.push(o);
             }
         }
@@ -350,10 +372,37 @@ impl CoupledRotor {
                 expansion,
             });
         }
+        let mut elements = Vec::new();
+        for (k, e) in model.spec.nonlinear.iter().enumerate() {
+            let field = format!("nonlinear[{k}] ({})", e.id);
+            let a = pos(e.node).ok_or_else(|| mismatch(model, &field, "node missing".into()))?;
+            let b = e.to_node.and_then(pos);
+            let law = match e.kind {
+                NonlinearKind::Rub => ElementLaw::Rub {
+                    gap_m: e.gap_m.unwrap_or(0.0),
+                    stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
+                    friction: e.friction_coefficient.unwrap_or(0.0),
+                    spin_sign: ratio_of(e.node).signum() * f64::from(ratio_of(e.node) != 0.0),
+                },
+                NonlinearKind::Polynomial => ElementLaw::Polynomial {
+                    coefficients: e.coefficients.clone().unwrap_or_default(),
+                },
+                NonlinearKind::Unilateral => {
+                    let a = e.direction_deg.unwrap_or(0.0).to_radians();
+                    ElementLaw::Unilateral {
+                        gap_m: e.gap_m.unwrap_or(0.0),
+                        stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
+                        direction: [a.cos(), a.sin()],
+                    }
+                }
+            };
+            elements.push(CoupledElement { law, a, b });
+        }
         Ok(Self {
             assembly,
             network,
             bearings,
+            elements,
             nl: NonlinearDofs { mech, therm },
             ambient_temp_c,
             frozen_clearance: options.frozen_clearance,
@@ -725,6 +774,33 @@ impl CoupledRotor {
                 if let Some((loc, d)) = ddv {
                     for (l, dl) in loc.iter().zip(d) {
                         row[p + l] += j[2][2] * dl;
+                    }
+                }
+            }
+        }
+
+        for e in &self.elements {
+            let xb = |o: usize| e.b.map_or(0.0, |b| x[b + o]);
+            let u = [x[e.a] - xb(0), x[e.a + 1] - xb(1)];
+            let (f, j) = e.law.force(u);
+            let sides: [(usize, f64); 2] = [(e.a, 1.0), (e.b.unwrap_or(usize::MAX), -1.0)];
+            for &(row, rs) in &sides {
+                if row == usize::MAX {
+                    continue;
+                }
+                out.f[row] += rs * f[0];
+                out.f[row + 1] += rs * f[1];
+                if !derivatives {
+                    continue;
+                }
+                for &(col, cs) in &sides {
+                    if col == usize::MAX {
+                        continue;
+                    }
+                    for r in 0..2 {
+                        for c in 0..2 {
+                            out.df_dx[(row + r) * p + col + c] += rs * cs * j[r][c];
+                        }
                     }
                 }
             }

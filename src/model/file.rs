@@ -41,6 +41,9 @@ pub struct ModelFile {
     /// Rolling bearings (nonlinear Hertz contact; linearised for modal analysis).
     #[serde(default)]
     pub bearings: Vec<BearingSpec>,
+    /// Other nonlinear elements: rub, polynomial supports, unilateral springs.
+    #[serde(default)]
+    pub nonlinear: Vec<NonlinearSpec>,
     /// Thermal network; defined and validated by the thermal layer, kept opaque here.
     #[serde(default)]
     pub thermal: Option<toml::Table>,
@@ -361,4 +364,50 @@ impl SupportSpec {
         }
         out
     }
+}
+
+/// The law of a `[[nonlinear]]` element.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum NonlinearKind {
+    /// Rotor–stator rub: radial gap, contact stiffness, Coulomb friction.
+    Rub,
+    /// Radial restoring force `Σ c_j r^j` (a cubic support: `[0, 0, k3]`).
+    Polynomial,
+    /// A spring acting along one direction beyond a gap (a one-sided stop).
+    Unilateral,
+}
+
+impl NonlinearKind {
+    /// The name in the model file.
+    pub fn label(self) -> &'static str {
+        match self {
+            Self::Rub => "rub",
+            Self::Polynomial => "polynomial",
+            Self::Unilateral => "unilateral",
+        }
+    }
+}
+
+/// `[[nonlinear]]`: a nonlinear element between a node and ground (or two nodes), acting on
+/// their relative x–y displacement (`coupled::elements` has the laws).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NonlinearSpec {
+    pub id: String,
+    pub kind: NonlinearKind,
+    pub node: u32,
+    /// Second node; absent means ground (the stator).
+    pub to_node: Option<u32>,
+    /// Radial gap (rub) or gap along the direction (unilateral) before contact (m).
+    pub gap_m: Option<f64>,
+    /// Contact stiffness (rub, unilateral; N/m).
+    pub stiffness_n_m: Option<f64>,
+    /// Coulomb friction coefficient of the rub contact (default 0).
+    pub friction_coefficient: Option<f64>,
+    /// Coefficients `c_1, c_2, …` of the radial force `Σ c_j r^j` (polynomial; N/m^j).
+    pub coefficients: Option<Vec<f64>>,
+    /// Direction of the unilateral spring, from +x towards +y (degrees): it pushes back
+    /// when the node moves along it by more than the gap.
+    pub direction_deg: Option<f64>,
 }

@@ -65,6 +65,10 @@ pub const TABLES: &[(&str, &str)] = &[
         "supports.table",
         "`[supports.table]`: support coefficients over speed",
     ),
+    (
+        "nonlinear",
+        "`[[nonlinear]]`: rub, polynomial supports, unilateral springs",
+    ),
     ("bearings", "`[[bearings]]`: rolling bearings (Eqs. 3–5)"),
     ("thermal", "`[thermal]`: the thermal network (Section 3)"),
     ("thermal.viscosity", "`[thermal.viscosity]`: Eq. 12"),

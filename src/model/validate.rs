@@ -5,7 +5,8 @@ use std::path::Path;
 
 use super::error::{InvalidKind, ModelError};
 use super::file::{
-    BearingSpec, DiskSpec, ModelFile, ShaftSpec, SpeedRatioSpec, SupportSpec, SupportTableSpec,
+    BearingSpec, DiskSpec, ModelFile, NonlinearKind, NonlinearSpec, ShaftSpec, SpeedRatioSpec,
+    SupportSpec, SupportTableSpec,
 };
 use crate::bearing::ContactLaw;
 use crate::hb::Ratio;
@@ -547,6 +548,83 @@ impl<'a> Validator<'a> {
         Ok(())
     }
 
+    /// A `[[nonlinear]]` element: its nodes, the keys its kind needs (and no key of
+    /// another kind), their ranges.
+    fn nonlinear_element(&self, i: usize, e: &NonlinearSpec, nodes: &[u32]) -> VResult<()> {
+        let p = |f: &str| format!("nonlinear[{i}].{f}");
+        self.node(nodes, p("node"), e.node)?;
+        if let Some(t) = e.to_node {
+            self.node(nodes, p("to_node"), t)?;
+            if t == e.node {
+                return Err(self.err(
+                    p("to_node"),
+                    InvalidKind::BadConnection(format!("element connects node {t} to itself")),
+                ));
+            }
+        }
+        let kind = e.kind;
+        let given: [(&str, bool); 5] = [
+            ("gap_m", e.gap_m.is_some()),
+            ("stiffness_n_m", e.stiffness_n_m.is_some()),
+            ("friction_coefficient", e.friction_coefficient.is_some()),
+            ("coefficients", e.coefficients.is_some()),
+            ("direction_deg", e.direction_deg.is_some()),
+        ];
+        let (needed, allowed): (&[&str], &[&str]) = match kind {
+            NonlinearKind::Rub => (
+                &["gap_m", "stiffness_n_m"],
+                &["gap_m", "stiffness_n_m", "friction_coefficient"],
+            ),
+            NonlinearKind::Polynomial => (&["coefficients"], &["coefficients"]),
+            NonlinearKind::Unilateral => (
+                &["stiffness_n_m", "direction_deg"],
+                &["gap_m", "stiffness_n_m", "direction_deg"],
+            ),
+        };
+        for (key, set) in given {
+            if set && !allowed.contains(&key) {
+                return Err(self.err(
+                    p(key),
+                    InvalidKind::BadConnection(format!(
+                        "a {} element has no {key} (it takes {})",
+                        kind.label(),
+                        allowed.join(", ")
+                    )),
+                ));
+            }
+            if !set && needed.contains(&key) {
+                return Err(self.err(
+                    p(key),
+                    InvalidKind::MissingKey(format!("a {} element needs {key}", kind.label())),
+                ));
+            }
+        }
+        if let Some(g) = e.gap_m {
+            self.non_negative(p("gap_m"), g)?;
+        }
+        if let Some(k) = e.stiffness_n_m {
+            self.positive(p("stiffness_n_m"), k)?;
+        }
+        if let Some(mu) = e.friction_coefficient {
+            self.non_negative(p("friction_coefficient"), mu)?;
+        }
+        if let Some(a) = e.direction_deg {
+            self.finite(p("direction_deg"), a)?;
+        }
+        if let Some(c) = &e.coefficients {
+            if c.is_empty() {
+                return Err(self.err(
+                    p("coefficients"),
+                    InvalidKind::BadConnection("needs at least one coefficient".into()),
+                ));
+            }
+            for (j, &v) in c.iter().enumerate() {
+                self.finite(format!("{}[{j}]", p("coefficients")), v)?;
+            }
+        }
+        Ok(())
+    }
+
     fn non_negative(&self, path: impl Into<String>, v: f64) -> VResult<()> {
         if !(v.is_finite() && v >= 0.0) {
             let e = self.err(path, InvalidKind::Negative(v));
@@ -747,6 +825,10 @@ impl<'a> Validator<'a> {
         }
 
         self.bearings(&spec, &nodes)?;
+        self.unique("nonlinear", spec.nonlinear.iter().map(|e| e.id.as_str()))?;
+        for (i, e) in spec.nonlinear.iter().enumerate() {
+            self.keep(self.nonlinear_element(i, e, &nodes));
+        }
         if !self.refused.get() {
             self.held_to_ground(&spec, &nodes)?;
         }
@@ -1082,6 +1164,18 @@ impl Validator<'_> {
                 index(b.inner_node),
                 b.outer_node.map_or(Some(ground), index),
             );
+        }
+        // a polynomial support with a linear term holds; a rub or a stop acts only
+        // beyond its gap
+        for e in &spec.nonlinear {
+            let linear = e
+                .coefficients
+                .as_ref()
+                .and_then(|c| c.first())
+                .is_some_and(|&c1| c1 > 0.0);
+            if e.kind == NonlinearKind::Polynomial && linear {
+                join(index(e.node), e.to_node.map_or(Some(ground), index));
+            }
         }
         let g = find(&mut parent, ground);
         for (i, &id) in nodes.iter().enumerate() {
