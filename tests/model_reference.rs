@@ -70,6 +70,7 @@ fn structs() -> Vec<(&'static str, BTreeSet<&'static str>)> {
         ("supports", fields::<mf::SupportSpec>()),
         ("supports.table", fields::<mf::SupportTableSpec>()),
         ("nonlinear", fields::<mf::NonlinearSpec>()),
+        ("forces", fields::<mf::ForceSpec>()),
         ("bearings", fields::<mf::BearingSpec>()),
         ("thermal", fields::<ts::ThermalSpec>()),
         ("thermal.viscosity", fields::<ts::ViscositySpec>()),

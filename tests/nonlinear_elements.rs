@@ -203,3 +203,58 @@ fn element_keys_are_checked_by_kind() {
     );
     Model::from_str(&stop, "stop.toml").expect("unilateral");
 }
+
+/// NLvib's two-mass contact benchmark written as a model file
+/// (`examples/rotors/two_mass_contact.toml`: disks as masses, supports as springs, a
+/// unilateral element, a `[[forces]]` entry) and continued exactly as
+/// `tests/engine_contact.rs` continues the hand-written system (H = 21 integer harmonics,
+/// 1024 AFT samples, shooting): the same published folds (0.6534401, 0.755664) and
+/// Neimark–Sacker point (0.618354).
+#[test]
+fn two_mass_contact_model_file_gives_the_published_bifurcations() {
+    use tmrotor::continuation::{Continuation, ContinuationOptions};
+    use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
+    use tmrotor::hb::{Basis, HarmonicBalance};
+    use tmrotor::stability::{BifurcationKind, Shooting};
+    use tmrotor::systems::contact::UnilateralContact;
+
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/rotors/two_mass_contact.toml"
+    );
+    let model = Model::from_file(path).expect("model");
+    let system = CoupledRotor::new(
+        &model,
+        &StudyOverrides::default(),
+        CouplingOptions::default(),
+    )
+    .expect("system");
+    let basis = Basis::integer(21).expect("basis");
+    let hb = HarmonicBalance::new(&system, &basis, Some(1024)).expect("hb");
+    let (w0, w1) = UnilateralContact::OMEGA_RANGE;
+    let mut opts = ContinuationOptions::new(w0, w1);
+    opts.ds_max = 0.05;
+    let method = Shooting::default();
+    let mut cont = Continuation::new(hb, opts, Some(&method)).expect("continuation");
+    let branch = cont.run(|_| {}).expect("run");
+    let mut folds: Vec<f64> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode) && branch.confirmed(b))
+        .map(|b| b.solution.omega)
+        .collect();
+    folds.sort_by(f64::total_cmp);
+    assert_eq!(folds.len(), 2, "confirmed folds {folds:?}");
+    assert!((folds[0] - 0.6534401).abs() < 1e-6, "{folds:?}");
+    assert!((folds[1] - 0.755664).abs() < 1e-5, "{folds:?}");
+    let ns: Vec<f64> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker))
+        .map(|b| b.solution.omega)
+        .collect();
+    assert!(
+        ns.iter().any(|w| (w - 0.618354).abs() < 5e-4),
+        "Neimark–Sacker points {ns:?}"
+    );
+}

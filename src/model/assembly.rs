@@ -104,9 +104,25 @@ pub struct Assembly {
     pub gravity: Vec<f64>,
     /// Disk unbalances.
     pub unbalances: Vec<Unbalance>,
+    /// Harmonic forces of fixed amplitude (`[[forces]]`).
+    pub harmonic_forces: Vec<HarmonicForce>,
     /// Supports with coefficients over speed; `stiffness` and `damping` do not hold them,
     /// [`Self::linear_part`] adds them at each speed.
     pub support_tables: Vec<SupportTable>,
+}
+
+/// A harmonic force `A cos(r ω t + φ)` along `(cos α, sin α)` at one node.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HarmonicForce {
+    pub id: String,
+    /// x DoF of the node (y is `+1`).
+    pub dof_x: usize,
+    pub amplitude_n: f64,
+    /// `(cos α, sin α)`.
+    pub direction: [f64; 2],
+    pub phase_rad: f64,
+    /// `r`: frequency over ω.
+    pub frequency_ratio: f64,
 }
 
 /// A support's cross-coupled terms: x DoFs of its nodes, stiffness, damping.
@@ -394,6 +410,21 @@ impl Assembly {
             bearing_stiffness: DenseMatrix::zeros(n),
             gravity,
             unbalances,
+            harmonic_forces: spec
+                .forces
+                .iter()
+                .map(|f| {
+                    let a = f.direction_deg.to_radians();
+                    Ok(HarmonicForce {
+                        id: f.id.clone(),
+                        dof_x: dof(node(f.node)?, Dir::X),
+                        amplitude_n: f.amplitude_n,
+                        direction: [a.cos(), a.sin()],
+                        phase_rad: f.phase_deg.to_radians(),
+                        frequency_ratio: f.frequency_ratio,
+                    })
+                })
+                .collect::<Result<Vec<_>, ModelError>>()?,
             support_tables,
         };
         asm.linearise_bearings(model)?;
@@ -592,10 +623,16 @@ impl Assembly {
         }
     }
 
-    /// Total external load `F(t)`: gravity plus unbalance, written into `out`.
+    /// Total external load `F(t)`: gravity, unbalance and the harmonic forces, written into
+    /// `out`.
     pub fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
         out.copy_from_slice(&self.gravity);
         self.add_unbalance_force(omega, t, out);
+        for f in &self.harmonic_forces {
+            let v = f.amplitude_n * (f.frequency_ratio * omega * t + f.phase_rad).cos();
+            out[f.dof_x] += v * f.direction[0];
+            out[f.dof_x + 1] += v * f.direction[1];
+        }
     }
 
     /// Position of node `id` in the DoF ordering.

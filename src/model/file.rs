@@ -44,6 +44,9 @@ pub struct ModelFile {
     /// Other nonlinear elements: rub, polynomial supports, unilateral springs.
     #[serde(default)]
     pub nonlinear: Vec<NonlinearSpec>,
+    /// Harmonic forces of fixed amplitude at a node (shakers, benchmark oscillators).
+    #[serde(default)]
+    pub forces: Vec<ForceSpec>,
     /// Thermal network; defined and validated by the thermal layer, kept opaque here.
     #[serde(default)]
     pub thermal: Option<toml::Table>,
@@ -410,4 +413,28 @@ pub struct NonlinearSpec {
     /// Direction of the unilateral spring, from +x towards +y (degrees): it pushes back
     /// when the node moves along it by more than the gap.
     pub direction_deg: Option<f64>,
+}
+
+/// `[[forces]]`: a harmonic force of fixed amplitude on a node along a fixed line,
+/// `F(t) = A cos(r ω t + φ) (cos α, sin α)`.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForceSpec {
+    pub id: String,
+    pub node: u32,
+    /// Amplitude `A` (N).
+    pub amplitude_n: f64,
+    /// Line of action `α`, from +x towards +y (degrees); default 0 (along x).
+    #[serde(default)]
+    pub direction_deg: f64,
+    /// Phase `φ` at `t = 0` (degrees); default 0.
+    #[serde(default)]
+    pub phase_deg: f64,
+    /// Frequency over the reference speed, `r`; default 1.
+    #[serde(default = "default_one")]
+    pub frequency_ratio: f64,
+}
+
+fn default_one() -> f64 {
+    1.0
 }

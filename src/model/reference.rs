@@ -69,6 +69,7 @@ pub const TABLES: &[(&str, &str)] = &[
         "nonlinear",
         "`[[nonlinear]]`: rub, polynomial supports, unilateral springs",
     ),
+    ("forces", "`[[forces]]`: harmonic forces of fixed amplitude"),
     ("bearings", "`[[bearings]]`: rolling bearings (Eqs. 3–5)"),
     ("thermal", "`[thermal]`: the thermal network (Section 3)"),
     ("thermal.viscosity", "`[thermal.viscosity]`: Eq. 12"),

@@ -5,8 +5,8 @@ use std::path::Path;
 
 use super::error::{InvalidKind, ModelError};
 use super::file::{
-    BearingSpec, DiskSpec, ModelFile, NonlinearKind, NonlinearSpec, ShaftSpec, SpeedRatioSpec,
-    SupportSpec, SupportTableSpec,
+    BearingSpec, DiskSpec, ForceSpec, ModelFile, NonlinearKind, NonlinearSpec, ShaftSpec,
+    SpeedRatioSpec, SupportSpec, SupportTableSpec,
 };
 use crate::bearing::ContactLaw;
 use crate::hb::Ratio;
@@ -625,6 +625,43 @@ impl<'a> Validator<'a> {
         Ok(())
     }
 
+    /// A `[[forces]]` entry: its node, a finite amplitude, angles, and a frequency the
+    /// harmonic basis holds (1 or a rotor's |speed ratio|: the basis of Eq. 34 is built
+    /// from those).
+    fn harmonic_force(
+        &self,
+        i: usize,
+        f: &ForceSpec,
+        nodes: &[u32],
+        ratios: &[SpeedRatio],
+    ) -> VResult<()> {
+        let p = |k: &str| format!("forces[{i}].{k}");
+        self.node(nodes, p("node"), f.node)?;
+        self.non_negative(p("amplitude_n"), f.amplitude_n)?;
+        self.finite(p("direction_deg"), f.direction_deg)?;
+        self.finite(p("phase_deg"), f.phase_deg)?;
+        let r = f.frequency_ratio;
+        let held = (r - 1.0).abs() < 1e-12
+            || ratios
+                .iter()
+                .any(|s| (s.value().abs() - r).abs() < 1e-12 * r.max(1.0));
+        if !(r.is_finite() && r > 0.0 && held) {
+            let list: Vec<String> = ratios.iter().map(|s| s.value().abs().to_string()).collect();
+            return Err(self.err(
+                p("frequency_ratio"),
+                InvalidKind::OutOfRange {
+                    value: r,
+                    reason: format!(
+                        "must be 1 or a rotor's |speed ratio| ({}): the harmonic basis is built \
+                         from those",
+                        list.join(", ")
+                    ),
+                },
+            ));
+        }
+        Ok(())
+    }
+
     fn non_negative(&self, path: impl Into<String>, v: f64) -> VResult<()> {
         if !(v.is_finite() && v >= 0.0) {
             let e = self.err(path, InvalidKind::Negative(v));
@@ -828,6 +865,10 @@ impl<'a> Validator<'a> {
         self.unique("nonlinear", spec.nonlinear.iter().map(|e| e.id.as_str()))?;
         for (i, e) in spec.nonlinear.iter().enumerate() {
             self.keep(self.nonlinear_element(i, e, &nodes));
+        }
+        self.unique("forces", spec.forces.iter().map(|f| f.id.as_str()))?;
+        for (i, f) in spec.forces.iter().enumerate() {
+            self.keep(self.harmonic_force(i, f, &nodes, &speed_ratios));
         }
         if !self.refused.get() {
             self.held_to_ground(&spec, &nodes)?;
