@@ -4,6 +4,8 @@
 //! steady state; the model file's checks of the elements. (The exact Jacobians of the laws
 //! against finite differences: unit tests in `coupled::elements`.)
 
+mod engine_support;
+
 use tmrotor::integrate::{SteadyStateOptions, steady_state_with};
 use tmrotor::model::{InvalidKind, Model};
 use tmrotor::record::MemorySink;
@@ -212,11 +214,7 @@ fn element_keys_are_checked_by_kind() {
 /// Neimark–Sacker point (0.618354).
 #[test]
 fn two_mass_contact_model_file_gives_the_published_bifurcations() {
-    use tmrotor::continuation::{Continuation, ContinuationOptions};
     use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
-    use tmrotor::hb::{Basis, HarmonicBalance};
-    use tmrotor::stability::{BifurcationKind, Shooting};
-    use tmrotor::systems::contact::UnilateralContact;
 
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
@@ -229,32 +227,5 @@ fn two_mass_contact_model_file_gives_the_published_bifurcations() {
         CouplingOptions::default(),
     )
     .expect("system");
-    let basis = Basis::integer(21).expect("basis");
-    let hb = HarmonicBalance::new(&system, &basis, Some(1024)).expect("hb");
-    let (w0, w1) = UnilateralContact::OMEGA_RANGE;
-    let mut opts = ContinuationOptions::new(w0, w1);
-    opts.ds_max = 0.05;
-    let method = Shooting::default();
-    let mut cont = Continuation::new(hb, opts, Some(&method)).expect("continuation");
-    let branch = cont.run(|_| {}).expect("run");
-    let mut folds: Vec<f64> = branch
-        .bifurcations
-        .iter()
-        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode) && branch.confirmed(b))
-        .map(|b| b.solution.omega)
-        .collect();
-    folds.sort_by(f64::total_cmp);
-    assert_eq!(folds.len(), 2, "confirmed folds {folds:?}");
-    assert!((folds[0] - 0.6534401).abs() < 1e-6, "{folds:?}");
-    assert!((folds[1] - 0.755664).abs() < 1e-5, "{folds:?}");
-    let ns: Vec<f64> = branch
-        .bifurcations
-        .iter()
-        .filter(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker))
-        .map(|b| b.solution.omega)
-        .collect();
-    assert!(
-        ns.iter().any(|w| (w - 0.618354).abs() < 5e-4),
-        "Neimark–Sacker points {ns:?}"
-    );
+    engine_support::contact_benchmark(&system);
 }

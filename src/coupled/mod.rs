@@ -593,6 +593,39 @@ fn relative(b: &CoupledBearing, xs: &[f64]) -> (f64, f64) {
     (dx, dy)
 }
 
+/// Adds a force `f` between two nodes (`sides`: each node's x position among the `p`
+/// nonlinear DoFs with its sign, `usize::MAX` for ground) and, with `derivatives`, its
+/// 2×2 displacement Jacobian `j` to `out`.
+fn add_pair_force(
+    out: &mut NonlinearEval,
+    p: usize,
+    sides: &[(usize, f64); 2],
+    f: [f64; 2],
+    j: &[[f64; 2]; 2],
+    derivatives: bool,
+) {
+    for &(row, rs) in sides {
+        if row == usize::MAX {
+            continue;
+        }
+        out.f[row] += rs * f[0];
+        out.f[row + 1] += rs * f[1];
+        if !derivatives {
+            continue;
+        }
+        for &(col, cs) in sides {
+            if col == usize::MAX {
+                continue;
+            }
+            for r in 0..2 {
+                for c in 0..2 {
+                    out.df_dx[(row + r) * p + col + c] += rs * cs * j[r][c];
+                }
+            }
+        }
+    }
+}
+
 fn cage_angle(b: &CoupledBearing, omega: f64, t: f64) -> f64 {
     b.hertz
         .cage_speed_rad_s(b.inner_ratio * omega, b.outer_ratio * omega)
@@ -716,26 +749,8 @@ impl CoupledRotor {
             let j = force.jac; // rows fx, fy, fb; columns dx, dy, δv
             // Mechanical force and its displacement derivatives.
             let sides: [(usize, f64); 2] = [(b.inner, 1.0), (b.outer.unwrap_or(usize::MAX), -1.0)];
-            for &(row_node, rs) in &sides {
-                if row_node == usize::MAX {
-                    continue;
-                }
-                out.f[row_node] += rs * force.fx;
-                out.f[row_node + 1] += rs * force.fy;
-                if !derivatives {
-                    continue;
-                }
-                for &(col_node, cs) in &sides {
-                    if col_node == usize::MAX {
-                        continue;
-                    }
-                    for r in 0..2 {
-                        for c in 0..2 {
-                            out.df_dx[(row_node + r) * p + col_node + c] += rs * cs * j[r][c];
-                        }
-                    }
-                }
-            }
+            let j2 = [[j[0][0], j[0][1]], [j[1][0], j[1][1]]];
+            add_pair_force(out, p, &sides, [force.fx, force.fy], &j2, derivatives);
             // Thermal clearance: ∂F/∂T = ∂F/∂δv · ∂δv/∂T.
             let ddv = match cv {
                 Some((loc, c)) if derivatives && !self.frozen_clearance => {
@@ -784,26 +799,7 @@ impl CoupledRotor {
             let u = [x[e.a] - xb(0), x[e.a + 1] - xb(1)];
             let (f, j) = e.law.force(u);
             let sides: [(usize, f64); 2] = [(e.a, 1.0), (e.b.unwrap_or(usize::MAX), -1.0)];
-            for &(row, rs) in &sides {
-                if row == usize::MAX {
-                    continue;
-                }
-                out.f[row] += rs * f[0];
-                out.f[row + 1] += rs * f[1];
-                if !derivatives {
-                    continue;
-                }
-                for &(col, cs) in &sides {
-                    if col == usize::MAX {
-                        continue;
-                    }
-                    for r in 0..2 {
-                        for c in 0..2 {
-                            out.df_dx[(row + r) * p + col + c] += rs * cs * j[r][c];
-                        }
-                    }
-                }
-            }
+            add_pair_force(out, p, &sides, f, &j, derivatives);
         }
 
         if let Some(net) = &self.network {

@@ -208,3 +208,48 @@ impl StabilityMethod for VariationalFloquet {
         ))
     }
 }
+
+/// NLvib's two-mass contact benchmark (`systems::contact`, or the same equations from a
+/// model file) continued as published: H = 21, 1024 AFT samples, Ω from 0.8 down to 0.5,
+/// stability by shooting. Asserts the folds the shot orbits confirm (0.6534401, 0.755664)
+/// and the Neimark–Sacker point (0.618354); returns the branch and the indices of the two
+/// confirmed folds' points.
+pub fn contact_benchmark(system: &dyn System) -> (tmrotor::continuation::Branch, [usize; 2]) {
+    use tmrotor::continuation::{Continuation, ContinuationOptions};
+    use tmrotor::hb::{Basis, HarmonicBalance};
+    use tmrotor::stability::{BifurcationKind, Shooting};
+    use tmrotor::systems::contact::UnilateralContact;
+
+    let basis = Basis::integer(21).expect("basis");
+    let hb = HarmonicBalance::new(system, &basis, Some(1024)).expect("hb");
+    let (w0, w1) = UnilateralContact::OMEGA_RANGE;
+    let mut opts = ContinuationOptions::new(w0, w1);
+    opts.ds_max = 0.05;
+    let method = Shooting::default();
+    let mut cont = Continuation::new(hb, opts, Some(&method)).expect("continuation");
+    let branch = cont.run(|_| {}).expect("run");
+    let mut confirmed: Vec<(f64, usize)> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode) && branch.confirmed(b))
+        .map(|b| (b.solution.omega, b.index))
+        .collect();
+    confirmed.sort_by_key(|c| c.1);
+    let mut folds: Vec<f64> = confirmed.iter().map(|c| c.0).collect();
+    folds.sort_by(f64::total_cmp);
+    assert_eq!(folds.len(), 2, "confirmed folds {folds:?}");
+    assert!((folds[0] - 0.6534401).abs() < 1e-6, "{folds:?}");
+    assert!((folds[1] - 0.755664).abs() < 1e-5, "{folds:?}");
+    let ns: Vec<f64> = branch
+        .bifurcations
+        .iter()
+        .filter(|b| b.bifurcation == Some(BifurcationKind::NeimarkSacker))
+        .map(|b| b.solution.omega)
+        .collect();
+    assert!(
+        ns.iter().any(|w| (w - 0.618354).abs() < 5e-4),
+        "Neimark–Sacker points {ns:?}"
+    );
+    let indices = [confirmed[0].1, confirmed[1].1];
+    (branch, indices)
+}
