@@ -127,9 +127,10 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             .count();
         writeln!(
             out,
-            "{excited} of {} excited by unbalance (forward share ≥ 0.5: a rotating unbalance \
-             drives only the forward part of a mode; modes are followed by shape, numbered \
-             in order of frequency at the first speed)",
+            "{excited} of {} excited by unbalance (a rotating unbalance drives only the part \
+             of a mode that whirls with it: forward share ≥ 0.5, ≤ 0.5 for a counter-rotating \
+             rotor; modes are followed by shape, numbered in order of frequency at the first \
+             speed)",
             diagram.critical_speeds.len()
         )?;
     }

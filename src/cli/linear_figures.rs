@@ -58,19 +58,17 @@ pub fn campbell_figure(c: &Campbell, title: &str) -> Figure {
         c.points.first().map_or(0.0, |p| p.speed_rad_s),
         c.points.last().map_or(1.0, |p| p.speed_rad_s),
     );
-    let mut ratios: Vec<(String, f64)> = Vec::new();
-    for cs in &c.critical_speeds {
-        if !ratios.iter().any(|r| r.1 == cs.speed_ratio) {
-            ratios.push((cs.rotor_id.clone(), cs.speed_ratio));
-        }
-    }
-    for (k, (rotor, s)) in ratios.iter().enumerate() {
+    for (k, (rotor, s)) in c.lines.iter().enumerate() {
         chart.series.push(Series {
             points: vec![(w0, s.abs() * w0), (w1, s.abs() * w1)],
             colour: colour(k + 4),
             line: LineStyle::Dashed,
             width: 1,
-            label: Some(format!("1× {rotor} ({s} ω)")),
+            label: Some(if *s < 0.0 {
+                format!("1× {rotor} ({} ω, counter-rotating)", s.abs())
+            } else {
+                format!("1× {rotor} ({s} ω)")
+            }),
         });
     }
     for (k, cs) in c.critical_speeds.iter().enumerate() {

@@ -418,6 +418,9 @@ impl CriticalSpeed {
 pub struct Campbell {
     pub points: Vec<CampbellPoint>,
     pub critical_speeds: Vec<CriticalSpeed>,
+    /// The 1× excitation lines: a rotor id and its signed speed ratio per distinct
+    /// spinning speed (the line's slope is the ratio's magnitude).
+    pub lines: Vec<(String, f64)>,
 }
 
 /// Modal assurance criterion of two complex shapes: `|aᴴb|² / (aᴴa · bᴴb)`, 1 for the same
@@ -730,5 +733,6 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
     Ok(Campbell {
         points,
         critical_speeds,
+        lines,
     })
 }
