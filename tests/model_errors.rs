@@ -689,3 +689,29 @@ fn cross_coupled_coefficients_must_be_finite() {
         |k| matches!(k, InvalidKind::OutOfRange { .. }),
     );
 }
+
+#[test]
+fn tapered_element_end_diameters_are_checked() {
+    let text = include_str!("fixtures/ross/tapered_1.toml");
+    let from = "inner_diameter_end_m = 0.0\nouter_diameter_end_m = 0.06";
+    assert!(text.contains(from));
+    let e = check(
+        &text.replacen(
+            from,
+            "inner_diameter_end_m = 0.07\nouter_diameter_end_m = 0.06",
+            1,
+        ),
+        "shafts[1].inner_diameter_end_m",
+        |k| matches!(k, InvalidKind::DiameterOrder { .. }),
+    );
+    assert!(e.to_string().contains("0.07"), "{e}");
+    check(
+        &text.replacen(
+            from,
+            "inner_diameter_end_m = 0.0\nouter_diameter_end_m = -0.06",
+            1,
+        ),
+        "shafts[1].outer_diameter_end_m",
+        |k| matches!(k, InvalidKind::NotPositive(_)),
+    );
+}

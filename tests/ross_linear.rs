@@ -126,3 +126,13 @@ fn unbalance_response_with_cross_coupled_supports_matches_ross() {
 fn unbalance_response_with_speed_dependent_supports_matches_ross() {
     unbalance_matches("speed_table", 1e-8);
 }
+
+/// Conical shaft elements (two of the six tapered, 0.05 ↔ 0.06 m outer diameter), one
+/// element per taper and each taper cut into four: ROSS's conical element (Genta &
+/// Gugliotta 1988) against tmrotor's integration of the Timoshenko interpolation over the
+/// varying section.
+#[test]
+fn eigenvalues_with_tapered_elements_match_ross() {
+    modes_match("tapered_1", 1e-8);
+    modes_match("tapered_4", 1e-8);
+}

@@ -46,6 +46,26 @@ UNBALANCE = dict(node=2, magnitude=1e-4, phase=0.0)  # kg·m at the first disk
 FREQS = [100.0, 250.0, 600.0]
 
 
+# The tapered case: the same rotor with elements 2 and 5 conical (outer 0.05 → 0.06 and
+# 0.06 → 0.05 m), meshed into `TAPER_SPLIT` elements each so that both codes converge.
+TAPERS = {1: (0.0, 0.05, 0.0, 0.06), 4: (0.0, 0.06, 0.0, 0.05)}  # element: idl, odl, idr, odr
+
+
+def tapered_sections(split):
+    """Elements as (length, idl, odl, idr, odr), the conical ones cut into `split` pieces."""
+    out = []
+    for k, (i, o) in enumerate(SECTIONS):
+        if k in TAPERS:
+            idl, odl, idr, odr = TAPERS[k]
+            for j in range(split):
+                f0, f1 = j / split, (j + 1) / split
+                out.append((L_EL / split, idl + f0 * (idr - idl), odl + f0 * (odr - odl),
+                            idl + f1 * (idr - idl), odl + f1 * (odr - odl)))
+        else:
+            out.append((L_EL, i, o, i, o))
+    return out
+
+
 def ross_rotor(with_table: bool):
     steel = rs.Material(name="steel", **STEEL)
     shafts = [
@@ -108,6 +128,35 @@ def model_toml(name: str, with_table: bool) -> str:
     return "\n".join(lines) + "\n"
 
 
+def tapered_toml(name, elements, node_of):
+    """The tapered rotor as a tmrotor model (conical elements by their end diameters)."""
+    n_nodes = len(elements) + 1
+    lines = [f'name = "{name}"', 'description = "tools/ross_reference.py: conical elements"', "",
+             "[gravity]", "enabled = false", "", "[[materials]]", 'id = "steel"',
+             f"youngs_modulus_pa = {STEEL['E']:e}", f"poisson_ratio = {STEEL['Poisson']}",
+             f"density_kg_m3 = {STEEL['rho']}", "", "[[rotors]]", 'id = "rotor"',
+             'speed_ratio = "1"', f"nodes = {list(range(1, n_nodes + 1))}"]
+    for k, (le, a, b, c, d) in enumerate(elements):
+        lines += ["", "[[shafts]]", f"nodes = [{k + 1}, {k + 2}]", f"length_m = {le!r}",
+                  f"inner_diameter_m = {a!r}", f"outer_diameter_m = {b!r}"]
+        if (c, d) != (a, b):
+            lines += [f"inner_diameter_end_m = {c!r}", f"outer_diameter_end_m = {d!r}"]
+        lines.append('material = "steel"')
+    for j, (nd, m, Id, Ip) in enumerate(DISKS):
+        lines += ["", "[[disks]]", f'id = "disk{j + 1}"', f"node = {node_of[nd] + 1}",
+                  f"mass_kg = {m}", f"polar_inertia_kg_m2 = {Ip}", f"diametral_inertia_kg_m2 = {Id}"]
+    c = CONST
+    lines += ["", "[[supports]]", 'id = "left"', "node = 1",
+              f"stiffness_xx_n_m = {c['kxx']:e}", f"stiffness_yy_n_m = {c['kyy']:e}",
+              f"stiffness_xy_n_m = {c['kxy']:e}", f"stiffness_yx_n_m = {c['kyx']:e}",
+              f"damping_xx_n_s_m = {c['cxx']}", f"damping_yy_n_s_m = {c['cyy']}",
+              f"damping_xy_n_s_m = {c['cxy']}", f"damping_yx_n_s_m = {c['cyx']}",
+              "", "[[supports]]", 'id = "right"', f"node = {node_of[N_EL] + 1}",
+              "stiffness_xx_n_m = 2.0e7", "stiffness_yy_n_m = 2.5e7",
+              "damping_xx_n_s_m = 800.0", "damping_yy_n_s_m = 850.0"]
+    return "\n".join(lines) + "\n"
+
+
 def lateral_eigenvalues(rotor, speed, count):
     """ROSS's eigenvalues with positive imaginary part, lowest |λ| first. ROSS's nodes
     carry axial and torsional DoFs too; the test matches each tmrotor mode to the nearest
@@ -152,6 +201,30 @@ def main():
         (out / f"{case}.toml").write_text(model_toml(f"ross_{case}", with_table))
         (out / f"{case}.json").write_text(json.dumps(ref, indent=1) + "\n")
         print(f"{case}: {len(ref['modes'])} speeds")
+    for split in (1, 4):
+        steel = rs.Material(name="steel", **STEEL)
+        elements = tapered_sections(split)
+        shafts = [rs.ShaftElement(L=le, idl=a, odl=b, idr=c, odr=d, material=steel,
+                                  shear_effects=True, rotary_inertia=True, gyroscopic=True,
+                                  shear_method_calc="cowper") for (le, a, b, c, d) in elements]
+        # disk nodes move with the split: node numbers of the original nodes
+        node_of = []
+        n = 0
+        for k in range(N_EL + 1):
+            node_of.append(n)
+            if k < N_EL:
+                n += split if k in TAPERS else 1
+        disks = [rs.DiskElement(n=node_of[nd], m=m, Id=Id, Ip=Ip) for (nd, m, Id, Ip) in DISKS]
+        bearings = [rs.BearingElement(n=0, **CONST),
+                    rs.BearingElement(n=node_of[N_EL], kxx=2.0e7, kyy=2.5e7, cxx=800.0, cyy=850.0)]
+        rotor = rs.Rotor(shafts, disks, bearings)
+        case = f"tapered_{split}"
+        ref = {"ross_version": rs.__version__, "dof_per_node": rotor.number_dof,
+               "modes": [{"speed_rad_s": w, "eigenvalues": lateral_eigenvalues(rotor, w, 6)}
+                         for w in SPEEDS]}
+        (out / f"{case}.json").write_text(json.dumps(ref, indent=1) + "\n")
+        (out / f"{case}.toml").write_text(tapered_toml(case, elements, node_of))
+        print(f"{case}: {len(elements)} elements")
 
 
 if __name__ == "__main__":

@@ -263,7 +263,12 @@ impl Assembly {
                 poisson_ratio: mat.poisson_ratio,
                 density_kg_m3: mat.density_kg_m3,
             };
-            let em = sec.matrices();
+            let em = if s.tapered() {
+                let (end_out, end_in) = s.end_diameters();
+                super::element::tapered_matrices(&sec, end_out, end_in)
+            } else {
+                sec.matrices()
+            };
             let px = [
                 dof(a, Dir::X),
                 dof(a, Dir::ThetaX),

@@ -176,3 +176,192 @@ pub fn element_matrices(s: &ShaftSection, phi: f64) -> ElementMatrices {
         stiffness: k,
     }
 }
+
+/// A conical (tapered) element: diameters varying linearly from `left` (the first node) to
+/// `right_outer_m`, `right_inner_m` at the second node, same length and material.
+///
+/// The matrices are the consistent ones of the Timoshenko element's interdependent
+/// interpolation (Friswell, Penny, Garvey & Lees, *Dynamics of Rotating Machines*,
+/// Cambridge 2010, §5.4.3: the shape functions that solve the uniform element's static
+/// equations exactly) integrated over the varying section by 6-point Gauss–Legendre
+/// quadrature, exact for the polynomial integrands (`A` quadratic and `I` quartic in the
+/// axial coordinate, shape-function products up to degree 6):
+///
+/// ```text
+///   M_T = ∫ ρ A N_wᵀ N_w dz,   M_R = ∫ ρ I N_ψᵀ N_ψ dz,   J = 2 M_R,
+///   K   = ∫ E I N_ψ'ᵀ N_ψ' dz + ∫ κ G A (N_w' − N_ψ)ᵀ (N_w' − N_ψ) dz,
+/// ```
+///
+/// with the shear parameter `φ` of the interpolation taken from the element's mean
+/// section (`A`, `I`, `κ` at mid-length). For equal ends the integrals are the closed
+/// forms of [`element_matrices`] (tested to rounding). For a taper the interpolation is
+/// no longer the exact static solution, so the element converges with the mesh; the
+/// damped eigenvalues of a rotor with conical elements agree with ROSS's conical element
+/// (Genta & Gugliotta, J. Sound Vib. 1988) to 3e-10 (`tests/ross_linear.rs`).
+pub fn tapered_matrices(
+    left: &ShaftSection,
+    right_outer_m: f64,
+    right_inner_m: f64,
+) -> ElementMatrices {
+    let l = left.length_m;
+    let (e, rho, mu) = (
+        left.youngs_modulus_pa,
+        left.density_kg_m3,
+        left.poisson_ratio,
+    );
+    let g = left.shear_modulus_pa();
+    let section = |xi: f64| {
+        let d_out = left.outer_diameter_m + xi * (right_outer_m - left.outer_diameter_m);
+        let d_in = left.inner_diameter_m + xi * (right_inner_m - left.inner_diameter_m);
+        let a = PI / 4.0 * (d_out * d_out - d_in * d_in);
+        let i = PI / 64.0 * (d_out.powi(4) - d_in.powi(4));
+        (a, i, cowper_kappa(mu, d_out, d_in))
+    };
+    let (am, im, km) = section(0.5);
+    let p = 12.0 * e * im / (g * km * am * l * l);
+    let c = 1.0 / (1.0 + p);
+    // shape functions at ξ: displacement N_w, rotation N_ψ, and their z-derivatives
+    let shapes = |xi: f64| {
+        let (x2, x3) = (xi * xi, xi * xi * xi);
+        let nw = [
+            c * (1.0 - 3.0 * x2 + 2.0 * x3 + p * (1.0 - xi)),
+            c * l * (xi - 2.0 * x2 + x3 + 0.5 * p * (xi - x2)),
+            c * (3.0 * x2 - 2.0 * x3 + p * xi),
+            c * l * (-x2 + x3 - 0.5 * p * (xi - x2)),
+        ];
+        let dnw = [
+            c * (-6.0 * xi + 6.0 * x2 - p) / l,
+            c * (1.0 - 4.0 * xi + 3.0 * x2 + 0.5 * p * (1.0 - 2.0 * xi)),
+            c * (6.0 * xi - 6.0 * x2 + p) / l,
+            c * (-2.0 * xi + 3.0 * x2 - 0.5 * p * (1.0 - 2.0 * xi)),
+        ];
+        let npsi = [
+            c * 6.0 * (-xi + x2) / l,
+            c * (1.0 - 4.0 * xi + 3.0 * x2 + p * (1.0 - xi)),
+            c * 6.0 * (xi - x2) / l,
+            c * (-2.0 * xi + 3.0 * x2 + p * xi),
+        ];
+        let dnpsi = [
+            c * 6.0 * (-1.0 + 2.0 * xi) / (l * l),
+            c * (-4.0 + 6.0 * xi - p) / l,
+            c * 6.0 * (1.0 - 2.0 * xi) / (l * l),
+            c * (-2.0 + 6.0 * xi + p) / l,
+        ];
+        (nw, dnw, npsi, dnpsi)
+    };
+    // 6-point Gauss–Legendre on [0, 1]
+    const X: [f64; 3] = [
+        0.238_619_186_083_196_9,
+        0.661_209_386_466_264_5,
+        0.932_469_514_203_152,
+    ];
+    const W: [f64; 3] = [
+        0.467_913_934_572_691,
+        0.360_761_573_048_138_6,
+        0.171_324_492_379_170_3,
+    ];
+    let mut mt = [[0.0; 4]; 4];
+    let mut mr = [[0.0; 4]; 4];
+    let mut k = [[0.0; 4]; 4];
+    for (x, w) in X.iter().zip(W) {
+        for xi in [0.5 * (1.0 - x), 0.5 * (1.0 + x)] {
+            let wt = 0.5 * w * l;
+            let (a, i, kappa) = section(xi);
+            let (nw, dnw, npsi, dnpsi) = shapes(xi);
+            let gamma: [f64; 4] = std::array::from_fn(|j| dnw[j] - npsi[j]);
+            for r in 0..4 {
+                for s in 0..4 {
+                    mt[r][s] += wt * rho * a * nw[r] * nw[s];
+                    mr[r][s] += wt * rho * i * npsi[r] * npsi[s];
+                    k[r][s] +=
+                        wt * (e * i * dnpsi[r] * dnpsi[s] + kappa * g * a * gamma[r] * gamma[s]);
+                }
+            }
+        }
+    }
+    let mut mass = mt;
+    let mut gyro = mr;
+    for r in 0..4 {
+        for s in 0..4 {
+            mass[r][s] += mr[r][s];
+            gyro[r][s] = 2.0 * mr[r][s];
+        }
+    }
+    ElementMatrices {
+        mass_translational: mt,
+        mass_rotary: mr,
+        mass,
+        gyro,
+        stiffness: k,
+    }
+}
+
+#[cfg(test)]
+mod tapered_tests {
+    use super::*;
+
+    fn section(d_out: f64, d_in: f64, l: f64) -> ShaftSection {
+        ShaftSection {
+            length_m: l,
+            inner_diameter_m: d_in,
+            outer_diameter_m: d_out,
+            youngs_modulus_pa: 211e9,
+            poisson_ratio: 0.3,
+            density_kg_m3: 7810.0,
+        }
+    }
+
+    fn close(a: &Mat4, b: &Mat4, tol: f64) -> f64 {
+        let scale = b.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let d = a
+            .iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()));
+        assert!(d <= tol * scale, "difference {d:e} of {scale:e}");
+        d / scale
+    }
+
+    /// With equal ends the integrated matrices are Appendix B's closed forms, for a thick
+    /// hollow element (φ ≈ 0.3) and a slender one.
+    #[test]
+    fn uniform_taper_is_the_closed_form() {
+        for (d_out, d_in, l) in [(0.1, 0.04, 0.05), (0.03, 0.0, 0.4)] {
+            let s = section(d_out, d_in, l);
+            let t = tapered_matrices(&s, d_out, d_in);
+            let u = s.matrices();
+            close(&t.mass_translational, &u.mass_translational, 1e-13);
+            close(&t.mass_rotary, &u.mass_rotary, 1e-13);
+            close(&t.stiffness, &u.stiffness, 1e-12);
+        }
+    }
+
+    /// The translational mass matrix holds the element's mass (the rigid translation
+    /// `[1, 0, 1, 0]` gives `uᵀ M u` = the frustum's mass) and the stiffness has the two
+    /// rigid-body modes in its null space.
+    #[test]
+    fn tapered_mass_and_rigid_modes() {
+        let s = section(0.08, 0.02, 0.3);
+        let t = tapered_matrices(&s, 0.05, 0.01);
+        let u = [1.0, 0.0, 1.0, 0.0];
+        let m: f64 = (0..4)
+            .flat_map(|r| (0..4).map(move |c| (r, c)))
+            .map(|(r, c)| u[r] * t.mass_translational[r][c] * u[c])
+            .sum();
+        // frustum: ρ π/4 ∫ (D(z)² − d(z)²) dz
+        let frustum = |a: f64, b: f64| (a * a + a * b + b * b) / 3.0;
+        let want = 7810.0 * PI / 4.0 * 0.3 * (frustum(0.08, 0.05) - frustum(0.02, 0.01));
+        assert!((m - want).abs() < 1e-12 * want, "{m} vs {want}");
+        let scale = t
+            .stiffness
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        for rigid in [[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.3, 1.0]] {
+            for r in 0..4 {
+                let f: f64 = (0..4).map(|c| t.stiffness[r][c] * rigid[c]).sum();
+                assert!(f.abs() < 1e-12 * scale, "rigid mode {rigid:?}: {f}");
+            }
+        }
+    }
+}

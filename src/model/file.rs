@@ -144,10 +144,31 @@ pub struct ShaftSpec {
     /// The two end nodes, both on the same rotor (exactly two).
     pub nodes: Vec<u32>,
     pub length_m: f64,
+    /// Inner diameter at the first node (m); at both ends unless `inner_diameter_end_m`.
     pub inner_diameter_m: f64,
+    /// Outer diameter at the first node (m); at both ends unless `outer_diameter_end_m`.
     pub outer_diameter_m: f64,
+    /// Inner diameter at the second node (m): a tapered (conical) element.
+    pub inner_diameter_end_m: Option<f64>,
+    /// Outer diameter at the second node (m): a tapered (conical) element.
+    pub outer_diameter_end_m: Option<f64>,
     /// Material id.
     pub material: String,
+}
+
+impl ShaftSpec {
+    /// `(outer, inner)` diameters at the second node.
+    pub fn end_diameters(&self) -> (f64, f64) {
+        (
+            self.outer_diameter_end_m.unwrap_or(self.outer_diameter_m),
+            self.inner_diameter_end_m.unwrap_or(self.inner_diameter_m),
+        )
+    }
+
+    /// Whether the diameters differ between the ends.
+    pub fn tapered(&self) -> bool {
+        self.end_diameters() != (self.outer_diameter_m, self.inner_diameter_m)
+    }
 }
 
 /// `[[disks]]`: a rigid disk (paper Eq. 6).

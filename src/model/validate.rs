@@ -767,6 +767,22 @@ impl<'a> Validator<'a> {
                     },
                 ));
             }
+            if let Some(v) = s.outer_diameter_end_m {
+                self.positive(p("outer_diameter_end_m"), v)?;
+            }
+            if let Some(v) = s.inner_diameter_end_m {
+                self.non_negative(p("inner_diameter_end_m"), v)?;
+            }
+            let (end_out, end_in) = s.end_diameters();
+            if end_in >= end_out {
+                return Err(self.err(
+                    p("inner_diameter_end_m"),
+                    InvalidKind::DiameterOrder {
+                        inner_m: end_in,
+                        outer_m: end_out,
+                    },
+                ));
+            }
             self.material(&spec, p("material"), &s.material)?;
             has_mass[a] = true;
             has_mass[b] = true;
