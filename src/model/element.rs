@@ -106,6 +106,28 @@ pub struct ElementMatrices {
     pub stiffness: Mat4,
 }
 
+impl ElementMatrices {
+    /// The set from the translational and rotary mass and the stiffness: `M_s = M_sT +
+    /// M_sR`, `J_s = 2 M_sR`.
+    fn from_parts(mt: Mat4, mr: Mat4, k: Mat4) -> Self {
+        let mut mass = mt;
+        let mut gyro = mr;
+        for r in 0..4 {
+            for c in 0..4 {
+                mass[r][c] += mr[r][c];
+                gyro[r][c] = 2.0 * mr[r][c];
+            }
+        }
+        Self {
+            mass_translational: mt,
+            mass_rotary: mr,
+            mass,
+            gyro,
+            stiffness: k,
+        }
+    }
+}
+
 fn sym(lower: [[f64; 4]; 4]) -> Mat4 {
     let mut m = lower;
     for i in 0..4 {
@@ -160,21 +182,7 @@ pub fn element_matrices(s: &ShaftSection, phi: f64) -> ElementMatrices {
         [6.0 * l, (2.0 - p) * l * l, -6.0 * l, (4.0 + p) * l * l],
     ])
     .map(|r| r.map(|v| v * ck));
-    let mut mass = mt;
-    let mut gyro = mr;
-    for r in 0..4 {
-        for c in 0..4 {
-            mass[r][c] += mr[r][c];
-            gyro[r][c] = 2.0 * mr[r][c];
-        }
-    }
-    ElementMatrices {
-        mass_translational: mt,
-        mass_rotary: mr,
-        mass,
-        gyro,
-        stiffness: k,
-    }
+    ElementMatrices::from_parts(mt, mr, k)
 }
 
 /// A conical (tapered) element: diameters varying linearly from `left` (the first node) to
@@ -279,21 +287,7 @@ pub fn tapered_matrices(
             }
         }
     }
-    let mut mass = mt;
-    let mut gyro = mr;
-    for r in 0..4 {
-        for s in 0..4 {
-            mass[r][s] += mr[r][s];
-            gyro[r][s] = 2.0 * mr[r][s];
-        }
-    }
-    ElementMatrices {
-        mass_translational: mt,
-        mass_rotary: mr,
-        mass,
-        gyro,
-        stiffness: k,
-    }
+    ElementMatrices::from_parts(mt, mr, k)
 }
 
 #[cfg(test)]
