@@ -70,9 +70,7 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             &diagram,
             &format!("Campbell diagram of {}", model.spec.name),
         );
-        let written = crate::figure::write_figure(stem, &fig, &args.figure_args.output()?)
-            .with_context(|| format!("drawing {}", stem.display()))?;
-        for f in &written.files {
+        for f in super::linear_figures::draw(stem, &fig, &args.figure_args)? {
             writeln!(out, "wrote {}", f.display())?;
         }
     }

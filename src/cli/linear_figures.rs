@@ -23,6 +23,18 @@ fn whirl_colour(w: Whirl) -> plotters::style::RGBColor {
     }
 }
 
+/// Draws `fig` to `stem` in the formats of `args`; returns the files written.
+pub fn draw(
+    stem: &std::path::Path,
+    fig: &Figure,
+    args: &super::FigureArgs,
+) -> anyhow::Result<Vec<std::path::PathBuf>> {
+    use anyhow::Context;
+    let written = crate::figure::write_figure(stem, fig, &args.output()?)
+        .with_context(|| format!("drawing {}", stem.display()))?;
+    Ok(written.files)
+}
+
 /// The Campbell diagram: each followed mode's frequency against speed, drawn in the colour
 /// of its whirl at each speed (blue forward, red backward, grey planar), every rotor's 1×
 /// line dashed, and the critical speeds circled (labelled `F`/`B` and numbered; an open

@@ -122,9 +122,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 model.spec.name, args.speed
             ),
         );
-        let written = crate::figure::write_figure(stem, &fig, &args.figure_args.output()?)
-            .with_context(|| format!("drawing {}", stem.display()))?;
-        for f in &written.files {
+        for f in super::linear_figures::draw(stem, &fig, &args.figure_args)? {
             eprintln!("wrote {}", f.display());
         }
     }

@@ -133,21 +133,29 @@ pub fn log_decrement(lambda: Complex<f64>) -> f64 {
     -2.0 * std::f64::consts::PI * lambda.re / lambda.im
 }
 
+/// `Σ |X|² + |Y|²` of the translations (`off = 0`) or the slopes (`off = 2`) of a shape.
+fn plane_energy(shape: &[Complex<f64>], off: usize) -> f64 {
+    shape
+        .chunks_exact(4)
+        .map(|n| n[off].norm_sqr() + n[off + 1].norm_sqr())
+        .sum()
+}
+
+/// Which pair of a shape's DoFs its whirl is judged on: the translations (0), or the
+/// slopes (2) where those carry more; summed over `shapes`.
+fn whirl_plane(shapes: &[&[Complex<f64>]]) -> usize {
+    let energy = |off| shapes.iter().map(|s| plane_energy(s, off)).sum::<f64>();
+    if energy(0) >= energy(2) { 0 } else { 2 }
+}
+
 /// Whirl sense of a displacement shape (node-major `[x, y, θx, θy]`).
 pub fn whirl_of(shape: &[Complex<f64>]) -> Whirl {
-    let mut best = (0.0, 0.0);
-    for off in [0, 2] {
-        let (mut s, mut n) = (0.0, 0.0);
-        for node in shape.chunks_exact(4) {
-            let (px, py) = (node[off], node[off + 1]);
-            s += (px.conj() * py).im;
-            n += px.norm_sqr() + py.norm_sqr();
-        }
-        if n > best.1 {
-            best = (s, n);
-        }
-    }
-    let (s, n) = best;
+    let off = whirl_plane(&[shape]);
+    let s: f64 = shape
+        .chunks_exact(4)
+        .map(|node| (node[off].conj() * node[off + 1]).im)
+        .sum();
+    let n = plane_energy(shape, off);
     if n == 0.0 || (s / n).abs() < 0.01 {
         Whirl::Planar
     } else if s < 0.0 {
@@ -253,13 +261,7 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
 /// forward one goes first.
 fn split_whirl(a: &mut Mode, b: &mut Mode) {
     let i = Complex::new(0.0, 1.0);
-    let off = if translation_energy(&a.shape) + translation_energy(&b.shape)
-        >= slope_energy(&a.shape) + slope_energy(&b.shape)
-    {
-        0
-    } else {
-        2
-    };
+    let off = whirl_plane(&[&a.shape, &b.shape]);
     // Hermitian forms over the pair: n[p][q] = Σ conj(u_p)·u_q, f likewise for the
     // forward parts (X + iY)/2.
     let shapes = [&a.shape, &b.shape];
@@ -323,20 +325,6 @@ fn split_whirl(a: &mut Mode, b: &mut Mode) {
     b.shape = bw;
     a.whirl = whirl_of(&a.shape);
     b.whirl = whirl_of(&b.shape);
-}
-
-fn translation_energy(shape: &[Complex<f64>]) -> f64 {
-    shape
-        .chunks_exact(4)
-        .map(|n| n[0].norm_sqr() + n[1].norm_sqr())
-        .sum()
-}
-
-fn slope_energy(shape: &[Complex<f64>]) -> f64 {
-    shape
-        .chunks_exact(4)
-        .map(|n| n[2].norm_sqr() + n[3].norm_sqr())
-        .sum()
 }
 
 /// Frequencies of one speed of a Campbell diagram.
@@ -442,21 +430,15 @@ pub fn mac(a: &[Complex<f64>], b: &[Complex<f64>]) -> f64 {
 /// the slopes, where those carry more), 1 for a purely forward mode, 0 for a backward one.
 pub fn forward_share(shape: &[Complex<f64>]) -> f64 {
     let i = Complex::new(0.0, 1.0);
-    let mut best = (0.0, 0.0);
-    for off in [0, 2] {
-        let (mut f, mut n) = (0.0, 0.0);
-        for node in shape.chunks_exact(4) {
-            let (px, py) = (node[off], node[off + 1]);
-            let fw = (0.5 * (px + i * py)).norm_sqr();
-            let bw = (0.5 * (px - i * py)).norm_sqr();
-            f += fw;
-            n += fw + bw;
-        }
-        if n > best.1 {
-            best = (f, n);
-        }
+    let off = whirl_plane(&[shape]);
+    let (mut f, mut n) = (0.0, 0.0);
+    for node in shape.chunks_exact(4) {
+        let (px, py) = (node[off], node[off + 1]);
+        let fw = (0.5 * (px + i * py)).norm_sqr();
+        f += fw;
+        n += fw + (0.5 * (px - i * py)).norm_sqr();
     }
-    if best.1 == 0.0 { 0.5 } else { best.0 / best.1 }
+    if n == 0.0 { 0.5 } else { f / n }
 }
 
 /// Extra modes solved at each speed beyond those followed, so that a followed mode that
