@@ -382,7 +382,7 @@ impl CoupledRotor {
                     gap_m: e.gap_m.unwrap_or(0.0),
                     stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
                     friction: e.friction_coefficient.unwrap_or(0.0),
-                    spin_sign: ratio_of(e.node).signum() * f64::from(ratio_of(e.node) != 0.0),
+                    spin_sign: spin_sign(ratio_of(e.node)),
                 },
                 NonlinearKind::Polynomial => ElementLaw::Polynomial {
                     coefficients: e.coefficients.clone().unwrap_or_default(),
@@ -591,6 +591,12 @@ fn relative(b: &CoupledBearing, xs: &[f64]) -> (f64, f64) {
         dy -= xs[o + 1];
     }
     (dx, dy)
+}
+
+/// The sense of a rotor's spin: the sign of its speed ratio, 0 for a part that does not
+/// spin.
+fn spin_sign(ratio: f64) -> f64 {
+    if ratio == 0.0 { 0.0 } else { ratio.signum() }
 }
 
 /// Adds a force `f` between two nodes (`sides`: each node's x position among the `p`
