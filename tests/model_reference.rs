@@ -10,6 +10,7 @@ use serde::Deserialize;
 use serde::de::{self, Deserializer, Visitor};
 use tmrotor::model::file as mf;
 use tmrotor::model::reference::{KEYS, Need, TABLES, markdown};
+use tmrotor::thermal::generate as tg;
 use tmrotor::thermal::spec as ts;
 
 /// A deserializer that records the field names a derived `Deserialize` asks for and then
@@ -84,6 +85,15 @@ fn structs() -> Vec<(&'static str, BTreeSet<&'static str>)> {
         ("thermal.housings", fields::<ts::HousingSpec>()),
         ("thermal.bearings", fields::<ts::BearingThermalSpec>()),
         ("thermal.bearings.heat_split", fields::<ts::HeatSplit>()),
+        ("thermal (generated)", fields::<tg::GeneratedThermal>()),
+        (
+            "thermal.ball_bearings, thermal.roller_bearings",
+            fields::<tg::KindSettings>(),
+        ),
+        (
+            "thermal.bearings (generated)",
+            fields::<tg::BearingSettings>(),
+        ),
     ]
 }
 

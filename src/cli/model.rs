@@ -7,7 +7,7 @@ use clap::Subcommand;
 
 use crate::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
 use crate::model::{BUILTIN_TOML, Model};
-use crate::thermal::ThermalSpec;
+use crate::thermal::{ThermalNetwork, ThermalSpec};
 
 /// Model-file commands.
 #[derive(Debug, Subcommand)]
@@ -27,6 +27,36 @@ pub enum ModelCommand {
     /// Print the model-file reference (markdown): every key with unit, default, whether it
     /// is required, the range checked and its meaning.
     Reference,
+    /// Print the thermal network of a model file (built-in when absent) as a `[thermal]`
+    /// table written node by node, with a table of its nodes: a generated network
+    /// (`generate = true`) spelled out, a starting point for editing it by hand.
+    Thermal {
+        /// The model file (TOML); the built-in dual rotor when absent.
+        file: Option<PathBuf>,
+        /// Set a value by its path first, as `sweep --set` does (repeatable).
+        #[arg(long = "set", value_name = "PATH=VALUE", value_parser = crate::model::set::parse_assignment)]
+        set: Vec<(String, toml::Value)>,
+    },
+}
+
+/// The `[thermal]` table of `spec` as TOML, preceded by a comment listing every node.
+fn thermal_table(model: &Model, spec: &ThermalSpec) -> anyhow::Result<String> {
+    #[derive(serde::Serialize)]
+    struct Doc<'a> {
+        thermal: &'a ThermalSpec,
+    }
+    let names = ThermalNetwork::new(spec)?.names().to_vec();
+    let mut out = format!(
+        "# The thermal network of {} ({} nodes), written node by node\n\
+         # (`tmrotor model thermal`). Nodes:\n",
+        model.source, spec.n_nodes
+    );
+    for (k, name) in names.iter().enumerate() {
+        out.push_str(&format!("# {:>4}  {name}\n", k + 1));
+    }
+    out.push('\n');
+    out.push_str(&toml::to_string(&Doc { thermal: spec })?);
+    Ok(out)
 }
 
 /// Loads the model named by an optional `--model` flag (built-in when absent).
@@ -42,6 +72,14 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
     match cmd {
         ModelCommand::Show => out.write_all(BUILTIN_TOML.as_bytes())?,
         ModelCommand::Reference => out.write_all(crate::model::reference::markdown().as_bytes())?,
+        ModelCommand::Thermal { file, set } => {
+            let set: crate::model::ModelSet = set.iter().cloned().collect();
+            let model = Model::load(file.as_deref(), &set)?;
+            let spec = ThermalSpec::of_model(&model)?.ok_or_else(|| {
+                anyhow::anyhow!("{}: the model has no [thermal] table", model.source)
+            })?;
+            out.write_all(thermal_table(&model, &spec)?.as_bytes())?;
+        }
         ModelCommand::Check { file, set } => {
             let set: crate::model::ModelSet = set.iter().cloned().collect();
             let model = Model::load(Some(file), &set)?;
@@ -55,10 +93,7 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
             )?;
             let asm = coupled.assembly();
             // the table's study values for the summary (already validated above)
-            let thermal = match model.thermal() {
-                Some(table) => Some(ThermalSpec::from_table(table, &model.source)?),
-                None => None,
-            };
+            let thermal = ThermalSpec::of_model(&model)?;
             let spec = &model.spec;
             let rotors: Vec<String> = spec
                 .rotors

@@ -258,16 +258,18 @@ impl CoupledRotor {
         options: CouplingOptions,
     ) -> Result<Self, CoupledError> {
         let assembly = Assembly::new(model)?;
-        let network = match (options.thermal, model.thermal()) {
-            (true, Some(table)) => {
-                let mut spec = ThermalSpec::from_table(table, &model.source)
-                    .map_err(|e| e.with_lines(&model.text))?;
+        let spec = match options.thermal {
+            true => ThermalSpec::of_model(model)?,
+            false => None,
+        };
+        let network = match spec {
+            Some(mut spec) => {
                 apply_overrides(&mut spec, study)?;
                 same_contact_laws(model, &spec)?;
                 same_speed_ratios(model, &spec)?;
                 Some(ThermalNetwork::new(&spec)?)
             }
-            _ => None,
+            None => None,
         };
         let ambient_temp_c = network.as_ref().map_or(25.0, |n| n.ambient_temp_c());
 

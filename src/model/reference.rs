@@ -92,6 +92,18 @@ pub const TABLES: &[(&str, &str)] = &[
         "thermal.bearings.heat_split",
         "`[thermal.bearings.heat_split]`: where the friction heat enters",
     ),
+    (
+        "thermal (generated)",
+        "`[thermal]` generated from the geometry (`generate = true`)",
+    ),
+    (
+        "thermal.ball_bearings, thermal.roller_bearings",
+        "`[thermal.ball_bearings]`, `[thermal.roller_bearings]`: settings per bearing kind (generated)",
+    ),
+    (
+        "thermal.bearings (generated)",
+        "`[[thermal.bearings]]` of a generated table: settings of one bearing",
+    ),
 ];
 
 /// Escapes a table cell.
@@ -114,7 +126,10 @@ pub fn markdown() -> String {
          rotor (`tmrotor model show > my_rotor.toml`, its comments give the paper's sources)\n\
          and check a file with `tmrotor model check my_rotor.toml`. A rotor without a\n\
          `[thermal]` table is solved mechanically (the bearings keep their initial clearance);\n\
-         the `[thermal]` table describes the lumped thermal network of the paper's Section 3.\n\n\
+         the `[thermal]` table describes the lumped thermal network of the paper's Section 3,\n\
+         either generated from the rotor's geometry (`generate = true`: a few lines, the last\n\
+         three tables below; `tmrotor model thermal FILE` prints the network it makes) or\n\
+         written node by node (the other `[thermal…]` tables).\n\n\
          Columns: the key, its unit, whether it is required, its default, what the loader\n\
          checks, and its meaning.\n",
     );

@@ -14,6 +14,8 @@
 //! * [`convection`]: conduction and convection resistances, Nusselt correlations (Table 1);
 //! * [`spec`]: [`ThermalSpec`], the `[thermal]` section of a model file (network layout,
 //!   geometry, materials, study parameters), parsed and validated;
+//! * [`generate`]: a `[thermal]` table with `generate = true`: the network derived from the
+//!   rotor's shafts, disks and bearings ([`ThermalSpec::of_model`] reads either form);
 //! * [`network`]: [`ThermalNetwork`], built from a spec: `C_T`, `K_T(ω)`, `F_T(ω)`, the
 //!   nonlinear nodes and the pointwise nonlinear thermal forces `g` with exact derivatives
 //!   with respect to temperatures, bearing loads `F_b` and loaded-element counts `n_b`;
@@ -58,6 +60,7 @@
 pub mod contact;
 pub mod convection;
 pub mod friction;
+pub mod generate;
 pub mod network;
 pub mod spec;
 

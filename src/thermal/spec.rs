@@ -11,10 +11,10 @@
 
 use super::ThermalError;
 use crate::bearing::ContactLaw;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 /// Viscosity law (Eq. 12).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ViscositySpec {
     /// `ν0` (mm²/s) at `ref_temp_c`.
@@ -26,7 +26,7 @@ pub struct ViscositySpec {
 }
 
 /// Lubricant properties (Table A.6).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LubricantSpec {
     pub density_kg_m3: f64,
@@ -36,7 +36,7 @@ pub struct LubricantSpec {
 }
 
 /// Ambient air and the housing convection coefficient.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct AirSpec {
     pub kinematic_viscosity_m2_s: f64,
@@ -46,7 +46,7 @@ pub struct AirSpec {
 }
 
 /// A solid material (Table A.5).
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialSpec {
     pub density_kg_m3: f64,
@@ -58,7 +58,7 @@ pub struct MaterialSpec {
 }
 
 /// Materials of bearings and of shafts/disks/housings.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MaterialsSpec {
     pub bearing: MaterialSpec,
@@ -66,7 +66,7 @@ pub struct MaterialsSpec {
 }
 
 /// One FE shaft element split into equal segment nodes, conducting along its chain.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ShaftSpec {
     /// Chain name (one per rotor); consecutive entries of a chain conduct to each other.
@@ -79,13 +79,13 @@ pub struct ShaftSpec {
     /// Thermal nodes of the segments, in axial order.
     pub nodes: Vec<usize>,
     /// Free text (e.g. the FE element).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "String::is_empty")]
     pub label: String,
 }
 
 /// A rigid disk, represented by an equivalent uniform annular disk with the given mass and
 /// polar moment of inertia.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct DiskSpec {
     pub name: String,
@@ -102,7 +102,7 @@ pub struct DiskSpec {
 /// A bearing housing: a sleeve (bore `bore_diameter_m`, outer radius `radius_m`, length
 /// `length_m`) split into a seat of length `seat_length_m` around the outer ring and two
 /// equal flanks, each wetted by the lubricant on its bore.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct HousingSpec {
     pub name: String,
@@ -115,7 +115,7 @@ pub struct HousingSpec {
 }
 
 /// Thermal data of one bearing.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct BearingThermalSpec {
     pub name: String,
@@ -127,10 +127,10 @@ pub struct BearingThermalSpec {
     /// Shaft segment node under the inner ring.
     pub inner_shaft_node: usize,
     /// Housing (by name) holding the outer ring; exclusive with `outer_shaft_node`.
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub housing: Option<String>,
     /// Shaft segment node holding the outer ring (inter-shaft bearing).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub outer_shaft_node: Option<usize>,
     /// Seat diameter `d_h` of Eq. 2 (m): `2 r_h` or `2 r_HP`.
     pub seat_diameter_m: f64,
@@ -145,10 +145,10 @@ pub struct BearingThermalSpec {
     pub outer_diameter_m: f64,
     pub width_m: f64,
     /// Roller length `a_roller` (rollers only).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub roller_length_m: Option<f64>,
     /// Groove conformity `r_groove/d` (balls only).
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub conformity: Option<f64>,
     pub cage_mass_kg: f64,
     pub f_l: f64,
@@ -170,7 +170,7 @@ pub struct BearingThermalSpec {
 /// to the rings, half to each; Harris (Rolling Bearing Analysis) attributes the friction
 /// heat to the element–raceway contacts, shared by element and raceway, and the viscous
 /// part to the lubricant that is churned.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct HeatSplit {
     pub elements: f64,
@@ -195,10 +195,36 @@ impl HeatSplit {
     pub fn fractions(&self) -> [f64; 4] {
         [self.elements, self.inner, self.outer, self.lubricant]
     }
+
+    /// Each fraction in [0, 1], all summing to 1; errors name `path.<part>` (or `path`).
+    pub(super) fn check(&self, file: &str, path: &str) -> Result<(), ThermalError> {
+        let parts = ["elements", "inner", "outer", "lubricant"];
+        for (part, v) in parts.iter().zip(self.fractions()) {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(invalid(
+                    file,
+                    format!("{path}.{part}"),
+                    format!("must be a fraction in [0, 1], got {v}"),
+                ));
+            }
+        }
+        let sum: f64 = self.fractions().iter().sum();
+        if (sum - 1.0).abs() > 1e-9 {
+            return Err(invalid(
+                file,
+                path.to_string(),
+                format!(
+                    "the fractions must sum to 1 (all of the friction heat enters the \
+                     network), they sum to {sum}"
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// The `[thermal]` section.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ThermalSpec {
     pub n_nodes: usize,
@@ -218,7 +244,7 @@ pub struct ThermalSpec {
     pub bearings: Vec<BearingThermalSpec>,
 }
 
-fn invalid(file: &str, path: String, reason: impl Into<String>) -> ThermalError {
+pub(super) fn invalid(file: &str, path: String, reason: impl Into<String>) -> ThermalError {
     ThermalError::Invalid {
         file: file.to_string(),
         line: None,
@@ -227,7 +253,7 @@ fn invalid(file: &str, path: String, reason: impl Into<String>) -> ThermalError 
     }
 }
 
-fn positive(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
+pub(super) fn positive(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
     if v > 0.0 && v.is_finite() {
         Ok(())
     } else {
@@ -251,6 +277,66 @@ fn finite(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
     }
 }
 
+/// Deserializes a `[thermal]` table's text as `T`; an unknown, missing or mistyped field is
+/// named by its path (`thermal.shafts[3].length_m`). `lines`: the text's lines are the
+/// file's, and a syntax error keeps its position.
+pub(super) fn deserialize<T: DeserializeOwned>(
+    text: &str,
+    file: &str,
+    lines: bool,
+) -> Result<T, ThermalError> {
+    toml::from_str(text).map_err(|e| {
+        if lines {
+            return ThermalError::Parse {
+                file: file.to_string(),
+                message: format!("[thermal]: {}", e.to_string().trim_end()),
+            };
+        }
+        let reason = e.message().trim_end();
+        let at = |offset: usize| crate::model::validate::path_at(text, offset).1;
+        match e.span() {
+            // a missing field's span is its table's: the table is named (its line is
+            // found from the model file's text, see `ThermalError::with_lines`)
+            Some(span) if reason.starts_with("missing field") => {
+                // the root table's span is the whole text
+                let table = if span.start == 0 {
+                    String::new()
+                } else {
+                    at(span.start)
+                };
+                ThermalError::Invalid {
+                    file: file.to_string(),
+                    line: None,
+                    path: if table.is_empty() {
+                        "thermal".to_string()
+                    } else {
+                        format!("thermal.{table}")
+                    },
+                    reason: reason.to_string(),
+                }
+            }
+            Some(span) if !at(span.start).is_empty() => ThermalError::Invalid {
+                file: file.to_string(),
+                line: None,
+                path: format!("thermal.{}", at(span.start)),
+                reason: reason.to_string(),
+            },
+            _ => ThermalError::Parse {
+                file: file.to_string(),
+                message: format!("[thermal]: {reason}"),
+            },
+        }
+    })
+}
+
+/// The text of a parsed `[thermal]` table, for [`deserialize`].
+pub(super) fn table_text(table: &toml::Table, file: &str) -> Result<String, ThermalError> {
+    toml::to_string(table).map_err(|e| ThermalError::Parse {
+        file: file.to_string(),
+        message: format!("[thermal]: {e}"),
+    })
+}
+
 impl ThermalSpec {
     /// Parses the contents of a `[thermal]` table; `file` names the source in errors.
     ///
@@ -258,11 +344,7 @@ impl ThermalSpec {
     /// named by its field path (`thermal.shafts[3].length_m`), not by a line: a line of
     /// the table written out again here would not be the file's.
     pub fn from_table(table: &toml::Table, file: &str) -> Result<Self, ThermalError> {
-        let text = toml::to_string(table).map_err(|e| ThermalError::Parse {
-            file: file.to_string(),
-            message: format!("[thermal]: {e}"),
-        })?;
-        Self::parse(&text, file, false)
+        Self::parse(&table_text(table, file)?, file, false)
     }
 
     /// Parses the text of a `[thermal]` table body and validates it.
@@ -273,48 +355,7 @@ impl ThermalSpec {
     /// [`Self::from_toml_str`]; `lines`: the text's lines are the file's, and a syntax
     /// error keeps its position.
     fn parse(text: &str, file: &str, lines: bool) -> Result<Self, ThermalError> {
-        let spec: ThermalSpec = toml::from_str(text).map_err(|e| {
-            if lines {
-                return ThermalError::Parse {
-                    file: file.to_string(),
-                    message: format!("[thermal]: {}", e.to_string().trim_end()),
-                };
-            }
-            let reason = e.message().trim_end();
-            let at = |offset: usize| crate::model::validate::path_at(text, offset).1;
-            match e.span() {
-                // a missing field's span is its table's: the table is named (its line is
-                // found from the model file's text, see `ThermalError::with_lines`)
-                Some(span) if reason.starts_with("missing field") => {
-                    // the root table's span is the whole text
-                    let table = if span.start == 0 {
-                        String::new()
-                    } else {
-                        at(span.start)
-                    };
-                    ThermalError::Invalid {
-                        file: file.to_string(),
-                        line: None,
-                        path: if table.is_empty() {
-                            "thermal".to_string()
-                        } else {
-                            format!("thermal.{table}")
-                        },
-                        reason: reason.to_string(),
-                    }
-                }
-                Some(span) if !at(span.start).is_empty() => ThermalError::Invalid {
-                    file: file.to_string(),
-                    line: None,
-                    path: format!("thermal.{}", at(span.start)),
-                    reason: reason.to_string(),
-                },
-                _ => ThermalError::Parse {
-                    file: file.to_string(),
-                    message: format!("[thermal]: {reason}"),
-                },
-            }
-        })?;
+        let spec: ThermalSpec = deserialize(text, file, lines)?;
         spec.validate(file)?;
         Ok(spec)
     }
@@ -549,32 +590,7 @@ impl ThermalSpec {
             if b.n_elements == 0 {
                 return Err(invalid(file, q("n_elements"), "must be > 0"));
             }
-            let parts = [
-                ("elements", b.heat_split.elements),
-                ("inner", b.heat_split.inner),
-                ("outer", b.heat_split.outer),
-                ("lubricant", b.heat_split.lubricant),
-            ];
-            for (part, v) in parts {
-                if !(0.0..=1.0).contains(&v) {
-                    return Err(invalid(
-                        file,
-                        q(&format!("heat_split.{part}")),
-                        format!("must be a fraction in [0, 1], got {v}"),
-                    ));
-                }
-            }
-            let sum: f64 = parts.iter().map(|(_, v)| v).sum();
-            if (sum - 1.0).abs() > 1e-9 {
-                return Err(invalid(
-                    file,
-                    q("heat_split"),
-                    format!(
-                        "the fractions must sum to 1 (all of the friction heat enters the \
-                         network), they sum to {sum}"
-                    ),
-                ));
-            }
+            b.heat_split.check(file, &q("heat_split"))?;
             for (f, v) in [
                 ("seat_diameter_m", b.seat_diameter_m),
                 ("element_diameter_m", b.element_diameter_m),
