@@ -5,29 +5,32 @@ use tmrotor::coupled::{CoupledRotor, CouplingOptions, StudyOverrides};
 use tmrotor::model::{Model, ModelSet};
 use tmrotor::thermal::network::BearingLoad;
 
-/// The `set` table of the example's counter-rotating run.
-fn counter_set() -> ModelSet {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/counter_rotating.toml"
-    );
-    let text = std::fs::read_to_string(path).expect("example");
+/// The model file (relative to `examples/`, `None`: built-in) and `set` table of the
+/// example's counter-rotating run.
+fn counter_run() -> (Option<String>, ModelSet) {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/examples");
+    let text = std::fs::read_to_string(format!("{dir}/counter_rotating.toml")).expect("example");
     let doc: toml::Table = toml::from_str(&text).expect("toml");
     let runs = doc["runs"].as_array().expect("runs");
     let run = runs
         .iter()
         .find(|r| r["name"].as_str() == Some("counter-rotating"))
         .expect("the counter-rotating run");
-    run["set"]
+    let model = run
+        .get("model")
+        .and_then(|m| m.as_str())
+        .map(|m| format!("{dir}/{m}"));
+    let set = run["set"]
         .as_table()
         .expect("set table")
         .iter()
         .map(|(k, v)| (k.clone(), v.clone()))
-        .collect()
+        .collect();
+    (model, set)
 }
 
-fn rotor(set: &ModelSet) -> CoupledRotor {
-    let model = Model::load(None, set).expect("model");
+fn rotor((file, set): (Option<String>, ModelSet)) -> CoupledRotor {
+    let model = Model::load(file.as_deref().map(std::path::Path::new), &set).expect("model");
     CoupledRotor::new(
         &model,
         &StudyOverrides::default(),
@@ -40,7 +43,7 @@ fn rotor(set: &ModelSet) -> CoupledRotor {
 /// speed is 2.2 ω; 2#'s inner ring (HP) turns at −1.2 ω.
 #[test]
 fn ring_speeds_of_the_counter_rotating_bearings() {
-    let counter = rotor(&counter_set());
+    let counter = rotor(counter_run());
     let net = counter.network().expect("thermal network");
     let w = 500.0;
     let (wi, wo) = net.ring_speeds_rad_s(2, w);
@@ -55,8 +58,8 @@ fn ring_speeds_of_the_counter_rotating_bearings() {
 /// (relative 0.2 · 11 ω), at the same load and temperatures; its sign does not matter.
 #[test]
 fn friction_heat_follows_the_relative_speed() {
-    let co = rotor(&ModelSet::new());
-    let counter = rotor(&counter_set());
+    let co = rotor((None, ModelSet::new()));
+    let counter = rotor(counter_run());
     let (nc, nn) = (co.network().expect("net"), counter.network().expect("net"));
     let temps = vec![60.0; nc.n_nodes()];
     let loads = vec![
