@@ -715,3 +715,39 @@ fn tapered_element_end_diameters_are_checked() {
         |k| matches!(k, InvalidKind::NotPositive(_)),
     );
 }
+
+/// An element given backwards (`[9, 8]` between `[7, 8]` and `[9, 10]`) would fold the rotor
+/// back over itself: refused, naming the element it overlaps. Listing the elements in
+/// another order is fine.
+#[test]
+fn shaft_element_against_the_axis() {
+    let e = check(
+        &edited("nodes = [8, 9]", "nodes = [9, 8]"),
+        "shafts[7].nodes",
+        |k| matches!(k, InvalidKind::BadConnection(_)),
+    );
+    let msg = e.to_string();
+    assert!(
+        msg.contains("element 9–8") && msg.contains("shafts[6]"),
+        "{msg}"
+    );
+    // the same elements in reverse file order are one rotor
+    let start = BUILTIN_TOML.find("\n[[shafts]]").expect("shafts");
+    let end = BUILTIN_TOML.find("\n[[disks]]").expect("disks");
+    let mut blocks: Vec<&str> = BUILTIN_TOML[start..end]
+        .split("\n[[shafts]]")
+        .filter(|b| !b.trim().is_empty())
+        .collect();
+    blocks.reverse();
+    let reordered = format!(
+        "{}{}{}",
+        &BUILTIN_TOML[..start],
+        blocks
+            .iter()
+            .map(|b| format!("\n[[shafts]]{b}"))
+            .collect::<String>(),
+        &BUILTIN_TOML[end..]
+    );
+    assert_ne!(reordered, BUILTIN_TOML);
+    Model::from_str(&reordered, FILE).expect("reordered elements are valid");
+}

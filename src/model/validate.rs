@@ -707,6 +707,72 @@ impl<'a> Validator<'a> {
         Ok(())
     }
 
+    /// The shaft elements of each rotor lie along its axis one after another: an element
+    /// runs from its first node to its second in +z, so the elements place every node, and
+    /// two elements of a rotor must not cover the same stretch of the axis (as an element
+    /// given backwards, `[3, 2]` between `[1, 2]` and `[3, 4]`, would).
+    fn shafts_in_line(&self, spec: &ModelFile, nodes: &[u32], node_rotor: &[usize]) -> VResult<()> {
+        let index = |id: u32| nodes.binary_search(&id).ok();
+        let mut z: Vec<Option<f64>> = vec![None; nodes.len()];
+        // place each rotor's nodes from its elements (elements may be listed in any order)
+        for _ in 0..spec.shafts.len() {
+            let mut placed_any = false;
+            for s in &spec.shafts {
+                let (Some(a), Some(b)) = (index(s.nodes[0]), index(s.nodes[1])) else {
+                    continue;
+                };
+                match (z[a], z[b]) {
+                    (Some(za), None) => z[b] = Some(za + s.length_m),
+                    (None, Some(zb)) => z[a] = Some(zb - s.length_m),
+                    (None, None)
+                        if !z
+                            .iter()
+                            .enumerate()
+                            .any(|(k, v)| v.is_some() && node_rotor[k] == node_rotor[a]) =>
+                    {
+                        z[a] = Some(0.0);
+                        z[b] = Some(s.length_m);
+                    }
+                    _ => continue,
+                }
+                placed_any = true;
+            }
+            if !placed_any {
+                break;
+            }
+        }
+        let span = |s: &ShaftSpec| -> Option<(f64, f64)> {
+            let (a, b) = (z[index(s.nodes[0])?]?, z[index(s.nodes[1])?]?);
+            Some((a.min(b), a.max(b)))
+        };
+        for (j, sj) in spec.shafts.iter().enumerate() {
+            let Some((lo_j, hi_j)) = span(sj) else {
+                continue;
+            };
+            for (i, si) in spec.shafts[..j].iter().enumerate() {
+                let Some((lo_i, hi_i)) = span(si) else {
+                    continue;
+                };
+                let same_rotor = index(si.nodes[0]).map(|k| node_rotor[k])
+                    == index(sj.nodes[0]).map(|k| node_rotor[k]);
+                let overlap = hi_i.min(hi_j) - lo_i.max(lo_j);
+                if same_rotor && overlap > 1e-9 * (hi_j - lo_j).max(hi_i - lo_i) {
+                    return Err(self.err(
+                        format!("shafts[{j}].nodes"),
+                        InvalidKind::BadConnection(format!(
+                            "element {}–{} covers z = {lo_j:.6}…{hi_j:.6} m of its rotor's \
+                             axis, which shafts[{i}] (element {}–{}) already covers \
+                             ({lo_i:.6}…{hi_i:.6} m): an element runs from its first node \
+                             to its second along the axis, so list its nodes in that order",
+                            sj.nodes[0], sj.nodes[1], si.nodes[0], si.nodes[1]
+                        )),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
     fn check(&self, spec: ModelFile) -> VResult<Model> {
         // Gravity.
         self.non_negative("gravity.acceleration_m_s2", spec.gravity.acceleration_m_s2)?;
@@ -790,6 +856,9 @@ impl<'a> Validator<'a> {
         };
         for (i, s) in spec.shafts.iter().enumerate() {
             self.keep(shaft(i, s));
+        }
+        if !self.refused.get() {
+            self.keep(self.shafts_in_line(&spec, &nodes, &node_rotor));
         }
 
         // Disks.
