@@ -147,10 +147,18 @@ pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
                 )?;
             }
             if let Some(t) = thermal {
+                let generated = model
+                    .thermal()
+                    .is_some_and(|t| t.contains_key(crate::thermal::generate::GENERATE_KEY));
                 writeln!(
                     out,
-                    "  thermal:  {} nodes, {} bearings; flow {} L/min, cooling {} °C, ambient {} °C",
+                    "  thermal:  {} nodes{}, {} bearings; flow {} L/min, cooling {} °C, ambient {} °C",
                     t.n_nodes,
+                    if generated {
+                        " (generated from the geometry; `tmrotor model thermal` lists them)"
+                    } else {
+                        ""
+                    },
                     t.bearings.len(),
                     t.flow_l_min,
                     t.cooling_temp_c,
