@@ -107,6 +107,13 @@ pub struct HarmonicSettings {
     pub order: u32,
     /// AFT samples per period; `None` (default) chooses from the basis.
     pub aft_samples: Option<usize>,
+    /// Keep the half orders of the paper's basis that the rotors' speeds cannot make
+    /// (`ω/2` for λ = 6/5: Eq. 34 has it, but no combination of `ω` and `λω` gives it).
+    /// Default true, the paper's basis. False follows the primary response, which has
+    /// none of them, on its own (shorter) period: its period doublings are then located as
+    /// such (a multiplier through −1) and the branch cannot drift into the period-doubled
+    /// response (see [`primary_basis`]).
+    pub half_orders: bool,
 }
 
 impl Default for HarmonicSettings {
@@ -114,6 +121,7 @@ impl Default for HarmonicSettings {
         Self {
             order: 3,
             aft_samples: None,
+            half_orders: true,
         }
     }
 }
@@ -206,6 +214,7 @@ pub struct FlatSettings {
     pub interval_map: IntervalMap,
     pub reduction_cutoff_rad_s: f64,
     pub aft_samples: Option<usize>,
+    pub half_orders: bool,
     #[serde(skip_serializing_if = "ModelSet::is_empty")]
     pub set: ModelSet,
 }
@@ -243,6 +252,7 @@ impl From<StudySettings> for FlatSettings {
             interval_map: floquet.interval_map,
             reduction_cutoff_rad_s: floquet.reduction_cutoff_rad_s,
             aft_samples: harmonic.aft_samples,
+            half_orders: harmonic.half_orders,
             set,
         }
     }
@@ -261,6 +271,7 @@ impl From<FlatSettings> for StudySettings {
             harmonic: HarmonicSettings {
                 order: f.order,
                 aft_samples: f.aft_samples,
+                half_orders: f.half_orders,
             },
             sweep: SweepSettings {
                 omega_start: f.omega_start,
@@ -462,8 +473,10 @@ impl SweepProblem {
         let lambda = speed_ratio(&model);
         let basis = if lambda == (Ratio { num: 1, den: 1 }) {
             Basis::integer(settings.harmonic.order)?
-        } else {
+        } else if settings.harmonic.half_orders {
             Basis::paper(settings.harmonic.order, lambda)?
+        } else {
+            primary_basis(settings.harmonic.order, lambda)?
         };
         let run = run_info(&model, &system, &basis, lambda, settings);
         Ok(Self {
@@ -561,6 +574,25 @@ impl FloquetSettings {
     }
 }
 
+/// The paper's basis (Eq. 34) without the harmonics that no combination `aω + bλω` of
+/// the rotor speeds makes: with `λ = p/q` those combinations are the multiples of `ω/q`,
+/// so for λ = 6/5 `ω/2` goes and `λω/2 = 3ω/5` stays. The unbalance response and every
+/// harmonic its nonlinear forces generate lie on that lattice (the primary response); a
+/// period doubling of it brings in the odd multiples of `ω/(2q)`, `ω/2` among them. On
+/// the primary basis the response's period is `2πq/ω` instead of `4πq/ω`.
+pub fn primary_basis(order: u32, lambda: Ratio) -> Result<Basis, crate::hb::BasisError> {
+    let paper = Basis::paper(order, lambda)?;
+    let on_lattice = |h: &Ratio| (h.num * lambda.den).is_multiple_of(h.den);
+    Basis::new(
+        paper
+            .harmonics()
+            .iter()
+            .copied()
+            .filter(on_lattice)
+            .collect(),
+    )
+}
+
 /// λ of the basis (Eq. 34): the speed of the second spinning rotor, `|ratio|` (1 for a
 /// single rotor). The basis holds frequencies, so a counter-rotating rotor's `−6/5` needs
 /// the same `6/5 ω` harmonics as a co-rotating one's; a part that does not spin adds none.
@@ -642,6 +674,30 @@ fn run_info(
 mod tests {
     use super::*;
 
+    #[test]
+    fn primary_basis_keeps_the_harmonics_the_speeds_make() {
+        let r = |num, den| Ratio { num, den };
+        // λ = 6/5: ω/2 goes, λω/2 = 3ω/5 stays; 7 frequencies, period 10π/ω
+        let b = primary_basis(3, r(6, 5)).expect("basis");
+        assert_eq!(
+            b.harmonics(),
+            &[
+                r(3, 5),
+                r(1, 1),
+                r(6, 5),
+                r(2, 1),
+                r(12, 5),
+                r(3, 1),
+                r(18, 5)
+            ]
+        );
+        assert_eq!(b.base_den(), 5);
+        // λ = 3/2: ω/2 = λω − ω stays, λω/2 = 3ω/4 goes
+        let b = primary_basis(2, r(3, 2)).expect("basis");
+        assert!(b.harmonics().contains(&r(1, 2)));
+        assert!(!b.harmonics().contains(&r(3, 4)));
+    }
+
     /// The grouped settings read and write the flat TOML of earlier versions: every key at
     /// the top level, unknown keys refused.
     #[test]
@@ -681,6 +737,7 @@ mod tests {
             "interval_map",
             "reduction_cutoff_rad_s",
             "aft_samples",
+            "half_orders",
             "model",
         ];
         expected.sort();

@@ -465,3 +465,54 @@ fn the_lead_in_steps_run_in_the_pools_the_caller_names() {
     problem.run(&mut plain, None, |_| {}).expect("sweep");
     assert_eq!(sink.points[0].coeffs_mech, plain.points[0].coeffs_mech);
 }
+
+/// `half_orders = false` (`--no-half-orders`): the dual rotor on the primary basis, the
+/// paper's without `ω/2`. Its response repeats after `10π/ω` instead of `20π/ω`, so its
+/// Floquet multipliers are taken over half the period: squared, they are the paper basis's
+/// (whose response holds only a trace of `ω/2`, from the cage's varying compliance), and
+/// the amplitudes agree to that trace.
+#[test]
+fn primary_basis_takes_half_the_period() {
+    let run = |half_orders: bool| {
+        let settings = StudySettings {
+            harmonic: HarmonicSettings {
+                half_orders,
+                ..Default::default()
+            },
+            sweep: SweepSettings {
+                omega_start: 400.0,
+                omega_end: 402.0,
+                max_points: 2,
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let problem = SweepProblem::new(&settings).expect("problem");
+        let mut sink = MemorySink::new();
+        problem.run(&mut sink, None, |_| {}).expect("sweep");
+        sink
+    };
+    let (paper, primary) = (run(true), run(false));
+    let (hp, hq) = (
+        &paper.run.as_ref().expect("run").harmonics,
+        &primary.run.as_ref().expect("run").harmonics,
+    );
+    let half = Ratio { num: 1, den: 2 };
+    assert!(hp.contains(&half));
+    assert!(!hq.contains(&half));
+    assert_eq!(hq.len() + 1, hp.len());
+    let (p, q) = (&paper.points[0], &primary.points[0]);
+    assert_eq!(p.omega_rad_s, q.omega_rad_s);
+    assert!((p.period_s - 2.0 * q.period_s).abs() < 1e-12 * p.period_s);
+    let radius = |m: &[num_complex::Complex64]| m.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    let (rp, rq) = (radius(&p.multipliers), radius(&q.multipliers));
+    assert!(rp > 0.0 && rq > 0.0);
+    assert!(
+        (rp - rq * rq).abs() < 1e-2 * rp,
+        "spectral radius {rp} (paper basis) vs {rq}² = {} (primary)",
+        rq * rq
+    );
+    for (a, b) in p.amplitude_rms_m.iter().zip(&q.amplitude_rms_m) {
+        assert!((a - b).abs() < 1e-2 * a.abs().max(1e-9), "{a} vs {b}");
+    }
+}

@@ -83,6 +83,11 @@ pub struct SweepArgs {
     /// Mechanical model only (no thermal network, clearances fixed at δ0).
     #[arg(long)]
     pub no_thermal: bool,
+    /// Leave out the half orders of the paper's basis that the rotor speeds cannot make
+    /// (ω/2 for λ = 6/5): the primary response on its own period, its period doublings
+    /// located as such.
+    #[arg(long)]
+    pub no_half_orders: bool,
     /// Skip Floquet stability (faster; no stable flags, and of the bifurcations only the
     /// saddle-nodes, which are the folds of the branch and need no multipliers).
     #[arg(long)]
@@ -138,6 +143,9 @@ impl SweepArgs {
         }
         if self.no_thermal {
             s.operating.thermal = false;
+        }
+        if self.no_half_orders {
+            s.harmonic.half_orders = false;
         }
         if self.no_stability {
             s.floquet.stability = false;
