@@ -318,6 +318,13 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             100.0 * PERIOD_DOUBLED_SHARE
         )?;
     }
+    if !report.period_doubled.is_empty() {
+        writeln!(
+            out,
+            "  the branch ran into a period-doubled response; --no-half-orders follows the \
+             primary response on its own period (docs/user-guide.md, \"The primary basis\")"
+        )?;
+    }
     const SHOWN_WARNINGS: usize = 5;
     for w in report.warnings.iter().take(SHOWN_WARNINGS) {
         writeln!(out, "  warning: {w}")?;
