@@ -380,3 +380,41 @@ fn model_thermal_prints_a_table_that_reads_back() {
     let (written, _) = network(&format!("{mech}\n{printed}"), "written");
     assert_eq!(written, generated);
 }
+
+/// Geometry the dual rotor does not show: a tapered element's segments take its mean
+/// diameters, and an inter-shaft bearing without `outer_shaft_radius_m` sits on the outer
+/// rotor's shaft with that shaft's outer diameter as its seat.
+#[test]
+fn tapered_elements_and_a_default_inter_shaft_seat() {
+    // the single spool's middle element tapered from 140/100 mm to 150/110 mm
+    let text = example("single_spool.toml").replacen(
+        "nodes = [3, 4]\ninner_diameter_m = 100e-3\nouter_diameter_m = 140e-3\n",
+        "nodes = [3, 4]\ninner_diameter_m = 100e-3\nouter_diameter_m = 140e-3\n\
+         outer_diameter_end_m = 150e-3\ninner_diameter_end_m = 110e-3\n",
+        1,
+    );
+    assert!(text.contains("outer_diameter_end_m"));
+    let (spec, _) = network(&text, "tapered");
+    let tapered = spec
+        .shafts
+        .iter()
+        .find(|s| s.label == "rotor element 3-4")
+        .expect("element 3-4");
+    assert!((tapered.outer_diameter_m - 0.145).abs() < 1e-15);
+    assert!((tapered.inner_diameter_m - 0.105).abs() < 1e-15);
+    // the disk at node 3 sits on element 3-4's first segment; its bore is that element's
+    // outer diameter at node 3, the start of the taper
+    assert_eq!(spec.disks[0].bore_diameter_m, 0.140);
+
+    // the dual rotor's 3# without outer_shaft_radius_m: seat = HP element 17-18's outer
+    // diameter (180 mm), which is what 2 r_HP gives there
+    let generated = example("dual_rotor_generated.toml");
+    let cut = generated.replacen("outer_shaft_radius_m = 90e-3\n", "", 1);
+    assert_ne!(cut, generated);
+    let (spec, _) = network(&cut, "no r_HP");
+    let b3 = spec.bearings.iter().find(|b| b.name == "3#").expect("3#");
+    assert_eq!(b3.seat_diameter_m, 0.180);
+    assert!(b3.housing.is_none());
+    assert_eq!(b3.outer_speed_ratio, 1.2);
+    assert_eq!(b3.inner_speed_ratio, 1.0);
+}
