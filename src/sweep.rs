@@ -627,6 +627,7 @@ impl SweepProblem {
                             .zip(audit.confirmed.iter().copied())
                         {
                             let rec = BifurcationRecord {
+                                branch: 0,
                                 // 0, 1, … (the schema's running number)
                                 number: n_bif,
                                 kind,

@@ -3,6 +3,8 @@
 //! `TMROTOR_PYTHON`; without it the test says why it is skipped, except under `CI=true`
 //! where a missing reader is a failure.
 
+mod common;
+
 use std::process::Command;
 
 use tmrotor::record::synthetic::{self, SyntheticOptions};
@@ -69,4 +71,61 @@ fn official_python_reader_decodes_every_message() {
         "Python reader check failed:\n{stdout}\n{stderr}"
     );
     assert!(stdout.contains("decoded"), "{stdout}");
+}
+
+/// The Python package reads a recording with a second branch: the `branch` column, the
+/// `branches` table, and each branch point's orbit re-derived on its branch's basis equal
+/// to the stored one.
+#[test]
+fn python_package_reads_a_second_branch() {
+    let Ok(python) = std::env::var("TMROTOR_PYTHON") else {
+        let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
+        assert!(!ci, "CI=true but TMROTOR_PYTHON is not set");
+        eprintln!("skipped: TMROTOR_PYTHON is not set");
+        return;
+    };
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("branches.mcap");
+    let two = common::TwoBranches::new();
+    two.write(&path);
+    let src = concat!(env!("CARGO_MANIFEST_DIR"), "/python/src");
+    let script = format!(
+        r#"
+import sys
+sys.path.insert(0, {src:?})
+import numpy as np, tmrotor
+r = tmrotor.read({path:?})
+b = r.branch
+assert list(b.columns[:3]) == ["index", "omega_rad_s", "branch"], list(b.columns[:3])
+on = b[b.branch == 1]
+assert len(on) == {n}, len(on)
+assert len(r.branches) == 1 and r.branches.kind[0] == "period_doubled"
+assert r.branches.harmonics[0] == {harmonics:?}, r.branches.harmonics[0]
+worst = 0.0
+for i in on["index"]:
+    a, s = r.orbit(int(i), samples=64), r.recorded_orbit(int(i))
+    worst = max(worst, float(np.abs(a.filter(like="_x_m").values - s.filter(like="_x_m").values).max()))
+assert worst < 1e-15, worst
+print("ok", len(on), worst)
+"#,
+        src = src,
+        path = path.to_str().expect("utf-8"),
+        n = two.branch_points.len(),
+        harmonics = two
+            .doubled
+            .harmonics()
+            .iter()
+            .map(|h| format!("{}/{}", h.num, h.den))
+            .collect::<Vec<_>>(),
+    );
+    let out = Command::new(&python)
+        .args(["-c", &script])
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

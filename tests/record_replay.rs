@@ -34,17 +34,18 @@ fn branch_csv_has_one_row_per_point_with_recorded_values() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(
         lines[0],
-        "index,omega_rad_s,arc_length,stable,bifurcation,spectral_radius,unstable_count,\
+        "index,omega_rad_s,branch,arc_length,stable,bifurcation,spectral_radius,unstable_count,\
          real_above_one,residual_mech,residual_therm,newton_iterations,half_order_share,amp_rms_node1_m"
     );
     assert_eq!(lines.len(), rec.points.len() + 1);
     for (line, p) in lines[1..].iter().zip(&rec.points) {
         let cols: Vec<&str> = line.split(',').collect();
         assert_eq!(cols[0].parse::<u64>().expect("index"), p.index);
+        assert_eq!(cols[2], "0");
         assert_eq!(cols[1].parse::<f64>().expect("omega"), p.omega_rad_s);
-        assert_eq!(cols[12].parse::<f64>().expect("amp"), p.amplitude_rms_m[0]);
+        assert_eq!(cols[13].parse::<f64>().expect("amp"), p.amplitude_rms_m[0]);
         assert_eq!(
-            cols[3],
+            cols[4],
             if p.stable == Some(true) {
                 "true"
             } else {
@@ -52,11 +53,11 @@ fn branch_csv_has_one_row_per_point_with_recorded_values() {
             }
         );
         assert_eq!(
-            cols[4],
+            cols[5],
             p.bifurcation.map_or("", |b| b.key()),
             "bifurcation column"
         );
-        assert_eq!(cols[5].parse::<f64>().expect("radius"), p.spectral_radius());
+        assert_eq!(cols[6].parse::<f64>().expect("radius"), p.spectral_radius());
     }
     assert_eq!(out.matches("saddle_node").count(), 2);
 }

@@ -1,6 +1,8 @@
 //! Write → read round trips of the MCAP sink against the in-memory sink, the re-derived
 //! quantities against the closed-form synthetic values, and the sink's checks.
 
+mod common;
+
 use std::collections::BTreeMap;
 
 use mcap::MessageStream;
@@ -347,4 +349,91 @@ fn a_dropped_sink_finishes_the_file() {
     assert!(rec.complete);
     assert!(matches!(rec.status, Some(RunStatus::Failed(_))));
     assert_eq!(rec.points.len(), 1);
+}
+
+/// A recording with a second branch (`/branches`): the synthetic run, then a branch on the
+/// doubled basis (the synthetic points with a half-order harmonic added) written after it.
+/// Read back, every point keeps its branch and its basis's coefficients, the branch its
+/// origin and harmonics, and the quantities re-derived with the branch's basis are the
+/// recorded ones.
+#[test]
+fn a_second_branch_on_its_own_basis_round_trips() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let path = dir.path().join("branches.mcap");
+    let two = common::TwoBranches::new();
+    let mut mem = MemorySink::new();
+    let mut file = McapSink::create(&path, McapOptions::default()).expect("create");
+    for sink in [&mut mem as &mut dyn Sink, &mut file as &mut dyn Sink] {
+        sink.begin_run(&two.data.run).expect("begin");
+        for p in &two.data.points {
+            sink.write_point(p).expect("point");
+        }
+        // a point of a branch not yet described is refused
+        let err = sink
+            .write_point(&two.branch_points[0])
+            .expect_err("undescribed");
+        assert!(matches!(err, RecordError::InvalidPoint { .. }), "{err}");
+        let mut wrong = two.branch.clone();
+        wrong.branch = 2;
+        sink.write_branch(&wrong).expect_err("branch 2 before 1");
+        sink.write_branch(&two.branch).expect("branch");
+        for p in &two.branch_points {
+            sink.write_point(p).expect("branch point");
+        }
+        sink.finish(RunStatus::Completed).expect("finish");
+    }
+    assert_eq!(mem.branches, vec![two.branch.clone()]);
+    let rec = read_recording(&path).expect("read");
+    assert!(rec.complete, "{:?}", rec.notes);
+    assert_eq!(rec.branches, vec![two.branch.clone()]);
+    assert_eq!(rec.branch_numbers(), vec![0, 1]);
+    assert_eq!(
+        rec.points.len(),
+        two.data.points.len() + two.branch_points.len()
+    );
+    for (got, want) in rec.points.iter().zip(mem.points.iter()) {
+        assert_eq!(got.index, want.index);
+        assert_eq!(got.branch, want.branch);
+        assert_eq!(got.coeffs_mech, want.coeffs_mech);
+        assert_eq!(got.period_s, want.period_s);
+    }
+    let on_branch: Vec<_> = rec.points.iter().filter(|p| p.branch == 1).collect();
+    assert_eq!(on_branch.len(), two.branch_points.len());
+    let run1 = rec.run_of(1).expect("branch 1");
+    assert_eq!(run1.harmonics, two.doubled.harmonics());
+    for p in on_branch {
+        assert_eq!(
+            p.coeffs_mech.len(),
+            two.data.run.n_mech * two.doubled.n_coeffs()
+        );
+        let orbits = derive::orbits(&run1, &p.coeffs_mech, p.omega_rad_s, 64).expect("orbits");
+        for (a, b) in orbits.iter().zip(&p.orbits) {
+            for (x, y) in a.x_m.iter().zip(&b.x_m) {
+                assert!((x - y).abs() < 1e-15, "{x} vs {y}");
+            }
+        }
+    }
+    assert!(rec.run_of(2).is_none());
+
+    // replay: info lists the branches, the branch table has the column, recover keeps them
+    let file_arg = path.to_str().expect("utf-8 path");
+    let (r, out, _) = common::replay_in_process(&["info", file_arg]);
+    r.expect("info");
+    assert!(out.contains("branches:    2"), "{out}");
+    assert!(out.contains("branch 1: period_doubled"), "{out}");
+    let (r, out, _) = common::replay_in_process(&["branch", file_arg, "--csv"]);
+    r.expect("branch");
+    assert!(out.starts_with("index,omega_rad_s,branch,"), "{out}");
+    let ones = out
+        .lines()
+        .filter(|l| l.split(',').nth(2) == Some("1"))
+        .count();
+    assert_eq!(ones, two.branch_points.len());
+    let copy = dir.path().join("copy.mcap");
+    let (r, _, _) =
+        common::replay_in_process(&["recover", file_arg, copy.to_str().expect("utf-8")]);
+    r.expect("recover");
+    let back = read_recording(&copy).expect("read the copy");
+    assert_eq!(back.branches, rec.branches);
+    assert_eq!(back.points.len(), rec.points.len());
 }

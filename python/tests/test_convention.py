@@ -18,6 +18,7 @@ UNITS = ("_m", "_rad_s", "_s", "_c", "_n", "_w", "_per_s")
 #: columns without unit (dimensionless quantities, counts, labels)
 DIMENSIONLESS = {
     "index",
+    "branch",
     "arc_length",
     "stable",
     "bifurcation",
@@ -48,6 +49,7 @@ PATTERNS = {
     "branch": [
         r"index",
         r"omega_rad_s",
+        r"branch",
         r"arc_length",
         r"stable",
         r"bifurcation",

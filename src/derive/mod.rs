@@ -240,6 +240,7 @@ pub fn point_from_coefficients(
     }
     Ok(PointRecord {
         index,
+        branch: 0,
         omega_rad_s,
         arc_length: 0.0,
         amplitude_rms_m: amplitude_rms(run, &coeffs_mech)?,

@@ -149,7 +149,7 @@ fn entity_cells<T>(
     }
 }
 
-/// One row per point: index, ω, arc length, stability (`stable`, the largest multiplier
+/// One row per point: index, ω, branch (0 the run's; see `Recording::branches`), arc length, stability (`stable`, the largest multiplier
 /// modulus and the counts of multipliers outside the unit circle and real above +1: empty
 /// without multipliers), the bifurcation located just before the point, residuals (Eq. 36),
 /// Newton iterations, the [`crate::derive::half_order_share`] (empty when the basis has no
@@ -161,6 +161,7 @@ pub fn branch(rec: &Recording) -> Table {
         [
             "index",
             "omega_rad_s",
+            "branch",
             "arc_length",
             "stable",
             "bifurcation",
@@ -179,6 +180,7 @@ pub fn branch(rec: &Recording) -> Table {
     );
     for p in &rec.points {
         let mut row = start(p);
+        row.push(p.branch.to_string());
         row.push(number(p.arc_length));
         row.push(boolean(p.stable));
         row.push(p.bifurcation.map_or(String::new(), |b| b.key().to_string()));
@@ -193,7 +195,9 @@ pub fn branch(rec: &Recording) -> Table {
         row.push(number(p.residual_mech));
         row.push(number(p.residual_therm));
         row.push(p.newton_iterations.to_string());
-        row.push(point_half_order_share(&rec.run, p).map_or(String::new(), number));
+        let run = rec.run_of(p.branch);
+        let share = run.and_then(|run| point_half_order_share(&run, p));
+        row.push(share.map_or(String::new(), number));
         entity_cells(&mut row, &p.amplitude_rms_m, nodes.len(), 1, |a| vec![*a]);
         t.rows.push(row);
     }

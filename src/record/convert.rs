@@ -13,8 +13,8 @@ use sha2::{Digest, Sha256};
 use super::pb::foxglove as fg;
 use super::pb::tmrotor::v1 as pb;
 use super::types::{
-    BearingInfo, BearingLoad, BifurcationRecord, ClearanceVariation, DynamicNode, FloquetCounts,
-    NodeOrbit, PointRecord, RunInfo, TemperatureStats, ThermalForces, ThermalNode,
+    BearingInfo, BearingLoad, BifurcationRecord, BranchRecord, ClearanceVariation, DynamicNode,
+    FloquetCounts, NodeOrbit, PointRecord, RunInfo, TemperatureStats, ThermalForces, ThermalNode,
 };
 use crate::hb::Ratio;
 use crate::stability::BifurcationKind;
@@ -305,6 +305,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     let stability = stability_to_pb(p.stable);
     let summary = pb::PointSummary {
         index,
+        branch: p.branch,
         omega_rad_s,
         arc_length: p.arc_length,
         amplitude_rms_m: p.amplitude_rms_m.clone(),
@@ -317,6 +318,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     };
     let harmonics = pb::Harmonics {
         index,
+        branch: p.branch,
         omega_rad_s,
         lambda: Some(ratio_to_pb(run.lambda)),
         harmonics: run.harmonics.iter().copied().map(ratio_to_pb).collect(),
@@ -327,6 +329,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     };
     let orbits = pb::Orbits {
         index,
+        branch: p.branch,
         omega_rad_s,
         period_s: p.period_s,
         nodes: run
@@ -342,6 +345,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     };
     let temperatures = (!p.temperatures.is_empty()).then(|| pb::Temperatures {
         index,
+        branch: p.branch,
         omega_rad_s,
         nodes: run
             .thermal_nodes
@@ -357,6 +361,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     });
     let clearances = (!p.clearances.is_empty()).then(|| pb::Clearances {
         index,
+        branch: p.branch,
         omega_rad_s,
         bearings: run
             .bearings
@@ -374,6 +379,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     });
     let bearing_loads = (!p.bearing_loads.is_empty()).then(|| pb::BearingLoads {
         index,
+        branch: p.branch,
         omega_rad_s,
         period_s: p.period_s,
         bearings: run
@@ -389,6 +395,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     });
     let thermal_forces = (!p.thermal_forces.is_empty()).then(|| pb::ThermalForces {
         index,
+        branch: p.branch,
         omega_rad_s,
         bearings: run
             .bearings
@@ -405,6 +412,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     });
     let floquet = (!p.multipliers.is_empty()).then(|| pb::Floquet {
         index,
+        branch: p.branch,
         omega_rad_s,
         stability: stability as i32,
         spectral_radius: p.spectral_radius(),
@@ -474,6 +482,7 @@ pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, S
     };
     let point = PointRecord {
         index: s.index,
+        branch: s.branch,
         omega_rad_s: s.omega_rad_s,
         arc_length: s.arc_length,
         amplitude_rms_m: s.amplitude_rms_m.clone(),
@@ -577,6 +586,7 @@ pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, S
 pub fn bifurcation_record_to_pb(b: &BifurcationRecord) -> pb::Bifurcation {
     pb::Bifurcation {
         number: b.number,
+        branch: b.branch,
         r#type: bifurcation_to_pb(Some(b.kind)) as i32,
         omega_rad_s: b.omega_rad_s,
         arc_length: b.arc_length,
@@ -595,6 +605,7 @@ pub fn bifurcation_record_from_pb(m: &pb::Bifurcation) -> Result<BifurcationReco
         bifurcation_from_pb(m.r#type)?.ok_or("bifurcation message with type NONE".to_string())?;
     Ok(BifurcationRecord {
         number: m.number,
+        branch: m.branch,
         kind,
         omega_rad_s: m.omega_rad_s,
         arc_length: m.arc_length,
@@ -604,6 +615,34 @@ pub fn bifurcation_record_from_pb(m: &pb::Bifurcation) -> Result<BifurcationReco
         confirmed: !m.unconfirmed,
         coeffs_mech: m.coeffs_mech.clone(),
         coeffs_therm: m.coeffs_therm.clone(),
+    })
+}
+
+/// The `/branches` message.
+pub fn branch_record_to_pb(b: &BranchRecord) -> pb::BranchInfo {
+    pb::BranchInfo {
+        branch: b.branch,
+        kind: b.kind.clone(),
+        parent: b.parent,
+        origin_bifurcation: b.origin_bifurcation,
+        origin_omega_rad_s: b.origin_omega_rad_s,
+        harmonics: b.harmonics.iter().map(|&r| ratio_to_pb(r)).collect(),
+    }
+}
+
+/// Back from `/branches`.
+pub fn branch_record_from_pb(m: &pb::BranchInfo) -> Result<BranchRecord, String> {
+    Ok(BranchRecord {
+        branch: m.branch,
+        kind: m.kind.clone(),
+        parent: m.parent,
+        origin_bifurcation: m.origin_bifurcation,
+        origin_omega_rad_s: m.origin_omega_rad_s,
+        harmonics: m
+            .harmonics
+            .iter()
+            .map(|r| ratio_from_pb(r, "branch harmonic"))
+            .collect::<Result<_, _>>()?,
     })
 }
 

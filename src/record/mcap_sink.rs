@@ -46,7 +46,7 @@ use super::convert::{
 use super::pb::foxglove::log::Level;
 use super::schema::{self, Topic, names};
 use super::sink::{Sink, SinkChecks};
-use super::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// One millisecond in nanoseconds: the step of the branch clock.
 pub const CLOCK_STEP_NS: u64 = 1_000_000;
@@ -448,6 +448,26 @@ impl Sink for McapSink {
             b.after_point.saturating_add(1)
         );
         self.publish(schema::TOPIC_LOG, t, &log_to_pb(t, Level::Warning, &text))?;
+        self.flush()
+    }
+
+    fn write_branch(&mut self, b: &BranchRecord) -> Result<(), RecordError> {
+        self.checks.branch(b)?;
+        let t = bifurcation_time_ns(self.checks.last_index().unwrap_or(0));
+        self.publish(
+            schema::TOPIC_BRANCHES,
+            t,
+            &super::convert::branch_record_to_pb(b),
+        )?;
+        let text = format!(
+            "branch {}: {} from bifurcation #{} of branch {} at ω = {:.4} rad/s",
+            b.branch,
+            b.kind,
+            u64::from(b.origin_bifurcation) + 1,
+            b.parent,
+            b.origin_omega_rad_s
+        );
+        self.publish(schema::TOPIC_LOG, t, &log_to_pb(t, Level::Info, &text))?;
         self.flush()
     }
 

@@ -51,7 +51,7 @@ use thiserror::Error;
 pub use mcap_sink::{McapOptions, McapSink};
 pub use reader::{ReadError, ReadOptions, Recording, read_recording, read_recording_with};
 pub use sink::{MemorySink, Sink, install_interrupt_flag, record_run};
-pub use types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+pub use types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// Errors writing a recording.
 #[derive(Debug, Error)]

@@ -17,12 +17,13 @@ use prost::Message;
 use thiserror::Error;
 
 use super::convert::{
-    PointParts, Presence, bifurcation_record_from_pb, point_from_pb, run_info_from_pb,
+    PointParts, Presence, bifurcation_record_from_pb, branch_record_from_pb, point_from_pb,
+    run_info_from_pb,
 };
 use super::pb::tmrotor::v1 as pb;
 use super::scan;
 use super::schema::{self, names};
-use super::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// Errors reading a recording. Every variant names the file.
 #[derive(Debug, Error)]
@@ -57,6 +58,8 @@ pub struct Recording {
     /// Completely written points, in index order.
     pub points: Vec<PointRecord>,
     pub bifurcations: Vec<BifurcationRecord>,
+    /// Branches beside the run's own (`/branches`), in order: branch `k` at `k − 1`.
+    pub branches: Vec<BranchRecord>,
     /// Status written by `finish`; `None` when the file was cut before it.
     pub status: Option<RunStatus>,
     /// True when the file ends properly (data end, footer, end magic), has a status, and
@@ -88,6 +91,26 @@ impl Recording {
     /// The point with index `index`.
     pub fn point(&self, index: u64) -> Option<&PointRecord> {
         self.points.iter().find(|p| p.index == index)
+    }
+
+    /// The run as the points of `branch` see it (its basis); `None` for a branch the
+    /// recording does not describe.
+    pub fn run_of(&self, branch: u32) -> Option<std::borrow::Cow<'_, RunInfo>> {
+        match branch {
+            0 => Some(std::borrow::Cow::Borrowed(&self.run)),
+            k => self
+                .branches
+                .iter()
+                .find(|b| b.branch == k)
+                .map(|b| std::borrow::Cow::Owned(b.run_of(&self.run))),
+        }
+    }
+
+    /// The branch numbers of the recording: 0, then those of [`Self::branches`].
+    pub fn branch_numbers(&self) -> Vec<u32> {
+        std::iter::once(0)
+            .chain(self.branches.iter().map(|b| b.branch))
+            .collect()
     }
 }
 
@@ -173,6 +196,7 @@ struct Collected {
     run: Option<pb::RunInfo>,
     parts: BTreeMap<u64, PointParts>,
     bifs: Vec<pb::Bifurcation>,
+    branches: Vec<pb::BranchInfo>,
     warnings: Vec<String>,
     /// Messages that did not decode: topic and reason.
     undecodable: Vec<String>,
@@ -207,6 +231,7 @@ impl Collected {
             &mut self.run,
             &mut self.parts,
             &mut self.bifs,
+            &mut self.branches,
             &mut self.warnings,
         ) {
             Ok(Some(summary_of)) => self.build(summary_of),
@@ -230,7 +255,12 @@ impl Collected {
         let Some(parts) = self.parts.remove(&index) else {
             return;
         };
-        match point_from_pb(run, &parts) {
+        let Some(run) = branch_run(run, &self.branches, &parts) else {
+            // its branch is not described (yet): said at the end
+            self.parts.insert(index, parts);
+            return;
+        };
+        match point_from_pb(&run, &parts) {
             Ok(point) => {
                 self.built.insert(index, (point, parts.present()));
             }
@@ -428,7 +458,14 @@ fn read_from<R: std::io::Read + std::io::Seek>(
             lost.push(index);
             continue;
         }
-        match point_from_pb(&run, &p) {
+        let point = match branch_run(&run, &c.branches, &p) {
+            Some(branch) => point_from_pb(&branch, &p),
+            None => Err(format!(
+                "its branch {} is not described on /branches",
+                p.summary.as_ref().map_or(0, |s| s.branch)
+            )),
+        };
+        match point {
             Ok(point) => points.push(point),
             Err(reason) if p.summary.is_none() => {
                 notes.push(format!("point {index} skipped: {reason}"));
@@ -441,6 +478,13 @@ fn read_from<R: std::io::Read + std::io::Seek>(
         }
     }
     points.sort_by_key(|p| p.index);
+    let mut branches = Vec::with_capacity(c.branches.len());
+    for b in &c.branches {
+        match branch_record_from_pb(b) {
+            Ok(b) => branches.push(b),
+            Err(reason) => notes.push(format!("a /branches message is unreadable: {reason}")),
+        }
+    }
     let mut bifurcations = Vec::with_capacity(c.bifs.len());
     for b in &c.bifs {
         match bifurcation_record_from_pb(b) {
@@ -516,6 +560,7 @@ fn read_from<R: std::io::Read + std::io::Seek>(
         run,
         points,
         bifurcations,
+        branches,
         status,
         complete,
         missing,
@@ -554,6 +599,27 @@ pub fn index_ranges(indices: &[u64]) -> String {
     parts.join(", ")
 }
 
+/// The run as the point of `parts` sees it: the run's, or its branch's (`None` when the
+/// branch is not among `branches` or its harmonics do not read).
+fn branch_run<'a>(
+    run: &'a RunInfo,
+    branches: &[pb::BranchInfo],
+    parts: &PointParts,
+) -> Option<std::borrow::Cow<'a, RunInfo>> {
+    let k = parts
+        .summary
+        .as_ref()
+        .map(|s| s.branch)
+        .or_else(|| parts.harmonics.as_ref().map(|h| h.branch))
+        .unwrap_or(0);
+    if k == 0 {
+        return Some(std::borrow::Cow::Borrowed(run));
+    }
+    let b = branches.iter().find(|b| b.branch == k)?;
+    let b = branch_record_from_pb(b).ok()?;
+    Some(std::borrow::Cow::Owned(b.run_of(run)))
+}
+
 fn decode<M: Message + Default>(data: &[u8]) -> Result<M, String> {
     M::decode(data).map_err(|e| format!("protobuf decoding failed: {e}"))
 }
@@ -566,6 +632,7 @@ fn decode_message(
     run: &mut Option<pb::RunInfo>,
     parts: &mut BTreeMap<u64, PointParts>,
     bifs: &mut Vec<pb::Bifurcation>,
+    branches: &mut Vec<pb::BranchInfo>,
     warnings: &mut Vec<String>,
 ) -> Result<Option<u64>, String> {
     match topic {
@@ -617,6 +684,7 @@ fn decode_message(
             parts.entry(index).or_default().floquet = Some(m);
         }
         t if t == schema::TOPIC_BIFURCATIONS.name => bifs.push(decode(data)?),
+        t if t == schema::TOPIC_BRANCHES.name => branches.push(decode(data)?),
         t if t == schema::TOPIC_LOG.name => {
             let m: super::pb::foxglove::Log = decode(data)?;
             if m.name == super::convert::AUDIT_LOG_NAME {

@@ -51,6 +51,8 @@ pub const THERMAL_FORCES: SchemaEntry = schema!(
 pub const FLOQUET: SchemaEntry = schema!("tmrotor.v1.Floquet", "tmrotor/v1/floquet.proto");
 pub const BIFURCATION: SchemaEntry =
     schema!("tmrotor.v1.Bifurcation", "tmrotor/v1/bifurcation.proto");
+pub const BRANCH_INFO: SchemaEntry =
+    schema!("tmrotor.v1.BranchInfo", "tmrotor/v1/branch_info.proto");
 pub const MAP_INFO: SchemaEntry = schema!("tmrotor.v1.MapInfo", "tmrotor/v1/operating_map.proto");
 pub const MAP_CURVE: SchemaEntry = schema!("tmrotor.v1.MapCurve", "tmrotor/v1/operating_map.proto");
 pub const MAP_PAIR_END: SchemaEntry =
@@ -61,7 +63,7 @@ pub const SCENE_UPDATE: SchemaEntry = schema!("foxglove.SceneUpdate", "foxglove/
 pub const LOG: SchemaEntry = schema!("foxglove.Log", "foxglove/Log.proto");
 
 /// Every schema a recording or an operating map may contain.
-pub const ALL_SCHEMAS: [SchemaEntry; 16] = [
+pub const ALL_SCHEMAS: [SchemaEntry; 17] = [
     RUN_INFO,
     POINT_SUMMARY,
     HARMONICS,
@@ -72,6 +74,7 @@ pub const ALL_SCHEMAS: [SchemaEntry; 16] = [
     THERMAL_FORCES,
     FLOQUET,
     BIFURCATION,
+    BRANCH_INFO,
     SCENE_UPDATE,
     LOG,
     MAP_INFO,
@@ -138,6 +141,11 @@ pub const TOPIC_BIFURCATIONS: Topic = Topic {
     schema: BIFURCATION,
     meaning: "located bifurcation points",
 };
+pub const TOPIC_BRANCHES: Topic = Topic {
+    name: "/branches",
+    schema: BRANCH_INFO,
+    meaning: "branches beside the run's own (e.g. switched to at a period doubling): origin and basis, one message per branch before its points",
+};
 pub const TOPIC_SCENE: Topic = Topic {
     name: "/scene",
     schema: SCENE_UPDATE,
@@ -150,7 +158,7 @@ pub const TOPIC_LOG: Topic = Topic {
 };
 
 /// All topics, in the order they are registered.
-pub const ALL_TOPICS: [Topic; 12] = [
+pub const ALL_TOPICS: [Topic; 13] = [
     TOPIC_RUN_INFO,
     TOPIC_SUMMARY,
     TOPIC_HARMONICS,
@@ -161,6 +169,7 @@ pub const ALL_TOPICS: [Topic; 12] = [
     TOPIC_THERMAL_FORCES,
     TOPIC_FLOQUET,
     TOPIC_BIFURCATIONS,
+    TOPIC_BRANCHES,
     TOPIC_SCENE,
     TOPIC_LOG,
 ];

@@ -7,7 +7,7 @@ use std::sync::{Arc, OnceLock};
 
 use super::RecordError;
 use super::convert::{validate_point, validate_run};
-use super::types::{BifurcationRecord, PointRecord, RunInfo, RunStatus};
+use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// Where the points of a continuation run go.
 ///
@@ -21,6 +21,9 @@ pub trait Sink {
     fn write_point(&mut self, point: &PointRecord) -> Result<(), RecordError>;
     /// Writes one located bifurcation.
     fn write_bifurcation(&mut self, bifurcation: &BifurcationRecord) -> Result<(), RecordError>;
+    /// Describes branch `k > 0` before its first point (branches numbered 1, 2, … in
+    /// order; points of branch 0 are the run's).
+    fn write_branch(&mut self, branch: &BranchRecord) -> Result<(), RecordError>;
     /// Ends the run with its status. Further writes fail with [`RecordError::Finished`].
     fn finish(&mut self, status: RunStatus) -> Result<(), RecordError>;
     /// Writes a warning about the branch between point `after_point` and the next (a
@@ -44,6 +47,9 @@ macro_rules! forward_sink {
             fn write_bifurcation(&mut self, b: &BifurcationRecord) -> Result<(), RecordError> {
                 (**self).write_bifurcation(b)
             }
+            fn write_branch(&mut self, b: &BranchRecord) -> Result<(), RecordError> {
+                (**self).write_branch(b)
+            }
             fn finish(&mut self, status: RunStatus) -> Result<(), RecordError> {
                 (**self).finish(status)
             }
@@ -60,6 +66,8 @@ forward_sink!(&mut S, Box<S>);
 #[derive(Clone, Debug, Default)]
 pub struct SinkChecks {
     run: Option<RunInfo>,
+    /// The run as the points of branch `k` see it, at `k − 1`.
+    branches: Vec<RunInfo>,
     last_index: Option<u64>,
     finished: bool,
 }
@@ -78,7 +86,40 @@ impl SinkChecks {
         Ok(())
     }
 
-    /// Checks a `write_point` call; returns the run.
+    /// Checks a `write_branch` call: branches come numbered 1, 2, … and leave from a
+    /// branch already there; its basis must be one.
+    pub fn branch(&mut self, b: &BranchRecord) -> Result<(), RecordError> {
+        if self.finished {
+            return Err(RecordError::Finished);
+        }
+        let run = self
+            .run
+            .as_ref()
+            .ok_or(RecordError::NotStarted("write_branch"))?;
+        let want = self.branches.len() as u32 + 1;
+        let reason = if b.branch != want {
+            Some(format!(
+                "branch {} given where branch {want} comes next",
+                b.branch
+            ))
+        } else if b.parent >= b.branch {
+            Some(format!("its parent {} is not an earlier branch", b.parent))
+        } else {
+            None
+        };
+        let branch_run = b.run_of(run);
+        let reason = reason.or_else(|| validate_run(&branch_run).err());
+        if let Some(reason) = reason {
+            return Err(RecordError::InvalidRun(format!(
+                "branch {}: {reason}",
+                b.branch
+            )));
+        }
+        self.branches.push(branch_run);
+        Ok(())
+    }
+
+    /// Checks a `write_point` call; returns the run as the point's branch sees it.
     pub fn point(&mut self, p: &PointRecord) -> Result<&RunInfo, RecordError> {
         if self.finished {
             return Err(RecordError::Finished);
@@ -87,6 +128,17 @@ impl SinkChecks {
             .run
             .as_ref()
             .ok_or(RecordError::NotStarted("write_point"))?;
+        let run = match p.branch {
+            0 => run,
+            k => self
+                .branches
+                .get(k as usize - 1)
+                .ok_or_else(|| RecordError::InvalidPoint {
+                    index: p.index,
+                    omega_rad_s: p.omega_rad_s,
+                    reason: format!("branch {k} was not described with write_branch"),
+                })?,
+        };
         if let Some(previous) = self.last_index
             && p.index <= previous
         {
@@ -158,6 +210,7 @@ pub struct MemorySink {
     pub run: Option<RunInfo>,
     pub points: Vec<PointRecord>,
     pub bifurcations: Vec<BifurcationRecord>,
+    pub branches: Vec<BranchRecord>,
     pub status: Option<RunStatus>,
     /// Warnings written with [`Sink::write_note`]: (after point, text).
     pub notes: Vec<(u64, String)>,
@@ -185,6 +238,12 @@ impl Sink for MemorySink {
     fn write_bifurcation(&mut self, bifurcation: &BifurcationRecord) -> Result<(), RecordError> {
         self.checks.bifurcation(bifurcation)?;
         self.bifurcations.push(bifurcation.clone());
+        Ok(())
+    }
+
+    fn write_branch(&mut self, branch: &BranchRecord) -> Result<(), RecordError> {
+        self.checks.branch(branch)?;
+        self.branches.push(branch.clone());
         Ok(())
     }
 

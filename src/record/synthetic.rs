@@ -291,6 +291,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
             let q = &raw[i - 1];
             let (am, wm) = (0.5 * (a + q.a), 0.5 * (w + q.omega));
             bifurcations.push(BifurcationRecord {
+                branch: 0,
                 number: bifurcations.len() as u32,
                 kind,
                 omega_rad_s: wm,
@@ -352,6 +353,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
             };
 
         points.push(PointRecord {
+            branch: 0,
             index: i as u64,
             omega_rad_s: w,
             arc_length: arc,

@@ -152,6 +152,8 @@ pub struct ThermalForces {
 pub struct PointRecord {
     /// Index along the branch, 0, 1, 2, … (strictly increasing).
     pub index: u64,
+    /// The branch the point lies on: 0 the run's, `k > 0` the `k`-th [`BranchRecord`].
+    pub branch: u32,
     /// Continuation parameter ω (LP rotor speed), rad/s.
     pub omega_rad_s: f64,
     /// Pseudo-arclength.
@@ -233,6 +235,8 @@ impl PointRecord {
 pub struct BifurcationRecord {
     /// Running number along the branch, 0, 1, ….
     pub number: u32,
+    /// The branch it lies on (see [`PointRecord::branch`]).
+    pub branch: u32,
     pub kind: BifurcationKind,
     /// Located ω, rad/s.
     pub omega_rad_s: f64,
@@ -251,6 +255,32 @@ pub struct BifurcationRecord {
     /// layout); empty in recordings written before they were recorded.
     pub coeffs_mech: Vec<f64>,
     pub coeffs_therm: Vec<f64>,
+}
+
+/// A branch of a recording beside the run's own (branch 0, described by the
+/// [`RunInfo`]): a branch switched to at a bifurcation, on a basis of its own.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BranchRecord {
+    /// 1, 2, …
+    pub branch: u32,
+    /// What it is: `"period_doubled"` for a branch switched to at a period doubling.
+    pub kind: String,
+    /// The branch it leaves from, and the located bifurcation there (number, ω).
+    pub parent: u32,
+    pub origin_bifurcation: u32,
+    pub origin_omega_rad_s: f64,
+    /// Harmonics of its basis; they replace [`RunInfo::harmonics`] for its points.
+    pub harmonics: Vec<Ratio>,
+}
+
+impl BranchRecord {
+    /// The run as the points of this branch see it: `run` with the branch's harmonics.
+    pub fn run_of(&self, run: &RunInfo) -> RunInfo {
+        RunInfo {
+            harmonics: self.harmonics.clone(),
+            ..run.clone()
+        }
+    }
 }
 
 /// How a run ended, written into the recording by [`super::Sink::finish`].

@@ -69,3 +69,82 @@ pub fn python() -> Option<String> {
         }
     }
 }
+
+/// A synthetic recording's data with a second branch: the branch on the doubled basis
+/// (`continuation::switch::doubled_basis`) leaving the run at its point 10, and four points
+/// on it, the synthetic points 8–11 with a half-order harmonic added (index after the
+/// run's last point).
+pub struct TwoBranches {
+    pub data: tmrotor::record::synthetic::SyntheticRun,
+    pub doubled: tmrotor::hb::Basis,
+    pub branch: tmrotor::record::BranchRecord,
+    pub branch_points: Vec<tmrotor::record::PointRecord>,
+}
+
+impl TwoBranches {
+    pub fn new() -> Self {
+        use tmrotor::continuation::switch::{doubled_basis, embed};
+        let data = tmrotor::record::synthetic::generate(&Default::default());
+        let basis = data.run.basis().expect("basis");
+        let doubled = doubled_basis(&basis).expect("doubled");
+        let branch = tmrotor::record::BranchRecord {
+            branch: 1,
+            kind: "period_doubled".into(),
+            parent: 0,
+            origin_bifurcation: 0,
+            origin_omega_rad_s: data.points[10].omega_rad_s,
+            harmonics: doubled.harmonics().to_vec(),
+        };
+        let branch_run = branch.run_of(&data.run);
+        let last = data.points.last().expect("points").index;
+        let new_harmonic = doubled
+            .harmonics()
+            .iter()
+            .position(|h| !basis.harmonics().contains(h))
+            .expect("a new harmonic");
+        let nc = doubled.n_coeffs();
+        let branch_points = data.points[8..12]
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                let mut mech = embed(&p.coeffs_mech, &basis, &doubled);
+                for d in 0..data.run.n_mech {
+                    mech[d * nc + 1 + new_harmonic] = 1e-6 * (d + 1) as f64;
+                }
+                let therm = embed(&p.coeffs_therm, &basis, &doubled);
+                let mut q = tmrotor::derive::point_from_coefficients(
+                    &branch_run,
+                    last + 1 + k as u64,
+                    p.omega_rad_s,
+                    mech,
+                    therm,
+                    64,
+                )
+                .expect("branch point");
+                q.branch = 1;
+                q
+            })
+            .collect();
+        Self {
+            data,
+            doubled,
+            branch,
+            branch_points,
+        }
+    }
+
+    /// Writes the run, the branch and its points to an MCAP file.
+    pub fn write(&self, path: &Path) {
+        use tmrotor::record::{McapOptions, McapSink, RunStatus, Sink};
+        let mut file = McapSink::create(path, McapOptions::default()).expect("create");
+        file.begin_run(&self.data.run).expect("begin");
+        for p in &self.data.points {
+            file.write_point(p).expect("point");
+        }
+        file.write_branch(&self.branch).expect("branch");
+        for p in &self.branch_points {
+            file.write_point(p).expect("branch point");
+        }
+        file.finish(RunStatus::Completed).expect("finish");
+    }
+}

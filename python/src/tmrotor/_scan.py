@@ -31,6 +31,7 @@ MAGIC = b"\x89MCAP0\r\n"
 TOPIC_RUN_INFO = "/run_info"
 TOPIC_SUMMARY = "/summary"
 TOPIC_BIFURCATIONS = "/bifurcations"
+TOPIC_BRANCHES = "/branches"
 TOPIC_LOG = "/log"
 TOPIC_SCENE = "/scene"
 #: Per-point topics (every message carries ``index``), as in ``schemas/README.md``.
@@ -113,6 +114,8 @@ class Scan:
     #: point index -> topic -> decoded message
     points: dict[int, dict[str, Any]] = field(default_factory=dict)
     bifurcations: list[Any] = field(default_factory=list)
+    #: /branches messages: the branches beside the run's own, in order
+    branches: list[Any] = field(default_factory=list)
     log: list[LogEntry] = field(default_factory=list)
     #: topic -> {"schema": name, "messages": count}, in order of first appearance
     topics: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -238,6 +241,8 @@ def _file_message(out: Scan, topic: str, msg: Any, log_time: int, file: str) -> 
         out.points.setdefault(int(msg.index), {})[topic] = msg
     elif topic == TOPIC_BIFURCATIONS:
         out.bifurcations.append(msg)
+    elif topic == TOPIC_BRANCHES:
+        out.branches.append(msg)
     elif topic == TOPIC_LOG:
         out.log.append(
             LogEntry(

@@ -178,6 +178,11 @@ class Recording:
         self.period_denominator: int = math.lcm(*(int(r.den) for r in run.harmonics))
         self._nu = np.array([float(r.num) / float(r.den) for r in run.harmonics])
         self._n_coeffs = 1 + 2 * len(self.basis)
+        #: branch number -> its basis as ``Ratio`` messages (branch 0: the run's); the
+        #: branches beside the run's own come from ``/branches``
+        self._branch_harmonics: dict[int, list[Any]] = {0: list(run.harmonics)}
+        for b in s.branches:
+            self._branch_harmonics[int(b.branch)] = list(b.harmonics)
         #: column prefixes of the dynamic nodes, thermal nodes and bearings, in RunInfo order
         self.node_columns: list[str] = [node_key(n.id) for n in run.nodes]
         self.thermal_node_columns: list[str] = [thermal_node_key(n.id) for n in run.thermal_nodes]
@@ -257,6 +262,15 @@ class Recording:
         state = "complete" if self.info["complete"] else "INCOMPLETE"
         return f"<tmrotor.Recording {self.path.name}: {len(self.points)} points, {state}>"
 
+    def _harmonics_of(self, parts: dict[str, Any]) -> list[Any]:
+        """The basis of a point: that of its branch (``branch`` of its ``/summary``)."""
+        k = _branch_of(parts["/summary"])
+        if k not in self._branch_harmonics:
+            raise RecordingError(
+                str(self.path), "corrupt", f"branch {k} is not described on /branches"
+            )
+        return self._branch_harmonics[k]
+
     def _check_point(self, index: int, parts: dict[str, Any]) -> None:
         run = self.run_info
         what = None
@@ -265,7 +279,7 @@ class Recording:
             what = f"/summary has {len(s.amplitude_rms_m)} amplitudes for {len(run.nodes)} nodes"
         h = parts.get("/harmonics")
         if h is not None:
-            nc = self._n_coeffs
+            nc = 1 + 2 * len(self._harmonics_of(parts))
             if len(h.mech) != run.n_mech * nc or len(h.therm) != run.n_therm * nc:
                 what = (
                     f"/harmonics has {len(h.mech)} + {len(h.therm)} coefficients, expected "
@@ -287,11 +301,16 @@ class Recording:
     def _summaries(self):
         return [self._points[i]["/summary"] for i in self.points]
 
-    def _start(self) -> dict[str, Any]:
-        return {
+    def _start(self, branch: bool = False) -> dict[str, Any]:
+        cols: dict[str, Any] = {
             "index": pd.Series(self.points, dtype="int64"),
             "omega_rad_s": pd.Series([s.omega_rad_s for s in self._summaries()], dtype="float64"),
         }
+        if branch:
+            cols["branch"] = pd.Series(
+                [_branch_of(s) for s in self._summaries()], dtype="int64"
+            )
+        return cols
 
     def _entity_columns(
         self,
@@ -317,7 +336,8 @@ class Recording:
 
     @cached_property
     def branch(self) -> pd.DataFrame:
-        """One row per complete point: ``index``, ``omega_rad_s``, ``arc_length``,
+        """One row per complete point: ``index``, ``omega_rad_s``, ``branch`` (0 the run's
+        branch, k > 0 the k-th of :attr:`branches`), ``arc_length``,
         ``stable`` (boolean; from ``/floquet``, missing without it), ``bifurcation``
         (type detected since the previous point, missing for none), ``spectral_radius``,
         ``unstable_count``, ``real_above_one`` (from ``/floquet``), ``residual_mech``,
@@ -327,7 +347,7 @@ class Recording:
         ``amp_rms_node<id>_m`` per dynamic node (RMS radial amplitude, paper Eq. 35)."""
         summaries = self._summaries()
         floquet = [self._points[i].get("/floquet") for i in self.points]
-        cols = self._start()
+        cols = self._start(branch=True)
         cols["arc_length"] = pd.Series([s.arc_length for s in summaries], dtype="float64")
         cols["stable"] = pd.array(
             [None if f is None else _STABILITY.get(int(f.stability)) for f in floquet],
@@ -351,7 +371,12 @@ class Recording:
             [int(s.newton_iterations) for s in summaries], dtype="int64"
         )
         cols["half_order_share"] = pd.Series(
-            [self._half_order_share(self._points[i].get("/harmonics")) for i in self.points],
+            [
+                self._half_order_share(
+                    self._points[i].get("/harmonics"), self._harmonics_of(self._points[i])
+                )
+                for i in self.points
+            ],
             dtype="float64",
         )
         amps = np.full((len(self.points), len(self._node_keys)), np.nan)
@@ -362,11 +387,11 @@ class Recording:
             cols[f"amp_rms_{k}_m"] = amps[:, j]
         return pd.DataFrame(cols)
 
-    def _half_order_share(self, h: Any) -> float:
+    def _half_order_share(self, h: Any, harmonics: list[Any]) -> float:
         """As ``derive::half_order_share`` of the Rust crate."""
         half = [
             r.den > 0 and (2 * r.num) % r.den == 0 and ((2 * r.num) // r.den) % 2 == 1
-            for r in self.run_info.harmonics
+            for r in harmonics
         ]
         if not any(half) or h is None:
             return math.nan
@@ -592,6 +617,36 @@ class Recording:
         return df
 
     @cached_property
+    def branches(self) -> pd.DataFrame:
+        """One row per branch beside the run's own (``/branches``): ``branch``, ``kind``
+        (``period_doubled``: switched to at a period doubling), ``parent`` (the branch it
+        leaves from), ``origin_bifurcation`` (its number on ``/bifurcations``),
+        ``origin_omega_rad_s``, ``harmonics`` (its basis, ``"num/den"`` strings). Empty for
+        a recording with one branch; :attr:`branch` has each point's ``branch``."""
+        rows = [
+            {
+                "branch": int(b.branch),
+                "kind": b.kind,
+                "parent": int(b.parent),
+                "origin_bifurcation": int(b.origin_bifurcation),
+                "origin_omega_rad_s": float(b.origin_omega_rad_s),
+                "harmonics": [f"{r.num}/{r.den}" for r in b.harmonics],
+            }
+            for b in self._scan.branches
+        ]
+        return pd.DataFrame(
+            rows,
+            columns=[
+                "branch",
+                "kind",
+                "parent",
+                "origin_bifurcation",
+                "origin_omega_rad_s",
+                "harmonics",
+            ],
+        )
+
+    @cached_property
     def harmonics(self) -> pd.DataFrame:
         """Harmonic coefficients, one row per (complete point, DoF).
 
@@ -604,7 +659,8 @@ class Recording:
         ``nu_h = basis[h-1]`` (also in ``DataFrame.attrs["basis"]`` as ``"num/den"``
         strings). Units of the coefficients: m (translations) or rad (rotations) for
         ``mech``, °C for ``therm`` — mixed, hence no unit suffix. Points without
-        ``/harmonics`` have no rows.
+        ``/harmonics`` have no rows, nor have the points of a branch on a basis of its own
+        (:attr:`branches`; their coefficients are in :meth:`orbit`'s basis).
         """
         run = self.run_info
         h_count = len(self.basis)
@@ -622,7 +678,7 @@ class Recording:
         blocks, index, omega, kind, dof, column = [], [], [], [], [], []
         for i in self.points:
             h = self._points[i].get("/harmonics")
-            if h is None:
+            if h is None or len(self._harmonics_of(self._points[i])) != h_count:
                 continue
             w = self._points[i]["/summary"].omega_rad_s
             c = np.concatenate(
@@ -688,14 +744,17 @@ class Recording:
             raise ValueError(f"point {point} has no /harmonics message")
         run = self.run_info
         omega = parts["/summary"].omega_rad_s
-        period = self._period(omega)
+        harmonics = self._harmonics_of(parts)
+        den = math.lcm(*(int(r.den) for r in harmonics))
+        period = 2.0 * math.pi * den / omega
+        nu = np.array([float(r.num) / float(r.den) for r in harmonics])
         # the same operations, in the same order, as the Rust crate's derive::sample_times
         # and Basis::trig_table
         t = period * np.arange(samples, dtype=float) / float(samples)
-        arg = np.outer(t, self._nu * omega)
+        arg = np.outer(t, nu * omega)
         cos, sin = np.cos(arg), np.sin(arg)
-        nh = len(self.basis)
-        c = np.asarray(h.mech, dtype=float).reshape(run.n_mech, self._n_coeffs)
+        nh = len(harmonics)
+        c = np.asarray(h.mech, dtype=float).reshape(run.n_mech, 1 + 2 * nh)
         cols: dict[str, np.ndarray] = {"t_s": t}
         for n, key in zip(run.nodes, self._node_keys):
             for axis, d in (("x", n.dof_x), ("y", n.dof_y)):
@@ -726,6 +785,12 @@ class Recording:
         df = pd.DataFrame(cols)
         df.attrs.update(index=int(point), omega_rad_s=o.omega_rad_s, period_s=o.period_s)
         return df
+
+
+def _branch_of(summary: Any) -> int:
+    """The ``branch`` of a ``/summary`` message; 0 in recordings written before branches
+    were recorded (their schema has no such field)."""
+    return int(getattr(summary, "branch", 0))
 
 
 def _text(s: str) -> str | None:

@@ -101,6 +101,32 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some((lo, hi)) = rec.omega_range() {
         writeln!(out, "ω range:     {lo:.4} … {hi:.4} rad/s")?;
     }
+    if !rec.branches.is_empty() {
+        writeln!(out, "branches:    {}", rec.branches.len() + 1)?;
+        for k in rec.branch_numbers() {
+            let on: Vec<&crate::record::PointRecord> =
+                rec.points.iter().filter(|p| p.branch == k).collect();
+            let range = match (on.first(), on.last()) {
+                (Some(a), Some(b)) => format!(
+                    "points {}–{}, ω {:.4} → {:.4} rad/s",
+                    a.index, b.index, a.omega_rad_s, b.omega_rad_s
+                ),
+                _ => "no points".to_string(),
+            };
+            let what = match rec.branches.iter().find(|b| b.branch == k) {
+                None => "the run's".to_string(),
+                Some(b) => format!(
+                    "{} from bifurcation #{} of branch {} at ω = {:.4} rad/s, {} harmonics",
+                    b.kind,
+                    u64::from(b.origin_bifurcation) + 1,
+                    b.parent,
+                    b.origin_omega_rad_s,
+                    b.harmonics.len()
+                ),
+            };
+            writeln!(out, "  branch {k}: {what}; {} {range}", on.len())?;
+        }
+    }
     let unstable = rec
         .points
         .iter()

@@ -22,7 +22,6 @@ pub fn run(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    let run = &rec.run;
     let p = rec.point(point).with_context(|| {
         let last = rec
             .points
@@ -34,6 +33,9 @@ pub fn run(
             rec.points.len()
         )
     })?;
+    let run = &*rec
+        .run_of(p.branch)
+        .with_context(|| format!("point {point}: its branch {} is not described", p.branch))?;
     if samples == 0 {
         bail!("--samples must be at least 1");
     }

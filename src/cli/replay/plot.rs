@@ -88,7 +88,10 @@ fn period_doubled_dots(rec: &Recording, y: impl Fn(&PointRecord) -> Option<f64>)
     let points: Vec<(f64, f64)> = rec
         .points
         .iter()
-        .filter(|p| is_period_doubled(&rec.run, p))
+        .filter(|p| {
+            rec.run_of(p.branch)
+                .is_some_and(|run| is_period_doubled(&run, p))
+        })
         .filter_map(|p| Some((p.omega_rad_s, y(p)?)))
         .collect();
     (!points.is_empty()).then(|| Series {
@@ -126,6 +129,22 @@ fn bifurcation_entry(bifs: &[BifurcationRecord]) -> Option<LegendEntry> {
     })
 }
 
+/// `(ω, y, stable)` of every point, with a break (no y) where the branch changes: each
+/// branch of the recording is its own line.
+fn per_branch(
+    rec: &Recording,
+    f: impl Fn(usize, &PointRecord) -> (f64, Option<f64>, Option<bool>),
+) -> Vec<(f64, Option<f64>, Option<bool>)> {
+    let mut out = Vec::with_capacity(rec.points.len());
+    for (i, p) in rec.points.iter().enumerate() {
+        if i > 0 && rec.points[i - 1].branch != p.branch {
+            out.push((p.omega_rad_s, None, None));
+        }
+        out.push(f(i, p));
+    }
+    out
+}
+
 /// One panel against ω in the stability colours, with its legend to the right.
 fn branch_figure(
     rec: &Recording,
@@ -135,7 +154,7 @@ fn branch_figure(
     marker_y: impl Fn(&BifurcationRecord) -> Option<f64>,
 ) -> Figure {
     let mut series = branch_series(
-        rec.points.iter().map(|p| (p.omega_rad_s, y(p), p.stable)),
+        per_branch(rec, |_, p| (p.omega_rad_s, y(p), p.stable)),
         BranchStyle::Colours,
     );
     series.extend(period_doubled_dots(rec, &y));
@@ -350,7 +369,7 @@ impl Plotter<'_> {
         for (b, info) in rec.run.bearings.iter().enumerate() {
             let c = colour(b);
             let mut s = branch_series(
-                rec.points.iter().map(|p| {
+                per_branch(rec, |_, p| {
                     (
                         p.omega_rad_s,
                         p.clearances.get(b).map(|c| c.delta_v_m * 1e6),
@@ -551,7 +570,10 @@ impl Plotter<'_> {
         let mut panels = Vec::new();
         for &i in &peaks {
             let p = &rec.points[i];
-            let orbits = derive::orbits(run, &p.coeffs_mech, p.omega_rad_s, period_samples(run))?;
+            let own = rec.run_of(p.branch).ok_or_else(|| {
+                anyhow::anyhow!("point {}: branch {} not described", p.index, p.branch)
+            })?;
+            let orbits = derive::orbits(&own, &p.coeffs_mech, p.omega_rad_s, period_samples(&own))?;
             for rotor in &rotors {
                 let series = run
                     .nodes
@@ -618,7 +640,12 @@ impl Plotter<'_> {
 
     fn bearing_loads(&mut self, point: Option<&PointRecord>) -> anyhow::Result<()> {
         let rec = self.rec;
-        let run = &rec.run;
+        // the chosen point's branch gives the basis
+        let branch = point.map_or(0, |p| p.branch);
+        let own = rec
+            .run_of(branch)
+            .ok_or_else(|| anyhow::anyhow!("branch {branch} is not described"))?;
+        let run = &*own;
         if run.bearings.is_empty() {
             return Ok(());
         }
@@ -717,10 +744,9 @@ impl Plotter<'_> {
         let mut panels = Vec::new();
         for (b, info) in run.bearings.iter().enumerate() {
             let mut series = branch_series(
-                rec.points
-                    .iter()
-                    .enumerate()
-                    .map(|(i, p)| (p.omega_rad_s, stats[i].get(b).map(|s| s.0), p.stable)),
+                per_branch(rec, |i, p| {
+                    (p.omega_rad_s, stats[i].get(b).map(|s| s.0), p.stable)
+                }),
                 BranchStyle::Colours,
             );
             // the lowest, then the highest load over a period: one legend entry
@@ -838,7 +864,7 @@ fn temperature_groups(rec: &Recording) -> Figure {
             let mut series = Vec::new();
             for (t, label, c) in &g.members {
                 let mut s = branch_series(
-                    rec.points.iter().map(|p| {
+                    per_branch(rec, |_, p| {
                         (
                             p.omega_rad_s,
                             p.temperatures.get(*t).map(|s| s.mean_c),

@@ -35,9 +35,14 @@ pub fn run(rec: &Recording, target: &Path, out: &mut dyn Write) -> anyhow::Resul
     let mut sink = McapSink::create(target, options)?;
     sink.begin_run(&rec.run)?;
     let mut bifs = rec.bifurcations.iter().peekable();
+    let mut branches = rec.branches.iter().peekable();
     for p in &rec.points {
         while let Some(b) = bifs.next_if(|b| b.after_point < p.index) {
             sink.write_bifurcation(b)?;
+        }
+        // a branch is described before its first point
+        while let Some(b) = branches.next_if(|b| b.branch <= p.branch) {
+            sink.write_branch(b)?;
         }
         sink.write_point(p)?;
     }

@@ -89,6 +89,45 @@ pub fn run(
              is extrapolated from N and N/2 intervals)"
         );
     }
+    // a recording with several branches: each on its own basis, compared in turn
+    if method.is_none() && !rec.branches.is_empty() {
+        let mut total = StabilityComparison {
+            compared: 0,
+            max_deviation: None,
+            flag_changes: Vec::new(),
+        };
+        for k in rec.branch_numbers() {
+            let Some(run) = rec.run_of(k) else { continue };
+            let hooks = rederivers_with_intervals(&run, sip_intervals);
+            let Some(m) = &hooks.stability else {
+                return Err(NotAvailable(format!(
+                    "Floquet multipliers cannot be recomputed for {} (branch {k}): {}",
+                    rec.file.display(),
+                    hooks.unavailable_reason
+                ))
+                .into());
+            };
+            let sub = Recording {
+                run: run.into_owned(),
+                points: rec
+                    .points
+                    .iter()
+                    .filter(|p| p.branch == k)
+                    .cloned()
+                    .collect(),
+                ..rec.clone()
+            };
+            let c = with_progress(|progress| compare_with(&sub, m.as_ref(), progress))?;
+            total.compared += c.compared;
+            if let Some((d, i)) = c.max_deviation
+                && total.max_deviation.is_none_or(|(t, _)| d > t)
+            {
+                total.max_deviation = Some((d, i));
+            }
+            total.flag_changes.extend(c.flag_changes);
+        }
+        return report(total, sip_intervals, out);
+    }
     let hooks;
     let method = match method {
         Some(m) => m,
@@ -115,6 +154,15 @@ pub fn run(
         }
     };
     let c = with_progress(|progress| compare_with(rec, method, progress))?;
+    report(c, sip_intervals, out)
+}
+
+/// Prints a comparison.
+fn report(
+    c: StabilityComparison,
+    sip_intervals: Option<usize>,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
     if let Some(n) = sip_intervals {
         writeln!(out, "recomputed with sip_intervals = {n}")?;
     }
