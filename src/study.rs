@@ -144,6 +144,14 @@ pub struct SweepSettings {
     /// Maximum number of points. Default 2000, far above the 150–500 points a sweep of the
     /// paper's range takes: a guard against a branch that never reaches the end.
     pub max_points: usize,
+    /// Follow the period-doubled branch from every period doubling the sweep locates,
+    /// each recorded as a branch of its own beside the run's (branch 1, 2, …; see
+    /// `SweepProblem::run`). Default true. It takes effect on the primary basis
+    /// (`half_orders = false`) with stability on: there a period doubling is located as
+    /// such, and its branch needs the half orders the basis lacks. On the paper's basis the
+    /// half orders are already in; a period doubling there would need quarter orders, a
+    /// basis three times as large, and is left to the user.
+    pub switch_branches: bool,
 }
 
 impl Default for SweepSettings {
@@ -153,6 +161,7 @@ impl Default for SweepSettings {
             omega_end: 700.0,
             ds_max: 0.15,
             max_points: 2000,
+            switch_branches: true,
         }
     }
 }
@@ -207,6 +216,7 @@ pub struct FlatSettings {
     pub omega_end: f64,
     pub ds_max: f64,
     pub max_points: usize,
+    pub switch_branches: bool,
     pub thermal: bool,
     pub stability: bool,
     pub stability_method: StabilityChoice,
@@ -245,6 +255,7 @@ impl From<StudySettings> for FlatSettings {
             omega_end: sweep.omega_end,
             ds_max: sweep.ds_max,
             max_points: sweep.max_points,
+            switch_branches: sweep.switch_branches,
             thermal: operating.thermal,
             stability: floquet.stability,
             stability_method: floquet.stability_method,
@@ -278,6 +289,7 @@ impl From<FlatSettings> for StudySettings {
                 omega_end: f.omega_end,
                 ds_max: f.ds_max,
                 max_points: f.max_points,
+                switch_branches: f.switch_branches,
             },
             floquet: FloquetSettings {
                 stability: f.stability,
@@ -730,6 +742,7 @@ mod tests {
             "omega_end",
             "ds_max",
             "max_points",
+            "switch_branches",
             "thermal",
             "stability",
             "stability_method",

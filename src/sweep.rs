@@ -18,13 +18,16 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use thiserror::Error;
 
+use crate::continuation::switch::{SwitchOptions, half_order_share, switch_at_period_doubling};
 use crate::continuation::{
     BranchPoint, Continuation, ContinuationError, ContinuationOptions, DriveEnd, FinishReason,
-    StepOutcome, Timings,
+    StepOutcome, Timings, crosses,
 };
 use crate::derive::{Stretch, period_doubled_stretches, point_half_order_share};
 use crate::hb::HarmonicBalance;
-use crate::record::types::{BifurcationRecord, FloquetCounts, PointRecord, RunInfo, RunStatus};
+use crate::record::types::{
+    BifurcationRecord, BranchRecord, FloquetCounts, PointRecord, RunInfo, RunStatus,
+};
 use crate::record::{RecordError, Sink};
 use crate::stability::{BifurcationKind, ExpSip, FloquetResult, StabilityError, StabilityMethod};
 pub use crate::study::{
@@ -107,7 +110,10 @@ pub struct Progress {
 /// What a finished sweep reports.
 #[derive(Clone, Debug)]
 pub struct SweepReport {
+    /// Recorded points, those of followed branches included.
     pub points: usize,
+    /// Located bifurcations (ω, label) of the run's own branch; those of the followed
+    /// branches are in `branches`.
     pub bifurcations: Vec<(f64, String)>,
     pub status: RunStatus,
     /// How the continuation ended, when it did (`None` when interrupted or failed).
@@ -134,6 +140,9 @@ pub struct SweepReport {
     /// Warnings about the branch, also written to the recording's `/log`: changes of
     /// stability that could not be located, folds the multipliers do not confirm.
     pub warnings: Vec<String>,
+    /// The period-doubled branches followed from the run's period doublings (see
+    /// [`SweepSettings::switch_branches`]); their points are counted in `points`.
+    pub branches: Vec<FollowedBranch>,
 }
 
 /// What one step of the branch (from point `after_point` to the next) says beyond its
@@ -568,18 +577,10 @@ impl SweepProblem {
         let mut cont = self.continuation(stab)?;
 
         sink.begin_run(&self.run)?;
-        let mut prog = Progress::default();
-        let mut bifs = Vec::new();
-        let mut n_bif = 0u32;
+        let mut rec = Recorder::new(&self.run);
         let mut finish = None;
         let mut lead_in_from = None;
-        let mut record_seconds = 0.0;
-        let (mut stable_points, mut unstable_points) = (0, 0);
-        let mut warnings = Vec::new();
-        // the last recorded point's ω and stability, for the audit of the next step
-        let mut previous: Option<(f64, Option<FloquetResult>)> = None;
-        // (index, ω, ω/2 share) per point, for the period-doubled stretches
-        let mut shares = Vec::new();
+        let mut branches = Vec::new();
         let interrupted = || {
             interrupt
                 .as_ref()
@@ -604,85 +605,15 @@ impl SweepProblem {
                         point,
                         bifurcations,
                     } => {
-                        let after_point = prog.points.saturating_sub(1) as u64;
-                        let kinds: Vec<BifurcationKind> =
-                            bifurcations.iter().filter_map(|b| b.bifurcation).collect();
-                        let audit = if prog.points == 0 {
-                            StepAudit::default()
-                        } else {
-                            audit_step(
-                                previous.as_ref().and_then(|(_, f)| f.as_ref()),
-                                point.stability.as_ref(),
-                                &kinds,
-                                (
-                                    previous.as_ref().map_or(f64::NAN, |(w, _)| *w),
-                                    point.solution.omega,
-                                ),
-                                after_point,
-                            )
-                        };
-                        for ((b, kind), confirmed) in bifurcations
-                            .iter()
-                            .filter_map(|b| b.bifurcation.map(|k| (b, k)))
-                            .zip(audit.confirmed.iter().copied())
-                        {
-                            let rec = BifurcationRecord {
-                                branch: 0,
-                                // 0, 1, … (the schema's running number)
-                                number: n_bif,
-                                kind,
-                                omega_rad_s: b.solution.omega,
-                                arc_length: b.arclength,
-                                after_point,
-                                amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
-                                multipliers: b
-                                    .stability
-                                    .as_ref()
-                                    .map(|f| f.multipliers.clone())
-                                    .unwrap_or_default(),
-                                confirmed,
-                                coeffs_mech: b.solution.mech.clone(),
-                                coeffs_therm: b.solution.therm.clone(),
-                            };
-                            sink.write_bifurcation(&rec)?;
-                            n_bif += 1;
-                            bifs.push((b.solution.omega, kind.label().to_string()));
-                        }
-                        for note in audit.notes {
-                            sink.write_note(after_point, &note)?;
-                            warnings.push(note);
-                        }
-                        previous = Some((point.solution.omega, point.stability.clone()));
-                        let recording = std::time::Instant::now();
-                        let mut rec = self.point_record(prog.points as u64, &point)?;
-                        // the point after located bifurcations carries the first one's type
-                        // (`/summary.bifurcation`, the `bifurcation` column of `replay branch`)
-                        if rec.bifurcation.is_none() {
-                            rec.bifurcation = kinds.first().copied();
-                        }
-                        shares.push((
-                            rec.index,
-                            rec.omega_rad_s,
-                            point_half_order_share(&self.run, &rec),
-                        ));
-                        sink.write_point(&rec)?;
-                        match rec.stable {
-                            Some(true) => stable_points += 1,
-                            Some(false) => unstable_points += 1,
-                            None => {}
-                        }
-                        record_seconds += recording.elapsed().as_secs_f64();
-                        prog.points += 1;
-                        prog.omega_rad_s = point.solution.omega;
-                        prog.bifurcations = bifs.len();
-                        prog.fraction = ((point.solution.omega - s.sweep.omega_start)
+                        rec.accept(self, sink, &point, &bifurcations)?;
+                        rec.prog.fraction = ((point.solution.omega - s.sweep.omega_start)
                             / (s.sweep.omega_end - s.sweep.omega_start))
                             .clamp(0.0, 1.0);
-                        progress(&prog);
+                        progress(&rec.prog);
                     }
                     StepOutcome::Rejected(_) => {
-                        prog.rejected_steps += 1;
-                        progress(&prog);
+                        rec.prog.rejected_steps += 1;
+                        progress(&rec.prog);
                     }
                     StepOutcome::Finished(f) => finish = Some(f),
                 }
@@ -710,13 +641,13 @@ impl SweepProblem {
                 Ok(DriveEnd::Paused) => continue,
                 Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
                     // reach the start by continuation from where the response is milder
-                    prog.lead_in = true;
+                    rec.prog.lead_in = true;
                     let mut at = |w: f64| {
-                        prog.omega_rad_s = w;
-                        progress(&prog);
+                        rec.prog.omega_rad_s = w;
+                        progress(&rec.prog);
                     };
                     let found = self.lead_in(&interrupted, &mut at, pools)?;
-                    prog.lead_in = false;
+                    rec.prog.lead_in = false;
                     let (from, guess) = match found {
                         LeadIn::Reached { from, coeffs } => (from, coeffs),
                         // (`lead_in` hands out only a reached start or an interruption)
@@ -733,25 +664,45 @@ impl SweepProblem {
                 }
                 Err(e) => return Err(e.into()),
             }
-        })();
+        })()
+        .and_then(|status| {
+            if status != RunStatus::Completed || !self.switches_branches() {
+                return Ok(status);
+            }
+            let mut progress = |p: &Progress| progress(p);
+            branches = self.follow_period_doublings(
+                &mut rec,
+                sink,
+                stab,
+                pools,
+                &interrupted,
+                &mut progress,
+            )?;
+            Ok(if interrupted() {
+                RunStatus::Interrupted
+            } else {
+                status
+            })
+        });
         match result {
             Ok(status) => {
                 sink.finish(status.clone())?;
                 Ok(SweepReport {
-                    points: prog.points,
-                    bifurcations: bifs,
+                    points: rec.prog.points,
+                    bifurcations: rec.bifurcations,
                     status,
                     finish,
                     total_seconds: start.elapsed().as_secs_f64(),
                     stability_note: None,
-                    rejected_steps: prog.rejected_steps,
-                    period_doubled: period_doubled_stretches(shares),
+                    rejected_steps: rec.prog.rejected_steps,
+                    period_doubled: period_doubled_stretches(rec.shares),
                     lead_in_from,
                     timings: cont.timings(),
-                    record_seconds,
-                    stable_points,
-                    unstable_points,
-                    warnings,
+                    record_seconds: rec.record_seconds,
+                    stable_points: rec.stable_points,
+                    unstable_points: rec.unstable_points,
+                    warnings: rec.warnings,
+                    branches,
                 })
             }
             Err(e) => {
@@ -765,11 +716,151 @@ impl SweepProblem {
         })
     }
 
+    /// Whether [`Self::run`] follows the period-doubled branches: `switch_branches` on the
+    /// primary basis with stability on (see [`SweepSettings::switch_branches`]).
+    pub fn switches_branches(&self) -> bool {
+        let s = &self.settings;
+        s.sweep.switch_branches && !s.harmonic.half_orders && s.floquet.stability
+    }
+
+    /// Follows the period-doubled branch of every period doubling `rec` located on the
+    /// run's branch, each recorded as a branch of its own (numbers 1, 2, … in the order of
+    /// the period doublings): a start beside the period doubling on the doubled basis
+    /// ([`switch_at_period_doubling`]), then a continuation with stability away from it
+    /// over the sweep's range, until the half-order share falls below
+    /// [`SwitchOptions::min_share`] (the branch has rejoined the run's branch, at another
+    /// period doubling or the same), it leaves the range, or a continuation end. A period
+    /// doubling where an earlier switched branch rejoined is not switched at again: its
+    /// branch is that one. A period doubling without a start is reported as a warning.
+    fn follow_period_doublings(
+        &self,
+        rec: &mut Recorder,
+        sink: &mut dyn Sink,
+        stab: Option<&dyn StabilityMethod>,
+        pools: &dyn StepPools,
+        interrupted: &dyn Fn() -> bool,
+        progress: &mut dyn FnMut(&Progress),
+    ) -> Result<Vec<FollowedBranch>, SweepError> {
+        let s = &self.settings;
+        let switch = SwitchOptions {
+            aft_samples: s.harmonic.aft_samples.map(|n| 2 * n),
+            ..SwitchOptions::default()
+        };
+        let (lo, hi) = (
+            s.sweep.omega_start.min(s.sweep.omega_end),
+            s.sweep.omega_start.max(s.sweep.omega_end),
+        );
+        let doublings = std::mem::take(&mut rec.period_doublings);
+        let mut followed: Vec<FollowedBranch> = Vec::new();
+        for (number, pd) in doublings {
+            if interrupted() {
+                break;
+            }
+            if followed
+                .iter()
+                .any(|b| b.rejoined.is_some_and(|(a, z)| crosses(a, z, pd.omega)))
+            {
+                continue;
+            }
+            let start = match switch_at_period_doubling(&self.system, &self.basis, &pd, &switch) {
+                Ok(start) => start,
+                Err(e) => {
+                    let note = format!(
+                        "period doubling #{number} at ω = {:.4} rad/s: no period-doubled branch followed ({e})",
+                        pd.omega
+                    );
+                    sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
+                    rec.warnings.push(note);
+                    continue;
+                }
+            };
+            let branch = BranchRecord {
+                branch: followed.len() as u32 + 1,
+                kind: "period_doubled".into(),
+                parent: 0,
+                origin_bifurcation: number,
+                origin_omega_rad_s: pd.omega,
+                harmonics: start.basis.harmonics().to_vec(),
+            };
+            sink.write_branch(&branch)?;
+            let run = branch.run_of(&self.run);
+            rec.begin_branch(branch.branch, &run);
+            let first_index = rec.prog.points;
+            let to = if start.omega >= pd.omega { hi } else { lo };
+            let hb = HarmonicBalance::new(&self.system, &start.basis, switch.aft_samples)?;
+            let mut opts = ContinuationOptions::new(start.omega, to);
+            opts.ds_max = s.sweep.ds_max;
+            opts.ds_initial = opts.ds_initial.min(s.sweep.ds_max);
+            opts.max_points = s.sweep.max_points;
+            opts.initial_guess = Some(start.unknowns.clone());
+            opts.omega_bounds = Some((lo, hi));
+            opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
+            opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
+            opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;
+            let mut cont = Continuation::new(hb, opts, stab)?;
+            let mut last_omega = start.omega;
+            let end = loop {
+                if interrupted() {
+                    break BranchEnd::Interrupted;
+                }
+                match step_in(pools, &mut cont) {
+                    Ok(StepOutcome::Accepted {
+                        point,
+                        bifurcations,
+                    }) => {
+                        let share =
+                            half_order_share(&point.solution.unknowns(), &self.basis, &start.basis);
+                        if share < switch.min_share {
+                            break BranchEnd::Rejoined {
+                                between: (last_omega, point.solution.omega),
+                            };
+                        }
+                        last_omega = point.solution.omega;
+                        rec.accept(self, sink, &point, &bifurcations)?;
+                        progress(&rec.prog);
+                    }
+                    Ok(StepOutcome::Rejected(_)) => {
+                        rec.prog.rejected_steps += 1;
+                        progress(&rec.prog);
+                    }
+                    Ok(StepOutcome::Finished(f)) => break BranchEnd::Finished(f),
+                    Err(e) => break BranchEnd::Failed(e.to_string()),
+                }
+            };
+            if let BranchEnd::Failed(why) = &end {
+                let note = format!("branch {}: {why}", branch.branch);
+                sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
+                rec.warnings.push(note);
+            }
+            followed.push(FollowedBranch {
+                branch: branch.branch,
+                origin_omega_rad_s: pd.omega,
+                points: rec.prog.points - first_index,
+                bifurcations: rec.branch_bifurcations.clone(),
+                omega_range: rec.branch_range.unwrap_or((start.omega, start.omega)),
+                rejoined: match end {
+                    BranchEnd::Rejoined { between } => Some(between),
+                    _ => None,
+                },
+                end: end.to_string(),
+            });
+            rec.begin_branch(0, &self.run);
+        }
+        Ok(followed)
+    }
+
     /// Converts one branch point into the recorded form, with bearing loads, clearances
-    /// and thermal forces evaluated through the model over one period.
-    pub fn point_record(&self, index: u64, p: &BranchPoint) -> Result<PointRecord, SweepError> {
-        let mut rec = crate::derive::point_record(self, index, &p.solution, RECORD_SAMPLES)
-            .map_err(|e| SweepError::Derive(e.to_string()))?;
+    /// and thermal forces evaluated through the model over one period; `run` describes the
+    /// points of the point's branch (the run's own, or [`BranchRecord::run_of`]).
+    pub fn point_record(
+        &self,
+        run: &RunInfo,
+        index: u64,
+        p: &BranchPoint,
+    ) -> Result<PointRecord, SweepError> {
+        let mut rec =
+            crate::derive::point_record(&self.system, run, index, &p.solution, RECORD_SAMPLES)
+                .map_err(|e| SweepError::Derive(e.to_string()))?;
         rec.arc_length = p.arclength;
         rec.stable = p.stable();
         rec.bifurcation = p.bifurcation;
@@ -779,6 +870,202 @@ impl SweepProblem {
             rec.floquet_counts = Some(FloquetCounts::of(f));
         }
         Ok(rec)
+    }
+}
+
+/// A period-doubled branch a sweep followed (see `SweepProblem::run`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FollowedBranch {
+    /// Its number in the recording (1, 2, …).
+    pub branch: u32,
+    /// ω of the period doubling it leaves from (rad/s).
+    pub origin_omega_rad_s: f64,
+    /// Recorded points.
+    pub points: usize,
+    /// Smallest and largest ω of its points (rad/s).
+    pub omega_range: (f64, f64),
+    /// Where it rejoined the run's branch: ω of its last point and of the first solution
+    /// without a half-order part; a period doubling of the run's branch between the two
+    /// is where it ends.
+    pub rejoined: Option<(f64, f64)>,
+    /// Its located bifurcations (ω, label), in branch order.
+    pub bifurcations: Vec<(f64, String)>,
+    /// How it ended, in words.
+    pub end: String,
+}
+
+/// How the continuation of a switched branch ended.
+enum BranchEnd {
+    Rejoined { between: (f64, f64) },
+    Finished(FinishReason),
+    Failed(String),
+    Interrupted,
+}
+
+impl std::fmt::Display for BranchEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Rejoined { between } => write!(
+                f,
+                "rejoined the run's branch between ω = {:.3} and {:.3} rad/s",
+                between.0, between.1
+            ),
+            Self::Finished(r) => write!(f, "{r}"),
+            Self::Failed(why) => write!(f, "stopped: {why}"),
+            Self::Interrupted => write!(f, "interrupted"),
+        }
+    }
+}
+
+/// What a sweep has recorded so far, over all its branches: the point count (the next
+/// point's index), the located bifurcations (numbered in one sequence), counts, warnings;
+/// and for the branch being recorded its number, how its points are described, and the
+/// previous point for the audit of the next step.
+struct Recorder {
+    prog: Progress,
+    run: RunInfo,
+    branch: u32,
+    /// ω and stability of the branch's last recorded point.
+    previous: Option<(f64, Option<FloquetResult>)>,
+    /// ω range of the branch's points so far.
+    branch_range: Option<(f64, f64)>,
+    /// Located bifurcations (ω, label) of the run's own branch, and of the switched branch
+    /// being recorded.
+    bifurcations: Vec<(f64, String)>,
+    branch_bifurcations: Vec<(f64, String)>,
+    n_bif: u32,
+    /// The run's own period doublings (number, solution there), for branch switching.
+    period_doublings: Vec<(u32, crate::hb::HbSolution)>,
+    /// (index, ω, ω/2 share) per point of the run's own branch.
+    shares: Vec<(u64, f64, Option<f64>)>,
+    record_seconds: f64,
+    stable_points: usize,
+    unstable_points: usize,
+    warnings: Vec<String>,
+}
+
+impl Recorder {
+    fn new(run: &RunInfo) -> Self {
+        Self {
+            prog: Progress::default(),
+            run: run.clone(),
+            branch: 0,
+            previous: None,
+            branch_range: None,
+            bifurcations: Vec::new(),
+            branch_bifurcations: Vec::new(),
+            n_bif: 0,
+            period_doublings: Vec::new(),
+            shares: Vec::new(),
+            record_seconds: 0.0,
+            stable_points: 0,
+            unstable_points: 0,
+            warnings: Vec::new(),
+        }
+    }
+
+    /// Points from here on belong to branch `branch`, described by `run`.
+    fn begin_branch(&mut self, branch: u32, run: &RunInfo) {
+        self.branch = branch;
+        self.run = run.clone();
+        self.previous = None;
+        self.branch_range = None;
+        self.branch_bifurcations.clear();
+    }
+
+    /// Records an accepted point and the bifurcations located on the step to it: the
+    /// step's audit, each bifurcation, the point (carrying the first bifurcation's type).
+    fn accept(
+        &mut self,
+        problem: &SweepProblem,
+        sink: &mut dyn Sink,
+        point: &BranchPoint,
+        bifurcations: &[BranchPoint],
+    ) -> Result<(), SweepError> {
+        let after_point = self.prog.points.saturating_sub(1) as u64;
+        let kinds: Vec<BifurcationKind> =
+            bifurcations.iter().filter_map(|b| b.bifurcation).collect();
+        let audit = match &self.previous {
+            None => StepAudit::default(),
+            Some((w, f)) => audit_step(
+                f.as_ref(),
+                point.stability.as_ref(),
+                &kinds,
+                (*w, point.solution.omega),
+                after_point,
+            ),
+        };
+        for ((b, kind), confirmed) in bifurcations
+            .iter()
+            .filter_map(|b| b.bifurcation.map(|k| (b, k)))
+            .zip(audit.confirmed.iter().copied())
+        {
+            let rec = BifurcationRecord {
+                branch: self.branch,
+                // 0, 1, … (the schema's running number)
+                number: self.n_bif,
+                kind,
+                omega_rad_s: b.solution.omega,
+                arc_length: b.arclength,
+                after_point,
+                amplitude_rms_m: amplitudes(&self.run, &b.solution.mech),
+                multipliers: b
+                    .stability
+                    .as_ref()
+                    .map(|f| f.multipliers.clone())
+                    .unwrap_or_default(),
+                confirmed,
+                coeffs_mech: b.solution.mech.clone(),
+                coeffs_therm: b.solution.therm.clone(),
+            };
+            sink.write_bifurcation(&rec)?;
+            if self.branch == 0 && kind == BifurcationKind::PeriodDoubling {
+                self.period_doublings.push((self.n_bif, b.solution.clone()));
+            }
+            self.n_bif += 1;
+            let located = (b.solution.omega, kind.label().to_string());
+            if self.branch == 0 {
+                self.bifurcations.push(located);
+            } else {
+                self.branch_bifurcations.push(located);
+            }
+        }
+        for note in audit.notes {
+            sink.write_note(after_point, &note)?;
+            self.warnings.push(note);
+        }
+        self.previous = Some((point.solution.omega, point.stability.clone()));
+        let recording = std::time::Instant::now();
+        let mut rec = problem.point_record(&self.run, self.prog.points as u64, point)?;
+        rec.branch = self.branch;
+        // the point after located bifurcations carries the first one's type
+        // (`/summary.bifurcation`, the `bifurcation` column of `replay branch`)
+        if rec.bifurcation.is_none() {
+            rec.bifurcation = kinds.first().copied();
+        }
+        if self.branch == 0 {
+            self.shares.push((
+                rec.index,
+                rec.omega_rad_s,
+                point_half_order_share(&self.run, &rec),
+            ));
+        }
+        sink.write_point(&rec)?;
+        match rec.stable {
+            Some(true) => self.stable_points += 1,
+            Some(false) => self.unstable_points += 1,
+            None => {}
+        }
+        self.record_seconds += recording.elapsed().as_secs_f64();
+        let w = point.solution.omega;
+        self.branch_range = Some(
+            self.branch_range
+                .map_or((w, w), |(a, z)| (a.min(w), z.max(w))),
+        );
+        self.prog.points += 1;
+        self.prog.omega_rad_s = w;
+        self.prog.bifurcations = self.n_bif as usize;
+        Ok(())
     }
 }
 
@@ -806,6 +1093,7 @@ mod tests {
             stable_points: 0,
             unstable_points: 0,
             warnings: Vec::new(),
+            branches: Vec::new(),
         }
     }
 

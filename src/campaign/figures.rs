@@ -216,7 +216,7 @@ fn load_run(
     let path = dir.join(&file);
     let colour = run_colour(k);
     let rec = match read_recording(&path) {
-        Ok(rec) => rec,
+        Ok(rec) => rec.own_branch(),
         // A run that has not started, or failed before it could record, has no file:
         // it stays in the legend with nothing drawn.
         Err(ReadError::Io { source, .. })

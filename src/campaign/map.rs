@@ -424,11 +424,13 @@ pub fn read_slices(
             ));
             continue;
         }
-        let rec = read_recording(&path).map_err(|error| CampaignError::Recording {
-            run: entry.name.clone(),
-            status: entry.status.clone(),
-            error,
-        })?;
+        let rec = read_recording(&path)
+            .map_err(|error| CampaignError::Recording {
+                run: entry.name.clone(),
+                status: entry.status.clone(),
+                error,
+            })?
+            .own_branch();
         if !rec.complete {
             notes.push(format!(
                 "run {}: the recording is incomplete; mapped as far as it goes",

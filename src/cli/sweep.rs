@@ -88,6 +88,10 @@ pub struct SweepArgs {
     /// located as such.
     #[arg(long)]
     pub no_half_orders: bool,
+    /// Do not follow the period-doubled branches from the period doublings located on the
+    /// primary basis (with --no-half-orders the sweep follows each as a branch of its own).
+    #[arg(long)]
+    pub no_switch: bool,
     /// Skip Floquet stability (faster; no stable flags, and of the bifurcations only the
     /// saddle-nodes, which are the folds of the branch and need no multipliers).
     #[arg(long)]
@@ -146,6 +150,9 @@ impl SweepArgs {
         }
         if self.no_half_orders {
             s.harmonic.half_orders = false;
+        }
+        if self.no_switch {
+            s.sweep.switch_branches = false;
         }
         if self.no_stability {
             s.floquet.stability = false;
@@ -310,6 +317,21 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     }
     for (w, kind) in &report.bifurcations {
         writeln!(out, "  {kind} at ω = {w:.3} rad/s")?;
+    }
+    for b in &report.branches {
+        writeln!(
+            out,
+            "  branch {}: period-doubled, from the period doubling at ω = {:.3} rad/s, {} over {:.3}–{:.3} rad/s; {}",
+            b.branch,
+            b.origin_omega_rad_s,
+            plural(b.points, "point", "points"),
+            b.omega_range.0,
+            b.omega_range.1,
+            b.end
+        )?;
+        for (w, kind) in &b.bifurcations {
+            writeln!(out, "    {kind} at ω = {w:.3} rad/s")?;
+        }
     }
     for st in &report.period_doubled {
         writeln!(

@@ -324,6 +324,10 @@ pub struct ContinuationOptions {
     /// inside a step (folds, Neimark–Sacker and period-doubling points): the cubic
     /// Hermite curve through the step's two points and tangents, or (off) the tangent.
     pub curved_predictor: bool,
+    /// The ω range the branch may cover, when it is wider than from `omega_start` to
+    /// `omega_end` (a branch started inside a sweep's range, heading for one end, that
+    /// may fold back past its start). Default `None`: between the two.
+    pub omega_bounds: Option<(f64, f64)>,
 }
 
 impl ContinuationOptions {
@@ -353,6 +357,7 @@ impl ContinuationOptions {
             max_bisections: 60,
             initial_guess: None,
             curved_predictor: true,
+            omega_bounds: None,
         }
     }
 }
@@ -1173,7 +1178,10 @@ impl<'a> Continuation<'a> {
     }
 
     fn lo_hi(&self) -> (f64, f64) {
-        let (a, b) = (self.opts.omega_start, self.opts.omega_end);
+        let (a, b) = self
+            .opts
+            .omega_bounds
+            .unwrap_or((self.opts.omega_start, self.opts.omega_end));
         (a.min(b), a.max(b))
     }
 

@@ -13,16 +13,20 @@
 //! iteration on the new coefficients. The period-doubled branch leaves the bifurcation
 //! tangent to that mode with an amplitude growing as `√|ω − ω_PD|` (Kuznetsov,
 //! *Elements of Applied Bifurcation Theory*, 3rd ed., Springer 2004, §4.4; Seydel,
-//! *Practical Bifurcation and Stability Analysis*, 3rd ed., Springer 2010, §7.6): a Newton
-//! solve at `ω_PD ± δ` from the orbit plus a multiple of the mode, on both sides and with
-//! both signs, is kept when its half-order part does not vanish (it has not fallen back
-//! onto the `T`-periodic orbit).
+//! *Practical Bifurcation and Stability Analysis*, 3rd ed., Springer 2010, §7.6). The start
+//! is a Newton solve on `(A, ω)` with the projection of `A` on the mode fixed at a small
+//! amplitude `ε` (ω free; Seydel §5.6's parametrisation by the bifurcating direction):
+//! the `T`-periodic branch has no projection on the mode, so the solve cannot fall back
+//! onto it, and the side of `ω_PD` the doubled branch lies on comes out of the solve.
+//! `ε` is a fraction of the orbit's largest oscillating coefficient (the constant terms,
+//! static offsets or temperatures, do not measure a vibration), tried with both signs and
+//! at a tenth of it.
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
 use super::ContinuationError;
-use crate::hb::newton::{NewtonOptions, solve_fixed};
+use crate::hb::newton::{ArcConstraint, NewtonOptions, solve_arclength};
 use crate::hb::{Basis, HarmonicBalance, HbSolution, Ratio};
 use crate::system::System;
 
@@ -35,18 +39,16 @@ pub struct SwitchedStart {
     pub omega: f64,
     /// Harmonic-balance unknowns in the doubled basis.
     pub unknowns: Vec<f64>,
-    /// Share of the half-order harmonics in the start's coefficients (2-norm ratio).
+    /// Share of the half-order harmonics in the start's coefficients ([`half_order_share`]).
     pub half_order_share: f64,
 }
 
 /// Settings of [`switch_at_period_doubling`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SwitchOptions {
-    /// Distance from the period doubling at which the start is solved (rad/s, or the
-    /// unit of the continuation parameter).
-    pub delta: f64,
-    /// Amplitude of the half-order mode in the guess, relative to the largest coefficient
-    /// of the orbit.
+    /// Projection of the start's coefficients on the half-order mode, relative to the
+    /// largest oscillating coefficient of the orbit (tried as given, then a tenth of it,
+    /// with both signs).
     pub amplitude: f64,
     /// Smallest half-order share that counts as period-doubled.
     pub min_share: f64,
@@ -57,7 +59,6 @@ pub struct SwitchOptions {
 impl Default for SwitchOptions {
     fn default() -> Self {
         Self {
-            delta: 1e-3,
             amplitude: 0.05,
             min_share: 1e-4,
             aft_samples: None,
@@ -143,6 +144,35 @@ fn new_coefficients(from: &Basis, to: &Basis, n_dof: usize) -> Vec<usize> {
         .collect()
 }
 
+/// 2-norm of the coefficients `half` over the 2-norm of all oscillating coefficients of
+/// `a` (blocks of `nc`): the constant terms (static offsets, temperatures) are left out of
+/// both, as they do not measure a vibration.
+fn share_of(a: &[f64], half: &[usize], nc: usize) -> f64 {
+    let h: f64 = half.iter().map(|&i| a[i] * a[i]).sum::<f64>().sqrt();
+    let all: f64 = a
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % nc != 0)
+        .map(|(_, x)| x * x)
+        .sum::<f64>()
+        .sqrt();
+    h / all.max(1e-300)
+}
+
+/// Share of the harmonics `to` adds to `from` in the coefficients `unknowns` (basis `to`,
+/// blocks of `to.n_coeffs()` per DoF): the 2-norm of those coefficients over the 2-norm
+/// of all oscillating ones. On the doubled basis of a branch it is the period-doubled
+/// part of a solution: zero on the branch it bifurcated from, growing as `√|ω − ω_PD|` on
+/// the doubled one.
+pub fn half_order_share(unknowns: &[f64], from: &Basis, to: &Basis) -> f64 {
+    let nc = to.n_coeffs();
+    share_of(
+        unknowns,
+        &new_coefficients(from, to, unknowns.len() / nc),
+        nc,
+    )
+}
+
 fn norm(x: &[f64]) -> f64 {
     x.iter().map(|v| v * v).sum::<f64>().sqrt()
 }
@@ -187,42 +217,54 @@ pub fn switch_at_period_doubling(
         v = next.into_iter().map(|y| y / s).collect();
     }
 
-    let scale = a0.iter().fold(0.0f64, |m, x| m.max(x.abs())).max(1e-300);
-    let share = |a: &[f64]| {
-        let h: f64 = half.iter().map(|&i| a[i] * a[i]).sum::<f64>().sqrt();
-        h / norm(a).max(1e-300)
-    };
+    // the orbit's largest oscillating coefficient: the constant terms (a static offset,
+    // or a temperature in kelvin beside displacements in metres) do not set the size of
+    // a vibration
+    let nc = doubled.n_coeffs();
+    let scale = a0
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| i % nc != 0)
+        .fold(0.0f64, |m, (_, x)| m.max(x.abs()))
+        .max(1e-300);
+    let share = |a: &[f64]| share_of(a, &half, nc);
     let newton = NewtonOptions::default();
-    let mut best: Option<SwitchedStart> = None;
-    for side in [1.0, -1.0] {
+    let mut tried = Vec::new();
+    for fraction in [1.0, 0.1] {
         for sign in [1.0, -1.0] {
-            let omega = pd.omega + side * opts.delta;
-            let guess: Vec<f64> = a0
-                .iter()
-                .zip(&v)
-                .map(|(a, m)| a + sign * opts.amplitude * scale * m)
-                .collect();
-            let Ok((a, _)) = solve_fixed(&hb, omega, &guess, &newton) else {
-                continue;
+            // the half-order part's projection on the mode fixed, ω free: the branch it
+            // bifurcated from has none, so Newton cannot fall back onto it
+            let eps = sign * fraction * opts.amplitude * scale;
+            let arc = ArcConstraint {
+                anchor: &a0,
+                anchor_omega: pd.omega,
+                row: &v,
+                corner: 0.0,
+                ds: eps,
             };
-            let s = share(&a);
-            if s >= opts.min_share && best.as_ref().is_none_or(|b| s > b.half_order_share) {
-                best = Some(SwitchedStart {
-                    basis: doubled.clone(),
-                    omega,
-                    unknowns: a,
-                    half_order_share: s,
-                });
+            let guess: Vec<f64> = a0.iter().zip(&v).map(|(a, m)| a + eps * m).collect();
+            match solve_arclength(&hb, &guess, pd.omega, &arc, &newton) {
+                Ok((a, omega, _)) => {
+                    let s = share(&a);
+                    if s >= opts.min_share {
+                        return Ok(SwitchedStart {
+                            basis: doubled,
+                            omega,
+                            unknowns: a,
+                            half_order_share: s,
+                        });
+                    }
+                    tried.push(format!(
+                        "mode amplitude {eps:.3e}: ω = {omega:.6}, half-order share {s:.2e}"
+                    ));
+                }
+                Err(e) => tried.push(format!("mode amplitude {eps:.3e}: {e}")),
             }
         }
-        if best.is_some() {
-            break;
-        }
     }
-    best.ok_or_else(|| {
-        ContinuationError::Switch(format!(
-            "period doubling at {}: no period-doubled solution within {} of it",
-            pd.omega, opts.delta
-        ))
-    })
+    Err(ContinuationError::Switch(format!(
+        "period doubling at ω = {:.6}: no period-doubled solution beside it ({})",
+        pd.omega,
+        tried.join("; ")
+    )))
 }

@@ -11,19 +11,22 @@ use crate::record::types::{BearingLoad, ClearanceVariation, PointRecord, RunInfo
 use crate::stability::{FloquetResult, StabilityError};
 use crate::study::{StudyError, StudySettings, SweepProblem, stability_method};
 
-/// The recorded form of one solution of `problem` (index `index`): orbits, amplitudes and
-/// temperatures from the coefficients ([`super::point_from_coefficients`]), bearing loads,
-/// clearances and thermal forces through the model ([`bearing_quantities`]), the residuals
-/// and Newton iterations, each sampled `samples` times per period. The stability fields
-/// (multipliers, stable flag, bifurcation) are the caller's.
+/// The recorded form of one solution of `system` (index `index`), a point of a branch
+/// whose points `run` describes (the run's own basis, or a switched branch's,
+/// [`crate::record::BranchRecord::run_of`]): orbits, amplitudes and temperatures from the
+/// coefficients ([`super::point_from_coefficients`]), bearing loads, clearances and
+/// thermal forces through the model ([`bearing_quantities`]), the residuals and Newton
+/// iterations, each sampled `samples` times per period. The stability fields
+/// (multipliers, stable flag, bifurcation) and the branch id are the caller's.
 pub fn point_record(
-    problem: &SweepProblem,
+    system: &CoupledRotor,
+    run: &RunInfo,
     index: u64,
     sol: &HbSolution,
     samples: usize,
 ) -> Result<PointRecord, DeriveError> {
     let mut rec = super::point_from_coefficients(
-        &problem.run,
+        run,
         index,
         sol.omega,
         sol.mech.clone(),
@@ -33,7 +36,7 @@ pub fn point_record(
     rec.residual_mech = sol.residual.mech;
     rec.residual_therm = sol.residual.therm;
     rec.newton_iterations = sol.iterations as u32;
-    let derived = bearing_quantities(&problem.system, sol, samples);
+    let derived = bearing_quantities(system, sol, samples);
     rec.bearing_loads = derived.loads;
     rec.clearances = derived.clearances;
     rec.thermal_forces = derived.thermal_forces;

@@ -106,6 +106,17 @@ impl Recording {
         }
     }
 
+    /// The recording with the run's own branch only (branch 0): the points and located
+    /// bifurcations of switched branches left out. The campaign's figures, maps and the
+    /// reproduction report read runs this way: their statements are about the branch the
+    /// sweep followed in ω.
+    pub fn own_branch(mut self) -> Self {
+        self.points.retain(|p| p.branch == 0);
+        self.bifurcations.retain(|b| b.branch == 0);
+        self.branches.clear();
+        self
+    }
+
     /// The branch numbers of the recording: 0, then those of [`Self::branches`].
     pub fn branch_numbers(&self) -> Vec<u32> {
         std::iter::once(0)

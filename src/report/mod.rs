@@ -241,10 +241,12 @@ pub fn campaign_findings(dir: &Path) -> Result<Vec<RunFindings>, ReportError> {
     let mut out = Vec::new();
     for entry in &manifest.runs {
         let path: PathBuf = dir.join(&entry.recording);
-        let rec = read_recording(&path).map_err(|e| ReportError::Input {
-            path: path.display().to_string(),
-            reason: e.to_string(),
-        })?;
+        let rec = read_recording(&path)
+            .map_err(|e| ReportError::Input {
+                path: path.display().to_string(),
+                reason: e.to_string(),
+            })?
+            .own_branch();
         out.push(run_findings(&entry.name, &rec));
     }
     Ok(out)
