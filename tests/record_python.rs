@@ -106,11 +106,18 @@ for i in on["index"]:
     a, s = r.orbit(int(i), samples=64), r.recorded_orbit(int(i))
     worst = max(worst, float(np.abs(a.filter(like="_x_m").values - s.filter(like="_x_m").values).max()))
 assert worst < 1e-15, worst
+h1 = r.branch_harmonics(1)
+assert sorted(set(h1["index"])) == sorted(on["index"]), h1["index"]
+assert h1.attrs["basis"] == {harmonics:?}, h1.attrs["basis"]
+assert "b{nh}" in h1.columns and "b{nh1}" not in h1.columns
+assert not set(r.harmonics["index"]) & set(on["index"])
 print("ok", len(on), worst)
 "#,
         src = src,
         path = path.to_str().expect("utf-8"),
         n = two.branch_points.len(),
+        nh = two.doubled.n_harmonics(),
+        nh1 = two.doubled.n_harmonics() + 1,
         harmonics = two
             .doubled
             .harmonics()

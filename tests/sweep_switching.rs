@@ -12,6 +12,7 @@
 //! responses coexist there).
 
 use tmrotor::continuation::switch::{doubled_basis, half_order_share};
+use tmrotor::derive::{CoupledRederive, ModelRederive, StabilityRederive};
 use tmrotor::hb::{HarmonicBalance, NewtonOptions, newton};
 use tmrotor::record::{MemorySink, PointRecord};
 use tmrotor::stability::BifurcationKind;
@@ -147,4 +148,28 @@ fn the_sweep_follows_the_period_doubled_branch_as_its_own() {
         "first point multipliers {:?}",
         points[0].multipliers.iter().take(6).collect::<Vec<_>>()
     );
+
+    // replay's re-derivation reads a branch point on the branch's basis: the same
+    // multipliers and the same clearances as recorded
+    let run = b.run_of(sink.run.as_ref().expect("run"));
+    let again = CoupledRederive::from_run(&run).expect("re-derivation");
+    let p = points[points.len() / 2];
+    let f = again.floquet(p).expect("multipliers of a branch point");
+    let radius = |m: &[num_complex::Complex64]| m.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    let (r0, r1) = (radius(&p.multipliers), radius(&f.multipliers));
+    assert!(
+        (r0 - r1).abs() <= 1e-9 * r0,
+        "spectral radius recorded {r0}, re-derived {r1}"
+    );
+    let bearings = again
+        .bearings(p, tmrotor::sweep::RECORD_SAMPLES)
+        .expect("bearing quantities");
+    for (c, d) in p.clearances.iter().zip(&bearings.clearances) {
+        assert!(
+            (c.delta_v_m - d.delta_v_m).abs() <= 1e-12,
+            "δv recorded {}, re-derived {}",
+            c.delta_v_m,
+            d.delta_v_m
+        );
+    }
 }

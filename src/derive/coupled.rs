@@ -111,7 +111,8 @@ pub struct CoupledRederive {
 }
 
 impl CoupledRederive {
-    /// Rebuilds the sweep problem from a recording's run description.
+    /// Rebuilds the sweep problem from a recording's run description, on the basis it
+    /// names (a branch's own, for the points of a switched branch).
     pub fn from_run(run: &RunInfo) -> Result<Self, StudyError> {
         Self::from_run_with_intervals(run, None)
     }
@@ -128,9 +129,15 @@ impl CoupledRederive {
         if let Some(n) = sip_intervals {
             settings.floquet.sip_intervals = n;
         }
-        Ok(Self {
-            problem: SweepProblem::with_model(&settings, model)?,
-        })
+        let mut problem = SweepProblem::with_model(&settings, model)?;
+        // the basis the run description gives: a switched branch's
+        // (`BranchRecord::run_of`) differs from the one the settings build
+        if let Ok(basis) = run.basis()
+            && basis.harmonics() != problem.basis.harmonics()
+        {
+            problem.basis = basis;
+        }
+        Ok(Self { problem })
     }
 
     fn solution(&self, point: &PointRecord) -> HbSolution {

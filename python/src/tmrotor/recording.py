@@ -660,11 +660,20 @@ class Recording:
         strings). Units of the coefficients: m (translations) or rad (rotations) for
         ``mech``, °C for ``therm`` — mixed, hence no unit suffix. Points without
         ``/harmonics`` have no rows, nor have the points of a branch on a basis of its own
-        (:attr:`branches`; their coefficients are in :meth:`orbit`'s basis).
+        (:attr:`branches`): :meth:`branch_harmonics` gives those, branch by branch.
         """
+        return self.branch_harmonics(0)
+
+    def branch_harmonics(self, branch: int) -> pd.DataFrame:
+        """:attr:`harmonics` for the points of branch ``branch`` (0: the run's own; the
+        others listed in :attr:`branches`), in that branch's basis (``attrs["basis"]``)."""
+        if branch not in self._branch_harmonics:
+            known = sorted(self._branch_harmonics)
+            raise KeyError(f"{self.path}: no branch {branch} (branches: {known})")
         run = self.run_info
-        h_count = len(self.basis)
-        nc = self._n_coeffs
+        basis = [Fraction(r.num, r.den) for r in self._branch_harmonics[branch]]
+        h_count = len(basis)
+        nc = 1 + 2 * h_count
         mech_names: list[Any] = [None] * run.n_mech
         for n, key in zip(run.nodes, self._node_keys):
             if n.dof_x < run.n_mech:
@@ -678,7 +687,7 @@ class Recording:
         blocks, index, omega, kind, dof, column = [], [], [], [], [], []
         for i in self.points:
             h = self._points[i].get("/harmonics")
-            if h is None or len(self._harmonics_of(self._points[i])) != h_count:
+            if h is None or _branch_of(self._points[i]["/summary"]) != branch:
                 continue
             w = self._points[i]["/summary"].omega_rad_s
             c = np.concatenate(
@@ -708,7 +717,7 @@ class Recording:
         for h in range(1, h_count + 1):
             cols[f"b{h}"] = coeffs[:, h_count + h]
         df = pd.DataFrame(cols)
-        df.attrs["basis"] = [f"{r.numerator}/{r.denominator}" for r in self.basis]
+        df.attrs["basis"] = [f"{r.numerator}/{r.denominator}" for r in basis]
         return df
 
     def tables(self) -> dict[str, pd.DataFrame]:
