@@ -762,6 +762,7 @@ impl SweepProblem {
             {
                 continue;
             }
+            let started = std::time::Instant::now();
             let start = match switch_at_period_doubling(&self.system, &self.basis, &pd, &switch) {
                 Ok(start) => start,
                 Err(e) => {
@@ -799,6 +800,7 @@ impl SweepProblem {
             opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;
             let mut cont = Continuation::new(hb, opts, stab)?;
             let mut last_omega = start.omega;
+            let switch_seconds = started.elapsed().as_secs_f64();
             let end = loop {
                 if interrupted() {
                     break BranchEnd::Interrupted;
@@ -837,6 +839,9 @@ impl SweepProblem {
                 origin_omega_rad_s: pd.omega,
                 points: rec.prog.points - first_index,
                 bifurcations: rec.branch_bifurcations.clone(),
+                seconds: started.elapsed().as_secs_f64(),
+                switch_seconds,
+                timings: cont.timings(),
                 omega_range: rec.branch_range.unwrap_or((start.omega, start.omega)),
                 rejoined: match end {
                     BranchEnd::Rejoined { between } => Some(between),
@@ -890,6 +895,11 @@ pub struct FollowedBranch {
     pub rejoined: Option<(f64, f64)>,
     /// Its located bifurcations (ω, label), in branch order.
     pub bifurcations: Vec<(f64, String)>,
+    /// Wall time of the branch in all, of its start (the switch), and where its
+    /// continuation's time went.
+    pub seconds: f64,
+    pub switch_seconds: f64,
+    pub timings: Timings,
     /// How it ended, in words.
     pub end: String,
 }
