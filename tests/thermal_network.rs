@@ -510,3 +510,62 @@ fn conductance_matrix_is_symmetric_and_conserves_heat() {
     let k1 = net.conductance(700.0);
     assert!(k1.get(0, 0) >= k0.get(0, 0));
 }
+
+/// `[thermal.air] rotor_convection_factor` scales the shafts' and disks' convection to
+/// ambient and nothing else: the ambient conductance of a node is its row sum of K_T
+/// minus its lubricant-flow term (zero off the lubricant nodes), checked against Table 1's
+/// correlation by hand for one LP shaft segment.
+#[test]
+fn the_rotor_convection_factor_scales_only_the_rotor_surfaces() {
+    let omega = 620.0;
+    let rows = |factor: f64| {
+        let mut s = spec();
+        s.air.rotor_convection_factor = factor;
+        let net = ThermalNetwork::new(&s).expect("network");
+        let k = net.conductance(omega);
+        let sums: Vec<f64> = (0..66)
+            .map(|i| (0..66).map(|j| k.get(i, j)).sum())
+            .collect();
+        (sums, net.names().to_vec())
+    };
+    let (one, names) = rows(1.0);
+    let (half, _) = rows(0.5);
+    let (zero, _) = rows(0.0);
+    for i in 0..66 {
+        let rotor = names[i].contains("shaft") || names[i].contains("disk");
+        let tol = 1e-12 * one[i].abs().max(1.0);
+        if rotor {
+            assert!(one[i] > 0.0, "{}: convects at factor 1", names[i]);
+            assert!((half[i] - 0.5 * one[i]).abs() < tol, "{}", names[i]);
+            assert!(zero[i].abs() < tol, "{}: {}", names[i], zero[i]);
+        } else {
+            assert!((half[i] - one[i]).abs() < tol, "{}", names[i]);
+            assert!((zero[i] - one[i]).abs() < tol, "{}", names[i]);
+        }
+    }
+    // LP shaft segment 10 (element 4-5, 3 segments): OD 120 mm, length 316.5125/3 mm,
+    // Re = ω D²/(2 ν_air), h = Nu k_air / D, conductance h π D L.
+    assert!(names[9].starts_with("LP shaft"), "{}", names[9]);
+    let s = spec();
+    let (d, l) = (0.120, 0.3165125 / 3.0);
+    let re = omega * d * d / (2.0 * s.air.kinematic_viscosity_m2_s);
+    let h = shaft_ambient_nusselt(re) * s.air.conductivity_w_m_k / d;
+    let by_hand = h * PI * d * l;
+    assert!(
+        (one[9] - by_hand).abs() < 1e-9 * by_hand,
+        "{} vs {by_hand}",
+        one[9]
+    );
+}
+
+#[test]
+fn a_negative_rotor_convection_factor_is_refused_by_path() {
+    let mut s = spec();
+    s.air.rotor_convection_factor = -0.5;
+    let err = ThermalNetwork::new(&s)
+        .map(|_| ())
+        .expect_err("refused")
+        .to_string();
+    assert!(err.contains("air.rotor_convection_factor"), "{err}");
+    assert!(err.contains(">= 0"), "{err}");
+}

@@ -1190,6 +1190,15 @@ pub const KEYS: &[Key] = &[
         range: "≥ 0",
         meaning: "Convection coefficient h from the housing outer surfaces and flank end faces to ambient (Table 1).",
     },
+    Key {
+        table: "thermal.air",
+        key: "rotor_convection_factor",
+        unit: "",
+        need: Need::Optional,
+        default: "1",
+        range: "≥ 0 (physical range 0–1)",
+        meaning: "Factor on the shafts' and disks' convection to ambient air (Table 1, \"shafts and ambient\"): 1 = every rotor surface in free air at the ambient temperature; 0 = rotor surfaces enclosed (casings; the LP shaft inside the HP shaft's bore) that lose no heat to ambient. The built-in model is calibrated at 0 (docs/calibration.md).",
+    },
     // ───────────────────────────── [thermal.materials] ─────────────────────────────
     Key {
         table: "thermal.materials",

@@ -140,14 +140,14 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
     };
     let not_run = |what: &str| (format!("no {what} run in the campaign"), Verdict::NotRun);
 
-    // 1–2: the peaks over the five flow rates.
+    // 1–2: the peaks over the five flow rates, each followed from 20 L/min by continuity.
     let series: Option<Vec<&RunFindings>> = FLOWS.iter().map(|&q| find(runs, q, 25.0)).collect();
-    let series = series.filter(|s| s.iter().all(|r| r.peaks.len() == 2));
-    let (o1, v1, o2, v2) = match &series {
-        Some(s) => {
+    let tracked = series.as_ref().and_then(|s| track_peaks(s));
+    let (o1, v1, o2, v2) = match (&series, &tracked) {
+        (Some(s), Some(t)) => {
             let mono = |k: usize, pick: fn(&(f64, f64)) -> f64, down: bool| {
-                s.windows(2).all(|w| {
-                    let (a, b) = (pick(&w[0].peaks[k]), pick(&w[1].peaks[k]));
+                t[k].windows(2).all(|w| {
+                    let (a, b) = (pick(&w[0]), pick(&w[1]));
                     if down { b <= a } else { b >= a }
                 })
             };
@@ -157,8 +157,8 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
                         format!(
                             "peak {}: {}",
                             k + 1,
-                            s.iter()
-                                .map(|r| format!("{:.prec$}", pick(&r.peaks[k])))
+                            t[k].iter()
+                                .map(|p| format!("{:.prec$}", pick(p)))
                                 .collect::<Vec<_>>()
                                 .join(" → ")
                         )
@@ -166,17 +166,25 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
                     .collect::<Vec<_>>()
                     .join("; ")
             };
+            let counts = s
+                .iter()
+                .map(|r| r.resonances.len().to_string())
+                .collect::<Vec<_>>()
+                .join(" / ");
             let (s1, s2) = (mono(0, |p| p.0, true), mono(1, |p| p.0, true));
             let (g1, g2) = (mono(0, |p| p.1, false), mono(1, |p| p.1, false));
             (
-                format!("{} rad/s", text(|p| p.0, 1)),
+                format!(
+                    "{} rad/s (the 20 L/min run's two largest peaks, each followed to the nearest resonant peak of the next run; resonant peaks per run: {counts})",
+                    text(|p| p.0, 1)
+                ),
                 Verdict::of(s1 && s2, s1 || s2),
                 format!("{} µm RMS", text(|p| p.1, 2)),
                 Verdict::of(g1 && g2, g1 || g2),
             )
         }
-        None => {
-            let (t, v) = not_run("complete 20/10/5/2/1 L/min (with two peaks each)");
+        _ => {
+            let (t, v) = not_run("complete 20/10/5/2/1 L/min (with two resonant peaks each)");
             (t.clone(), v, t, v)
         }
     };
@@ -619,6 +627,37 @@ pub fn sensitivity(runs: &[RunFindings]) -> Vec<(String, Vec<Statement>)> {
         .collect()
 }
 
+/// Node 8's two resonant peaks followed over a flow series: the first run's two largest
+/// peaks, then in each next run the pair of its resonant peaks nearest (in ω) to the pair
+/// before, in order. `None` when a run has fewer than two resonant peaks.
+fn track_peaks(series: &[&RunFindings]) -> Option<[Vec<(f64, f64)>; 2]> {
+    let first = series.first()?;
+    if first.peaks.len() != 2 {
+        return None;
+    }
+    let mut t = [vec![first.peaks[0]], vec![first.peaks[1]]];
+    for r in &series[1..] {
+        let res = &r.resonances;
+        let (p0, p1) = (t[0].last()?.0, t[1].last()?.0);
+        let mut best: Option<(f64, usize, usize)> = None;
+        for i in 0..res.len() {
+            for j in 0..res.len() {
+                if i == j {
+                    continue;
+                }
+                let d = (res[i].0 - p0).abs() + (res[j].0 - p1).abs();
+                if best.is_none_or(|b| d < b.0) {
+                    best = Some((d, i, j));
+                }
+            }
+        }
+        let (_, i, j) = best?;
+        t[0].push(res[i]);
+        t[1].push(res[j]);
+    }
+    Some(t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::At620;
@@ -644,6 +683,7 @@ mod tests {
             points: 100,
             complete: true,
             peaks: vec![(480.0 - shift, 10.0 + shift), (580.0 - shift, 12.0 + shift)],
+            resonances: vec![(480.0 - shift, 10.0 + shift), (580.0 - shift, 12.0 + shift)],
             turning_points: Vec::new(),
             unstable: if flow < 3.0 { 5 } else { 0 },
             bifurcations,
@@ -720,9 +760,27 @@ mod tests {
         assert_eq!(at(&r, 7), Verdict::Partial);
         // 1–2: a peak that rises in ω at the lowest flow
         let mut r = paper_runs();
-        r[4].peaks[0].0 = 500.0;
+        r[4].resonances[0].0 = 500.0;
         assert_eq!(at(&r, 1), Verdict::Partial);
         assert_eq!(at(&r, 2), Verdict::Match);
+        // … a peak that shrinks at the lowest flow
+        let mut r = paper_runs();
+        r[4].resonances[1].1 = 1.0;
+        assert_eq!(at(&r, 1), Verdict::Match);
+        assert_eq!(at(&r, 2), Verdict::Partial);
+        // a third resonance that grows past the first at low flow is not taken for it
+        // (the two largest peaks of each run alone would switch to it and break the series)
+        let mut r = paper_runs();
+        for x in &mut r[3..5] {
+            x.resonances.push((640.0, 40.0));
+            x.peaks = vec![x.peaks[1], (640.0, 40.0)];
+        }
+        assert_eq!(at(&r, 1), Verdict::Match);
+        assert_eq!(at(&r, 2), Verdict::Match);
+        // a run with a single resonant peak cannot be followed
+        let mut r = paper_runs();
+        r[2].resonances.truncate(1);
+        assert_eq!(at(&r, 1), Verdict::NotRun);
         // a missing run is "not run", not "differs"
         let r: Vec<RunFindings> = paper_runs()
             .into_iter()

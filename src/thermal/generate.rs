@@ -92,6 +92,9 @@ diffusivity_m2_s = 7.38e-8
 kinematic_viscosity_m2_s = 1.57e-5
 conductivity_w_m_k = 0.0262
 housing_h_w_m2_k = 15.0
+# Shafts' and disks' convection to ambient: Table 1's correlation as it stands (factor 1;
+# 0 = rotor surfaces enclosed, no heat to ambient).
+rotor_convection_factor = 1.0
 
 [ball_bearings]
 # Harris (Rolling Bearing Analysis): f_v 2–4 (the lower end, oil-jet lubrication),

@@ -184,6 +184,7 @@ pub struct ThermalNetwork {
     flow_conductance_w_k: f64,
     air_nu_m2_s: f64,
     air_k: f64,
+    rotor_convection_factor: f64,
     fluid: Fluid,
     viscosity: Viscosity,
     min_load_n: f64,
@@ -504,6 +505,7 @@ impl ThermalNetwork {
             ),
             air_nu_m2_s: spec.air.kinematic_viscosity_m2_s,
             air_k: spec.air.conductivity_w_m_k,
+            rotor_convection_factor: spec.air.rotor_convection_factor,
             fluid: Fluid {
                 conductivity: spec.lubricant.conductivity_w_m_k,
                 diffusivity: spec.lubricant.diffusivity_m2_s,
@@ -619,7 +621,7 @@ impl ThermalNetwork {
                 self.air_nu_m2_s,
                 self.air_k,
             );
-            v.push((s.node, h * s.area_m2));
+            v.push((s.node, self.rotor_convection_factor * h * s.area_m2));
         }
         v
     }

@@ -43,6 +43,20 @@ pub struct AirSpec {
     pub conductivity_w_m_k: f64,
     /// Housing outer surface to ambient (Table 1: 15 W/(m²·K)).
     pub housing_h_w_m2_k: f64,
+    /// Factor on the shafts' and disks' convection to ambient air (Table 1's "shafts and
+    /// ambient" correlation): 1 = the correlation as it stands (every rotor surface in free
+    /// air at the ambient temperature), 0 = rotor surfaces enclosed (by casings, or the LP
+    /// shaft inside the HP shaft's bore) that exchange no heat with the ambient. Default 1.
+    #[serde(default = "one", skip_serializing_if = "is_one")]
+    pub rotor_convection_factor: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn is_one(x: &f64) -> bool {
+    *x == 1.0
 }
 
 /// A solid material (Table A.5).
@@ -460,6 +474,13 @@ impl ThermalSpec {
         );
         if !non_negative(self.air.housing_h_w_m2_k) {
             return Err(invalid(file, p("air.housing_h_w_m2_k"), "must be >= 0"));
+        }
+        if !non_negative(self.air.rotor_convection_factor) {
+            return Err(invalid(
+                file,
+                p("air.rotor_convection_factor"),
+                "must be >= 0 (0: the shafts and disks lose no heat to ambient; 1: Table 1's correlation)",
+            ));
         }
         for (name, m) in [
             ("bearing", &self.materials.bearing),
