@@ -79,6 +79,12 @@ pub struct At620 {
     /// housings, lubricant: paper nodes 50–66, the ones of the paper's Fig. 14).
     pub max_c: f64,
     pub min_c: f64,
+    /// Coolest and hottest thermal node over all nodes (paper numbering), by mean
+    /// temperature.
+    pub coolest_node: Option<u32>,
+    pub hottest_node: Option<u32>,
+    /// Radial expansions (µm) per bearing: rolling elements, inner ring, outer ring.
+    pub expansions_um: Vec<[f64; 3]>,
 }
 
 /// Errors of the report.
@@ -86,6 +92,18 @@ pub struct At620 {
 pub enum ReportError {
     #[error("{path}: {reason}")]
     Input { path: String, reason: String },
+}
+
+/// The thermal node (paper numbering) whose mean temperature at `p` beats every other's
+/// by `better`.
+fn extreme_node(rec: &Recording, p: &PointRecord, better: fn(f64, f64) -> bool) -> Option<u32> {
+    rec.run
+        .thermal_nodes
+        .iter()
+        .zip(&p.temperatures)
+        .map(|(n, t)| (n.id, t.mean_c))
+        .reduce(|a, b| if better(b.1, a.1) { b } else { a })
+        .map(|(id, _)| id)
 }
 
 fn mean_temp(rec: &Recording, p: &PointRecord, id: u32) -> Option<f64> {
@@ -220,6 +238,13 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
                     .collect(),
                 max_c: means.iter().copied().fold(f64::MIN, f64::max),
                 min_c: means.iter().copied().fold(f64::MAX, f64::min),
+                coolest_node: extreme_node(rec, p, |a, b| a < b),
+                hottest_node: extreme_node(rec, p, |a, b| a > b),
+                expansions_um: p
+                    .clearances
+                    .iter()
+                    .map(|c| [c.ub_m * 1e6, c.ui_m * 1e6, c.uo_m * 1e6])
+                    .collect(),
             }
         });
     let temp_range_c = pts

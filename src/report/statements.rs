@@ -601,6 +601,88 @@ pub fn orderings(runs: &[RunFindings]) -> Vec<Statement> {
         &[4, 2, 1, 3],
         lu(1.0),
     );
+    // the coolest and hottest nodes (Fig. 14d, e text: node 65 coolest, node 55 hottest at
+    // 20 L/min; "the same thermal nodes" at 1 L/min)
+    let mut node_row = |id: &str, claim, paper: &'static str, want: u32, got: Option<u32>| {
+        let (ours, verdict) = match got {
+            Some(n) => (format!("node {n}"), Verdict::of(n == want, false)),
+            None => ("no such run".to_string(), Verdict::NotRun),
+        };
+        out.push(Statement {
+            id: id.into(),
+            claim,
+            paper,
+            ours,
+            verdict,
+        });
+    };
+    node_row(
+        "I",
+        "Coolest thermal node at 620 rad/s, 20 L/min",
+        "node 65 (3# lubricant)",
+        65,
+        at(20.0).and_then(|a| a.coolest_node),
+    );
+    node_row(
+        "J",
+        "Coolest thermal node at 620 rad/s, 1 L/min",
+        "node 65 (3# lubricant)",
+        65,
+        at(1.0).and_then(|a| a.coolest_node),
+    );
+    node_row(
+        "K",
+        "Hottest thermal node at 620 rad/s, 20 L/min",
+        "node 55 (2# rolling elements)",
+        55,
+        at(20.0).and_then(|a| a.hottest_node),
+    );
+    node_row(
+        "L",
+        "Hottest thermal node at 620 rad/s, 1 L/min",
+        "node 55 (2# rolling elements)",
+        55,
+        at(1.0).and_then(|a| a.hottest_node),
+    );
+    // Fig. 13: u_o > u_i > u_b for every bearing at 20, 2 and 1 L/min
+    let runs_u: Vec<(f64, Option<&super::At620>)> =
+        [20.0, 2.0, 1.0].iter().map(|&q| (q, at(q))).collect();
+    let (ours, verdict) = if runs_u.iter().all(|(_, a)| a.is_some()) {
+        let mut held = 0;
+        let mut total = 0;
+        let mut fails = Vec::new();
+        for (q, a) in runs_u.iter().filter_map(|(q, a)| a.map(|a| (q, a))) {
+            for (k, u) in a.expansions_um.iter().enumerate() {
+                total += 1;
+                if u[2] > u[1] && u[1] > u[0] {
+                    held += 1;
+                } else {
+                    fails.push(format!(
+                        "{q} L/min {}#: u_o {:.1}, u_i {:.1}, u_b {:.1} µm",
+                        k + 1,
+                        u[2],
+                        u[1],
+                        u[0]
+                    ));
+                }
+            }
+        }
+        let text = if fails.is_empty() {
+            format!("holds for all {total} (bearing, flow) pairs")
+        } else {
+            format!("holds for {held} of {total}; not for {}", fails.join("; "))
+        };
+        (text, Verdict::of(held == total && total > 0, false))
+    } else {
+        ("no such run".to_string(), Verdict::NotRun)
+    };
+    out.push(Statement {
+        id: "M".into(),
+        claim: "Radial expansions at 620 rad/s, 20, 2 and 1 L/min, every bearing",
+        paper: "u_o > u_i > u_b (Fig. 13)",
+        ours,
+        verdict,
+    });
     out
 }
 
@@ -700,6 +782,9 @@ mod tests {
                 seat_c: vec![40.0, 45.0, 27.0, 48.0],
                 max_c: 70.0,
                 min_c: 26.0,
+                coolest_node: Some(65),
+                hottest_node: Some(55),
+                expansions_um: vec![[1.0, 2.0, 3.0]; 4],
             }),
             temp_range_c: Some((49.0, 73.0)),
             ball_order_share: 1.0,
