@@ -32,14 +32,17 @@ VARIANTS = [
     ("fv-balls-4", each(BALLS, "f_v", "4.0")),
     ("fv-3-4", each(["3#"], "f_v", "4.0")),
     ("fv-4-2.2", each(["4#"], "f_v", "2.2")),
+    ("fv-4-4", each(["4#"], "f_v", "4.0")),
     ("fl-balls-0.0005", each(BALLS, "f_l", "0.0005")),
     ("fl-balls-0.0009", each(BALLS, "f_l", "0.0009")),
     ("fl-rollers-0.0002", each(ROLLERS, "f_l", "0.0002")),
     ("fl-rollers-0.0004", each(ROLLERS, "f_l", "0.0004")),
-    ("nu0-20", [("thermal.viscosity.nu0_mm2_s", "20.0")]),
     ("nu0-45", [("thermal.viscosity.nu0_mm2_s", "45.0")]),
+    ("rotor-convection-1", [("thermal.air.rotor_convection_factor", "1.0")]),
+    ("rotor-convection-0.1", [("thermal.air.rotor_convection_factor", "0.1")]),
     ("heat-elements", split(1.0, 0.0, 0.0, 0.0)),
     ("heat-rings", split(0.0, 0.5, 0.5, 0.0)),
+    ("heat-inner-0.02", split(0.2, 0.02, 0.0, 0.78)),
 ]
 
 RUNS = [("q20", 20.0, 25.0), ("q10", 10.0, 25.0), ("q5", 5.0, 25.0), ("q2", 2.0, 25.0),

@@ -343,7 +343,7 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
     let _ = writeln!(s, "## Runs\n");
     let _ = writeln!(
         s,
-        "| run | q_l (L/min) | cooling (°C) | points | node-8 peaks ω (rad/s) | peak RMS (µm) | ω-turning points | stable / assessed | bifurcations |"
+        "| run | q_l (L/min) | cooling (°C) | points | node-8 resonant peaks ω (rad/s) | their RMS (µm) | ω-turning points | stable / assessed | bifurcations |"
     );
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
     for r in runs {
@@ -361,8 +361,8 @@ pub fn markdown(runs: &[RunFindings], source: &str, truncation: Option<&str>) ->
             r.flow_l_min,
             r.cooling_c,
             r.points,
-            statements::list(&r.peaks.iter().map(|p| p.0).collect::<Vec<_>>(), 1),
-            statements::list(&r.peaks.iter().map(|p| p.1).collect::<Vec<_>>(), 2),
+            statements::list(&r.resonances.iter().map(|p| p.0).collect::<Vec<_>>(), 1),
+            statements::list(&r.resonances.iter().map(|p| p.1).collect::<Vec<_>>(), 2),
             r.turning_points.len(),
             r.assessed - r.unstable,
             r.assessed,
@@ -498,22 +498,21 @@ pub fn sensitivity_markdown(runs: &[RunFindings], source: &str) -> String {
 const NOTES: &str = "\
 The paper does not give every value the coupled model needs. The built-in model
 (`models/dual_rotor.toml`) is calibrated within the physical ranges of those values
-(damping ratio, lubricant viscosity, Palmgren's f_v of 4#, where the friction heat enters);
-each value, its range, source and reason, the calibration steps, the literature model's
-verdicts beside these, and what moves each finding are in `docs/calibration.md` and
-`docs/sensitivity.md`. What still differs:
+(damping ratio, lubricant viscosity, Palmgren's f_v of 4#, where the friction heat enters,
+the rotor's convection to ambient); each value, its range, source and reason, the
+calibration steps, the literature model's verdicts beside these, and what moves each
+finding are in `docs/calibration.md` and `docs/sensitivity.md`. What still differs:
 
-* **1–2, the peaks at 1 L/min**: from 20 to 2 L/min both of node 8's peaks move down; at
-  1 L/min the branch bends over to the right and the tip of that fold is the largest
-  maximum, which the report's peak rule (the two largest local maxima, 30 rad/s apart) takes
-  as the first peak.
-* **5**: no Neimark–Sacker point at 1 L/min; with less damping they appear, but then every
-  flow rate folds (statements 3, 4, 6).
-* **7**: over all nodes the lowest temperature is set by the disks and shaft segments that
-  convect to the 25 °C ambient air; the highest is a few kelvin above the paper's.
-* **10 against 12**: the inner ring's share of the friction heat trades |δv| at 20 L/min
-  against T_b > T_i > T_o at 1 L/min (`docs/calibration.md`).
-* **13**: the nonlinear force is more than 100× the order-3 residual at D, less at B.
+* **5**: no Neimark–Sacker point at 1 L/min (4 saddle-nodes there against 2 at 2 L/min);
+  with less damping they appear, but then every flow rate folds (statements 3, 4, 6).
+* **13**: the residual falls with the order up to 3 and order 4 changes the amplitude by
+  less than 0.1 %, but the nonlinear force is two orders of magnitude above the order-3
+  residual at D only, not at B: what is left at order 3 is mostly at frequencies no order
+  of Eq. 34 contains, the combination tones (λ ∓ 1)ω and the 3# roller passing
+  (`examples/truncation.md`).
+* **Peaks**: node 8 has three resonant peaks in 300–700 rad/s; statements 1–2 follow the
+  two largest at 20 L/min to lower flows. The third, near 616 rad/s at 20 L/min, also moves
+  down and grows; at 2 and 1 L/min it is larger than the first.
 
 Saddle-nodes are the folds of the branch, located where the ω-component of its tangent
 vanishes; Neimark–Sacker and period-doubling points are located by the crossing multiplier
