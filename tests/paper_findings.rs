@@ -44,7 +44,10 @@ fn clearances_stay_within_a_micrometre_at_20_l_min() {
     assert_eq!(saddle_nodes(&rec), 0);
     let first = rec.points.first().expect("points").omega_rad_s;
     let last = rec.points.last().expect("points").omega_rad_s;
-    assert!(first <= 300.0 + 1e-9 && last >= 700.0 - 1e-9, "{first}–{last}");
+    assert!(
+        first <= 300.0 + 1e-9 && last >= 700.0 - 1e-9,
+        "{first}–{last}"
+    );
     let worst = rec
         .points
         .iter()
@@ -69,6 +72,12 @@ fn four_saddle_nodes_and_the_papers_temperature_range_at_50_c_cooling() {
             high = high.max(t.mean_c);
         }
     }
-    assert!((low - 50.0).abs() <= 3.0, "lowest {low:.2} °C, paper ≈ 50 °C");
-    assert!((high - 72.0).abs() <= 3.0, "highest {high:.2} °C, paper ≈ 72 °C");
+    assert!(
+        (low - 50.0).abs() <= 3.0,
+        "lowest {low:.2} °C, paper ≈ 50 °C"
+    );
+    assert!(
+        (high - 72.0).abs() <= 3.0,
+        "highest {high:.2} °C, paper ≈ 72 °C"
+    );
 }

@@ -159,7 +159,8 @@ Any value of a model file can be set without editing the file: `tmrotor sweep --
 PATH=VALUE` (repeatable; also `tmrotor model check FILE --set …`), or a `set` table in a\n\
 campaign's `[defaults]`, a run, or its `[grid]` (an array of values there: one run per\n\
 value). The path joins TOML keys with dots; an array of tables is indexed from 0 or by the\n\
-entry's `name` (or `id`):\n\n\
+entry's `name` (or `id`), and `[*]` sets the key in every entry\n\
+(`thermal.bearings[*].heat_split`):\n\n\
 ```toml\n\
 [grid]                                   # a campaign: three runs\n\
 name = \"fv{thermal.bearings[2#].f_v}\"\n\

@@ -10,6 +10,7 @@
 //! thermal.bearings[1].f_v                the second [[thermal.bearings]] table
 //! thermal.bearings[2#].f_v               the [[thermal.bearings]] table named "2#"
 //! bearings[1#].radial_clearance_m        a mechanical bearing by its id
+//! thermal.bearings[*].f_v                every [[thermal.bearings]] table
 //! ```
 //!
 //! Every table on the path must exist; the last key may be absent (an optional key such as
@@ -289,9 +290,64 @@ pub fn apply(text: &str, file: &str, set: &ModelSet) -> Result<String, ModelErro
         .parse()
         .map_err(|e: toml_edit::TomlError| invalid("(file)", e.message().to_string()))?;
     for (path, value) in set {
-        set_one(&mut doc, path, value).map_err(|reason| invalid(path, reason))?;
+        for one in expand(&doc, path).map_err(|reason| invalid(path, reason))? {
+            set_one(&mut doc, &one, value).map_err(|reason| invalid(path, reason))?;
+        }
     }
     Ok(doc.to_string())
+}
+
+/// The item at `path` (keys and selections, no `[*]`), for reading.
+fn item_at<'a>(doc: &'a DocumentMut, path: &str) -> Result<&'a Item, String> {
+    let mut item: &Item = doc.as_item();
+    let mut at = String::new();
+    for step in parse_path(path)? {
+        let here = if at.is_empty() {
+            step.key.to_string()
+        } else {
+            format!("{at}.{}", step.key)
+        };
+        item = match item.get(step.key).filter(|i| !i.is_none()) {
+            Some(next) => next,
+            None if at.is_empty() => return Err(format!("the file has no table `{here}`")),
+            None => return Err(format!("`{at}` has no key `{}`", step.key)),
+        };
+        at = here;
+        for sel in &step.select {
+            let i = position(item, sel, &at)?;
+            at = format!("{at}[{sel}]");
+            item = item
+                .get(i)
+                .ok_or_else(|| format!("`{at}` cannot be selected"))?;
+        }
+    }
+    Ok(item)
+}
+
+/// `path` with every `[*]` replaced by each index of its array in turn (the paths of every
+/// entry); `path` itself when it has none. An array without entries is an error (the set
+/// would change nothing).
+fn expand(doc: &DocumentMut, path: &str) -> Result<Vec<String>, String> {
+    let Some((head, tail)) = path.split_once("[*]") else {
+        return Ok(vec![path.to_string()]);
+    };
+    let n = match item_at(doc, head)? {
+        Item::ArrayOfTables(a) => a.len(),
+        Item::Value(toml_edit::Value::Array(a)) => a.len(),
+        _ => {
+            return Err(format!(
+                "`{head}` is not an array (`[*]` selects every entry)"
+            ));
+        }
+    };
+    if n == 0 {
+        return Err(format!("`{head}` has no entries"));
+    }
+    let mut out = Vec::new();
+    for i in 0..n {
+        out.extend(expand(doc, &format!("{head}[{i}]{tail}"))?);
+    }
+    Ok(out)
 }
 
 /// Parses `PATH=VALUE` (the command line's `--set`): the value is TOML (`3.0`, `"ball"`,
@@ -370,6 +426,24 @@ k = 2.0
         assert!(e.contains("is not a table"), "{e}");
         let e = one("bearings[0.k", toml::Value::Float(1.0)).expect_err("an error");
         assert!(e.contains("unclosed"), "{e}");
+    }
+
+    #[test]
+    fn a_star_sets_every_entry_of_an_array() {
+        let out = one("bearings[*].k", toml::Value::Float(5.0)).expect("ok");
+        let t: toml::Table = out.parse().expect("ok");
+        assert_eq!(t["bearings"][0]["k"].as_float(), Some(5.0));
+        assert_eq!(t["bearings"][1]["k"].as_float(), Some(5.0));
+        assert_eq!(t["damping"]["zeta"].as_float(), Some(0.02));
+        let e = one("damping[*].zeta", toml::Value::Float(1.0)).expect_err("an error");
+        assert!(
+            e.contains("set damping[*].zeta") && e.contains("`damping` is not an array"),
+            "{e}"
+        );
+        let e = one("shafts[*].k", toml::Value::Float(1.0)).expect_err("an error");
+        assert!(e.contains("no table `shafts`"), "{e}");
+        let e = one("bearings[*].k.x", toml::Value::Float(1.0)).expect_err("an error");
+        assert!(e.contains("set bearings[*].k.x"), "{e}");
     }
 
     #[test]
