@@ -21,7 +21,7 @@ def split(elements, inner, outer, lubricant):
         f"{{ elements = {elements}, inner = {inner}, outer = {outer}, "
         f"lubricant = {lubricant} }}"
     )
-    return [(f"thermal.bearings[{b}].heat_split", table) for b in BALLS + ROLLERS]
+    return [("thermal.bearings[*].heat_split", table)]
 
 
 # (variant name, [(path, TOML value)]); the first is the built-in model as it is

@@ -173,9 +173,21 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
                 .join(" / ");
             let (s1, s2) = (mono(0, |p| p.0, true), mono(1, |p| p.0, true));
             let (g1, g2) = (mono(0, |p| p.1, false), mono(1, |p| p.1, false));
+            // the same runs read as each run's own two largest peaks, for comparison
+            let largest = s
+                .iter()
+                .map(|r| {
+                    r.peaks
+                        .iter()
+                        .map(|p| format!("{:.1}", p.0))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                })
+                .collect::<Vec<_>>()
+                .join(" → ");
             (
                 format!(
-                    "{} rad/s (the 20 L/min run's two largest peaks, each followed to the nearest resonant peak of the next run; resonant peaks per run: {counts})",
+                    "{} rad/s (the 20 L/min run's two largest peaks, each followed to the nearest resonant peak of the next run; resonant peaks per run: {counts}; each run's own two largest peaks: {largest})",
                     text(|p| p.0, 1)
                 ),
                 Verdict::of(s1 && s2, s1 || s2),
