@@ -503,8 +503,11 @@ the rotor's convection to ambient); each value, its range, source and reason, th
 calibration steps, the literature model's verdicts beside these, and what moves each
 finding are in `docs/calibration.md` and `docs/sensitivity.md`. What still differs:
 
-* **5**: no Neimark–Sacker point at 1 L/min (4 saddle-nodes there against 2 at 2 L/min);
-  with less damping they appear, but then every flow rate folds (statements 3, 4, 6).
+* **5**: no Neimark–Sacker point at 1 L/min (4 saddle-nodes there against 2 at 2 L/min).
+  They appear with less damping (ζ = 0.02: 13 at 1 L/min), but then every flow rate folds
+  (14 saddle-nodes at 20 L/min; statements 3, 4, 6), and with more viscous heat
+  (ν0 = 45 mm²/s: one at 1 L/min), but then 2 L/min has 4 saddle-nodes and the 50 °C
+  maximum is 85.9 °C (statements 3, 7); `docs/sensitivity.md`.
 * **13**: the residual falls with the order up to 3 and order 4 changes the amplitude by
   less than 0.1 %, but the nonlinear force is two orders of magnitude above the order-3
   residual at D only, not at B: what is left at order 3 is mostly at frequencies no order
