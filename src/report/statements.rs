@@ -539,20 +539,11 @@ pub fn orderings(runs: &[RunFindings]) -> Vec<Statement> {
                    paper: &'static str,
                    want: &[usize],
                    got: Option<(&[f64], &str, &str)>| {
-        let (ours, verdict) = match got {
-            Some((v, pre, suf)) => {
-                let (ok, of) = pairs_holding(v, want);
-                (order(v, pre, suf), Verdict::of(ok == of, false))
-            }
-            None => ("no such run".to_string(), Verdict::NotRun),
-        };
-        out.push(Statement {
-            id: id.into(),
-            claim,
-            paper,
-            ours,
-            verdict,
+        let got = got.map(|(v, pre, suf)| {
+            let (ok, of) = pairs_holding(v, want);
+            (order(v, pre, suf), Verdict::of(ok == of, false))
         });
+        out.push(ordering(id, claim, paper, got));
     };
     let dv = |q: f64| at(q).map(|a| (a.dv_um.as_slice(), "δv", ""));
     row(
@@ -616,17 +607,8 @@ pub fn orderings(runs: &[RunFindings]) -> Vec<Statement> {
     // the coolest and hottest nodes (Fig. 14d, e text: node 65 coolest, node 55 hottest at
     // 20 L/min; "the same thermal nodes" at 1 L/min)
     let mut node_row = |id: &str, claim, paper: &'static str, want: u32, got: Option<u32>| {
-        let (ours, verdict) = match got {
-            Some(n) => (format!("node {n}"), Verdict::of(n == want, false)),
-            None => ("no such run".to_string(), Verdict::NotRun),
-        };
-        out.push(Statement {
-            id: id.into(),
-            claim,
-            paper,
-            ours,
-            verdict,
-        });
+        let got = got.map(|n| (format!("node {n}"), Verdict::of(n == want, false)));
+        out.push(ordering(id, claim, paper, got));
     };
     node_row(
         "I",
@@ -657,18 +639,17 @@ pub fn orderings(runs: &[RunFindings]) -> Vec<Statement> {
         at(1.0).and_then(|a| a.hottest_node),
     );
     // Fig. 13: u_o > u_i > u_b for every bearing at 20, 2 and 1 L/min
-    let runs_u: Vec<(f64, Option<&super::At620>)> =
-        [20.0, 2.0, 1.0].iter().map(|&q| (q, at(q))).collect();
-    let (ours, verdict) = if runs_u.iter().all(|(_, a)| a.is_some()) {
-        let mut held = 0;
+    let runs_u: Option<Vec<(f64, &super::At620)>> = [20.0, 2.0, 1.0]
+        .iter()
+        .map(|&q| at(q).map(|a| (q, a)))
+        .collect();
+    let got = runs_u.map(|runs_u| {
         let mut total = 0;
         let mut fails = Vec::new();
-        for (q, a) in runs_u.iter().filter_map(|(q, a)| a.map(|a| (q, a))) {
+        for (q, a) in runs_u {
             for (k, u) in a.expansions_um.iter().enumerate() {
                 total += 1;
-                if u[2] > u[1] && u[1] > u[0] {
-                    held += 1;
-                } else {
+                if !(u[2] > u[1] && u[1] > u[0]) {
                     fails.push(format!(
                         "{q} L/min {}#: u_o {:.1}, u_i {:.1}, u_b {:.1} µm",
                         k + 1,
@@ -682,20 +663,39 @@ pub fn orderings(runs: &[RunFindings]) -> Vec<Statement> {
         let text = if fails.is_empty() {
             format!("holds for all {total} (bearing, flow) pairs")
         } else {
-            format!("holds for {held} of {total}; not for {}", fails.join("; "))
+            format!(
+                "holds for {} of {total}; not for {}",
+                total - fails.len(),
+                fails.join("; ")
+            )
         };
-        (text, Verdict::of(held == total && total > 0, false))
-    } else {
-        ("no such run".to_string(), Verdict::NotRun)
-    };
-    out.push(Statement {
-        id: "M".into(),
-        claim: "Radial expansions at 620 rad/s, 20, 2 and 1 L/min, every bearing",
-        paper: "u_o > u_i > u_b (Fig. 13)",
+        (text, Verdict::of(fails.is_empty() && total > 0, false))
+    });
+    out.push(ordering(
+        "M",
+        "Radial expansions at 620 rad/s, 20, 2 and 1 L/min, every bearing",
+        "u_o > u_i > u_b (Fig. 13)",
+        got,
+    ));
+    out
+}
+
+/// A further ordering: ours and the verdict, or "no such run" when a run it reads is
+/// missing.
+fn ordering(
+    id: &str,
+    claim: &'static str,
+    paper: &'static str,
+    got: Option<(String, Verdict)>,
+) -> Statement {
+    let (ours, verdict) = got.unwrap_or_else(|| ("no such run".to_string(), Verdict::NotRun));
+    Statement {
+        id: id.into(),
+        claim,
+        paper,
         ours,
         verdict,
-    });
-    out
+    }
 }
 
 /// Counts of (match, partial, differs) over `statements`.
