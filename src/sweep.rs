@@ -264,40 +264,11 @@ impl SweepReport {
     /// [`Self::time_summary`], naming the Floquet product's kernel (its instruction set)
     /// only when `kernel` is set.
     pub fn time_summary_with(&self, kernel: bool) -> String {
-        let t = &self.timings;
-        let per = |secs: f64, n: usize| {
-            if n > 0 {
-                format!(", {:.0} ms each", 1e3 * secs / n as f64)
-            } else {
-                String::new()
-            }
-        };
-        let mut line = format!(
-            "corrector {:.1} s ({} steps{})",
-            t.step_seconds,
-            t.steps,
-            per(t.step_seconds, t.steps)
-        );
-        if t.evaluations > 0 {
-            line += &format!(
-                ", stability {:.1} s ({} evaluations{}, beside the corrector{})",
-                t.stability_seconds,
-                t.evaluations,
-                per(t.stability_seconds, t.evaluations),
-                if kernel {
-                    format!(", {} kernel", crate::stability::panel_kernel_isa())
-                } else {
-                    String::new()
-                }
-            );
-        }
-        if t.searches > 0 {
-            line += &format!(
-                ", bifurcation location {:.1} s ({} searches)",
-                t.search_seconds, t.searches
-            );
-        }
-        line + &format!(", recording {:.1} s", self.record_seconds)
+        format!(
+            "{}, recording {:.1} s",
+            self.timings.summary(kernel),
+            self.record_seconds
+        )
     }
 }
 

@@ -329,17 +329,12 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             b.omega_range.1,
             b.end
         )?;
-        let t = &b.timings;
         writeln!(
             out,
-            "    {:.1} s: start {:.1} s, corrector {:.1} s ({} steps), stability {:.1} s ({} evaluations), bifurcation location {:.1} s",
+            "    {:.1} s: start {:.1} s, {}",
             b.seconds,
             b.switch_seconds,
-            t.step_seconds,
-            t.steps,
-            t.stability_seconds,
-            t.evaluations,
-            t.search_seconds
+            b.timings.summary(false)
         )?;
         for (w, kind) in &b.bifurcations {
             writeln!(out, "    {kind} at ω = {w:.3} rad/s")?;

@@ -851,6 +851,47 @@ pub struct Timings {
     pub search_seconds: f64,
 }
 
+impl Timings {
+    /// Where the time went, in words: the corrector, the stability evaluations (when
+    /// any; the Floquet product's kernel named when `kernel` is set) and the bifurcation
+    /// searches (when any).
+    pub fn summary(&self, kernel: bool) -> String {
+        let per = |secs: f64, n: usize| {
+            if n > 0 {
+                format!(", {:.0} ms each", 1e3 * secs / n as f64)
+            } else {
+                String::new()
+            }
+        };
+        let mut line = format!(
+            "corrector {:.1} s ({} steps{})",
+            self.step_seconds,
+            self.steps,
+            per(self.step_seconds, self.steps)
+        );
+        if self.evaluations > 0 {
+            line += &format!(
+                ", stability {:.1} s ({} evaluations{}, beside the corrector{})",
+                self.stability_seconds,
+                self.evaluations,
+                per(self.stability_seconds, self.evaluations),
+                if kernel {
+                    format!(", {} kernel", crate::stability::panel_kernel_isa())
+                } else {
+                    String::new()
+                }
+            );
+        }
+        if self.searches > 0 {
+            line += &format!(
+                ", bifurcation location {:.1} s ({} searches)",
+                self.search_seconds, self.searches
+            );
+        }
+        line
+    }
+}
+
 /// Counters behind [`Timings`], shared by the tasks that run side by side.
 #[derive(Debug, Default)]
 struct Clock {
