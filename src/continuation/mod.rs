@@ -110,6 +110,8 @@ use crate::hb::{
     Factorization, HarmonicBalance, HbError, HbSolution, JacobianParts, LinearSolver, SolveError,
     condense::{Border, dot},
 };
+use num_complex::Complex64;
+
 use crate::stability::{BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL};
 
 /// A fold is located until the ω-component of the unit tangent is this fraction of its
@@ -185,24 +187,50 @@ fn merged_changes(
     found
 }
 
-/// Moduli of the multipliers of `kind` ([`BifurcationKind::of_multiplier`]), largest first.
-fn moduli_of_kind(f: &FloquetResult, kind: BifurcationKind) -> Vec<f64> {
+/// What a crossing search follows: the counted multipliers of one kind, or the
+/// exponents of the near-zero disk whatever their kind (the largest real part among them
+/// is continuous where two real exponents collide into a complex pair, so a pair that
+/// forms outside and crosses within one step is found; a real one crosses zero only at a
+/// fold, which the tangent locates).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Family {
+    Kind(BifurcationKind),
+    NearZero,
+}
+
+impl Family {
+    fn holds(self, c: &crate::stability::Counted) -> bool {
+        match self {
+            Family::Kind(k) => c.exponent.is_none() && c.kind == k,
+            Family::NearZero => c.exponent.is_some(),
+        }
+    }
+}
+
+/// Distances outside the circle ([`crate::stability::Counted::excess`]) of the counted
+/// multipliers of `family`, largest first.
+fn excesses_of(f: &FloquetResult, family: Family) -> Vec<f64> {
     let mut m: Vec<f64> = f
-        .multipliers
+        .counted()
         .iter()
-        .filter(|c| BifurcationKind::of_multiplier(**c) == kind)
-        .map(|c| c.norm())
+        .filter(|c| family.holds(c))
+        .map(|c| c.excess)
         .collect();
     m.sort_by(|x, y| y.total_cmp(x));
     m
 }
 
-/// How many multipliers of `kind` lie outside the unit circle.
-fn outside_of_kind(f: &FloquetResult, kind: BifurcationKind) -> usize {
-    f.multipliers
+/// How many counted multipliers of `family` lie outside the unit circle.
+fn outside_of(f: &FloquetResult, family: Family) -> usize {
+    f.counted()
         .iter()
-        .filter(|c| c.norm() > 1.0 + UNIT_CIRCLE_TOL && BifurcationKind::of_multiplier(**c) == kind)
+        .filter(|c| family.holds(c) && c.excess > 0.0)
         .count()
+}
+
+/// How many counted fast multipliers of `kind` lie outside the unit circle.
+fn outside_of_kind(f: &FloquetResult, kind: BifurcationKind) -> usize {
+    outside_of(f, Family::Kind(kind))
 }
 
 /// A tangent refined with a nearby iterate's matrix ([`Continuation::refine_tangent`]) is
@@ -1782,8 +1810,18 @@ impl<'a> Continuation<'a> {
                 BifurcationKind::PeriodDoubling,
             ] {
                 if outside_of_kind(fa, kind) != outside_of_kind(fb, kind) {
-                    found.extend(self.locate(from, to, [fa, fb], index, kind));
+                    found.extend(self.locate(from, to, [fa, fb], index, Family::Kind(kind)));
                 }
+            }
+            // the near-zero exponents: a real one passes zero only at a fold (det J = 0
+            // there), which the tangent locates; any other change is a pair's crossing
+            let (na, nb) = (
+                outside_of(fa, Family::NearZero),
+                outside_of(fb, Family::NearZero),
+            );
+            let fold = folds_between(from, to, self.hb.n_unknowns());
+            if na != nb && (!fold || na.abs_diff(nb) != 1) {
+                found.extend(self.locate(from, to, [fa, fb], index, Family::NearZero));
             }
             found
         })
@@ -2130,7 +2168,7 @@ impl<'a> Continuation<'a> {
         to: &Current,
         [f_a, f_b]: [&FloquetResult; 2],
         index: usize,
-        kind: BifurcationKind,
+        family: Family,
     ) -> Option<BranchPoint> {
         let span = to.arclength - cur.arclength;
         // The crossing multiplier is followed among the multipliers of its kind (complex
@@ -2141,11 +2179,14 @@ impl<'a> Continuation<'a> {
         // would be a slow thermal one just below +1 for as long as the crossing multiplier
         // is smaller: g would sit within 1e-5 of zero on that side, and the modulus
         // tolerance would end the search at its first trial, wherever that fell.
-        let n_a = outside_of_kind(f_a, kind);
-        let k = n_a.min(outside_of_kind(f_b, kind));
+        let n_a = outside_of(f_a, family);
+        let k = n_a.min(outside_of(f_b, family));
         // (a side with fewer multipliers of that kind counts the missing ones as 0)
         let g = |f: &FloquetResult| {
-            moduli_of_kind(f, kind).get(k).copied().unwrap_or(0.0) - (1.0 + UNIT_CIRCLE_TOL)
+            excesses_of(f, family)
+                .get(k)
+                .copied()
+                .unwrap_or(-(1.0 + UNIT_CIRCLE_TOL))
         };
         let nu = self.hb.n_unknowns();
         // on a step without a fold ω is monotone along the bracket
@@ -2166,7 +2207,7 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let g_mid = g(fm);
-            let lo_side = outside_of_kind(fm, kind) == n_a;
+            let lo_side = outside_of(fm, family) == n_a;
             let done = search.record(
                 mid,
                 g_mid,
@@ -2189,6 +2230,16 @@ impl<'a> Continuation<'a> {
         if g_best.abs() > CROSSING_MODULUS_TOL {
             return None;
         }
+        let kind = match family {
+            Family::Kind(kind) => kind,
+            // the crossing exponent: the k-th largest real part at the located point
+            Family::NearZero => {
+                let f = p.stability.as_ref()?;
+                let mut near: Vec<Complex64> = f.slow_exponents.clone();
+                near.sort_by(|a, b| b.re.total_cmp(&a.re));
+                BifurcationKind::of_exponent(*near.get(k)?)
+            }
+        };
         p.bifurcation = Some(kind);
         p.index = index;
         Some(p)
@@ -2461,10 +2512,11 @@ mod tests {
         assert_eq!(outside_of_kind(&reals, ns), 0);
         let pd = BifurcationKind::PeriodDoubling;
         assert_eq!(outside_of_kind(&pair, pd), outside_of_kind(&reals, pd));
-        // the pair's moduli, largest first, without the real multiplier near +1
-        let m = moduli_of_kind(&pair, ns);
+        // the pair's distances outside the circle, largest first, without the real
+        // multiplier near +1
+        let m = excesses_of(&pair, Family::Kind(ns));
         assert_eq!(m.len(), 2);
-        assert!((m[0] - c(0.85, 0.62).norm()).abs() < 1e-15);
+        assert!((m[0] - (c(0.85, 0.62).norm() - 1.0 - UNIT_CIRCLE_TOL)).abs() < 1e-15);
     }
 
     /// Points on a circle of radius 1 in the (x₀, x₁) plane, `n` per turn, for `turns`

@@ -140,7 +140,13 @@ impl CoupledRederive {
         Ok(Self { problem })
     }
 
-    fn solution(&self, point: &PointRecord) -> HbSolution {
+    /// The rebuilt sweep problem (model, coupled rotor, basis, settings).
+    pub fn problem(&self) -> &SweepProblem {
+        &self.problem
+    }
+
+    /// The harmonic-balance solution of a recorded point.
+    pub fn solution(&self, point: &PointRecord) -> HbSolution {
         HbSolution {
             omega: point.omega_rad_s,
             basis: self.problem.basis.clone(),

@@ -668,7 +668,10 @@ impl Lu {
 
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let n = self.lu.nrows();
-        let par = self.par;
+        // one right-hand side: a triangular solve of a few hundred unknowns is over before
+        // threads could share it (measured: the threads' wake-ups and yields took more
+        // time than the solve)
+        let par = if rhs.ncols() == 1 { Par::Seq } else { self.par };
         let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
         // the two scratch sizes are the same (one row permutation of the right-hand sides)
         let mut mem = MemBuffer::new(lu_solve::solve_in_place_scratch::<usize, f64>(

@@ -490,7 +490,7 @@ impl<'a> HarmonicBalance<'a> {
                 }
             }
             if let Some(jac) = jac {
-                self.nonlinear_jacobian(&evals, omega, jac);
+                self.nonlinear_jacobian(&evals, omega, jac, false);
             }
             self.recycle(evals);
         }
@@ -503,7 +503,38 @@ impl<'a> HarmonicBalance<'a> {
         Ok(lin)
     }
 
-    fn nonlinear_jacobian(&self, evals: &[NonlinearEval], omega: f64, jac: &mut [f64]) {
+    /// The Galerkin matrix of the velocity sensitivities alone, `P[∂f/∂ẋ ·]` and
+    /// `P[∂g/∂ẋ ·]` acting on the nonlinear mechanical DoFs' coefficients (the layout of
+    /// [`JacobianParts::nonlinear`]; zero in the thermal columns). It is the part of the
+    /// nonlinear terms that multiplies `λ` in Hill's eigenproblem: a perturbation
+    /// `e^{λt} p(t)` has the rate `e^{λt} (ṗ + λ p)`.
+    pub fn velocity_sensitivity(&self, coeffs: &[f64], omega: f64) -> Result<Vec<f64>, HbError> {
+        self.check_len("coefficient vector", coeffs.len())?;
+        let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
+        let mut out = vec![0.0; pn * pn];
+        if pn > 0 {
+            let evals = self.evaluate(coeffs, omega, true);
+            self.nonlinear_jacobian(&evals, omega, &mut out, true);
+            self.recycle(evals);
+        }
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(HbError::NonFinite {
+                what: "velocity sensitivity",
+                omega,
+            });
+        }
+        Ok(out)
+    }
+
+    /// Assembles `∂P[f, g]/∂A` into `jac`; with `velocity_only`, the Galerkin matrix of the
+    /// velocity derivatives taken as values instead ([`Self::velocity_sensitivity`]).
+    fn nonlinear_jacobian(
+        &self,
+        evals: &[NonlinearEval],
+        omega: f64,
+        jac: &mut [f64],
+        velocity_only: bool,
+    ) {
         let nc = self.n_coeffs();
         let n = self.aft.n_samples();
         let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
@@ -534,6 +565,13 @@ impl<'a> HarmonicBalance<'a> {
                     let mut terms: [(Option<Derivative>, Signal, usize); 2] =
                         [(None, Signal::Value, 0), (None, Signal::Rate, 0)];
                     match (k < p, l < p) {
+                        (true, true) if velocity_only => {
+                            terms[0] = (Some(Derivative::FV), Signal::Value, k * p + l);
+                        }
+                        (false, true) if velocity_only => {
+                            terms[0] = (Some(Derivative::GV), Signal::Value, (k - p) * p + l);
+                        }
+                        _ if velocity_only => {}
                         (true, true) => {
                             terms[0] = (Some(Derivative::FX), Signal::Value, k * p + l);
                             terms[1] = (Some(Derivative::FV), Signal::Rate, k * p + l);

@@ -37,6 +37,7 @@ pub mod modal;
 pub mod reduced;
 pub mod sip;
 pub mod slow;
+pub mod hill_near_zero;
 pub mod thermal;
 pub mod variational;
 
@@ -47,6 +48,7 @@ pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
 pub use slow::{slow_exponents, slow_exponents_with, thermal_schur};
+pub use hill_near_zero::{HillOptions, HillPencil, NearZero};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::{Shooting, Variational};
 
@@ -79,12 +81,55 @@ pub struct FloquetResult {
     /// `γ = min |ln μ| / P` over the fast multipliers (1/s): the fast exponent nearest
     /// zero, the scale the slow exponents must stay below; `None` without a split.
     pub fast_gap: Option<f64>,
+    /// The disk around zero in which `slow_exponents` are the coupled Floquet exponents of
+    /// the balance, exactly (Hill's eigenproblem, [`hill_near_zero`]); `None` when they
+    /// come from the quasi-static reduction or there are none.
+    pub near_zero: Option<NearZeroDisk>,
     /// Set when the parity of the number of real multipliers above +1 disagrees with the
     /// number of folds the branch has passed (see [`FloquetResult::with_branch_parity`]):
     /// the harmonic balance that defines the branch then has one real Floquet exponent
     /// above zero that the monodromy product of the orbit does not show, and it is counted
     /// as one multiplier outside the circle.
     pub fold_parity_mismatch: bool,
+}
+
+/// One multiplier as the verdict counts it ([`FloquetResult::counted`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Counted {
+    /// The multiplier (for an exponent of the near-zero disk, `exp(λP)`).
+    pub multiplier: Complex64,
+    /// The exponent `λ` (1/s) when it comes from the near-zero disk.
+    pub exponent: Option<Complex64>,
+    /// How it leaves the circle: by the multiplier's position for a fast one, by the
+    /// exponent's ([`BifurcationKind::of_exponent`]) for a near-zero one.
+    pub kind: BifurcationKind,
+    /// Its distance outside the circle, the quantity the stable flag and a crossing search
+    /// test: `|μ| − (1 + UNIT_CIRCLE_TOL)` for a fast multiplier, `(Re λ − tol)·P` for a
+    /// near-zero exponent ([`NearZeroDisk::tol`]); positive outside.
+    pub excess: f64,
+}
+
+/// Where the exponents of Hill's eigenproblem supersede the monodromy product's: the disk
+/// `|λ| < radius` (1/s) around zero, for an orbit of period `period` (s). A fast
+/// multiplier `μ` with `|ln μ| / P` below the radius is the product's estimate of an
+/// exponent the disk holds exactly, with the thermal coupling the product leaves out.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NearZeroDisk {
+    pub radius: f64,
+    pub period: f64,
+}
+
+impl NearZeroDisk {
+    /// Whether the fast multiplier `m` lies in the disk (its exponent is in the Hill set).
+    pub fn holds(&self, m: Complex64) -> bool {
+        m.norm() > 0.0 && m.ln().norm() / self.period < self.radius
+    }
+
+    /// A Hill exponent's real part above this counts as unstable: a relative rounding
+    /// margin of the Arnoldi eigenvalues (their residual tolerance is 1e-10).
+    pub fn tol(&self) -> f64 {
+        1e-9 * self.radius
+    }
 }
 
 /// A slow/fast split whose [`FloquetResult::split_ratio`] exceeds this is reported as not
@@ -107,8 +152,70 @@ impl FloquetResult {
             stable,
             intervals: None,
             fast_gap: None,
+            near_zero: None,
             fold_parity_mismatch: false,
         }
+    }
+
+    /// The fast multipliers of `self` joined with the coupled exponents nearest zero
+    /// `nz` of an orbit of period `period` (s): the exponents in the disk replace the
+    /// fast multipliers there, and `stable` is decided again on the joint set.
+    pub fn with_near_zero(self, nz: NearZero, period: f64) -> Self {
+        let gamma = slow::fast_gap(&self.multipliers, period);
+        let mut r = Self {
+            fast_gap: Some(gamma),
+            slow_exponents: nz.exponents,
+            near_zero: Some(NearZeroDisk {
+                radius: nz.radius,
+                period,
+            }),
+            ..self
+        };
+        r.stable = r.unstable_count() == 0;
+        r
+    }
+
+    /// The fast multipliers that count: all of them, or with a near-zero disk those
+    /// outside it.
+    pub fn counted_multipliers(&self) -> impl Iterator<Item = &Complex64> {
+        let disk = self.near_zero;
+        self.multipliers
+            .iter()
+            .filter(move |m| !disk.is_some_and(|d| d.holds(**m)))
+    }
+
+    /// The exponents of the near-zero disk with positive real part (empty without a disk).
+    pub fn near_zero_unstable(&self) -> impl Iterator<Item = &Complex64> {
+        let tol = self.near_zero.map_or(f64::INFINITY, |d| d.tol());
+        self.slow_exponents.iter().filter(move |l| l.re > tol)
+    }
+
+    /// Every multiplier the verdict counts, as [`Counted`] entries: the fast ones (outside
+    /// the near-zero disk, when there is one), then the disk's exponents.
+    pub fn counted(&self) -> Vec<Counted> {
+        let mut out: Vec<Counted> = self
+            .counted_multipliers()
+            .map(|m| Counted {
+                multiplier: *m,
+                exponent: None,
+                kind: BifurcationKind::of_multiplier(*m),
+                excess: m.norm() - (1.0 + UNIT_CIRCLE_TOL),
+            })
+            .collect();
+        if let Some(d) = self.near_zero {
+            out.extend(self.slow_exponents.iter().map(|l| Counted {
+                multiplier: (l * d.period).exp(),
+                exponent: Some(*l),
+                kind: BifurcationKind::of_exponent(*l),
+                excess: (l.re - d.tol()) * d.period,
+            }));
+        }
+        out
+    }
+
+    /// The near-zero entries of [`Self::counted`] outside the circle.
+    pub fn near_zero_outside(&self) -> usize {
+        self.near_zero_unstable().count()
     }
 
     /// The same result, noting the intervals of the product.
@@ -159,9 +266,13 @@ impl FloquetResult {
     /// complex pairs in the right half-plane ([`Self::slow_unstable_count`]), plus one for
     /// a fold-parity mismatch: the count of multipliers outside the unit circle.
     pub fn unstable_count(&self) -> usize {
-        unstable_count(&self.multipliers)
-            + self.slow_unstable_count()
-            + usize::from(self.fold_parity_mismatch)
+        let outside = self.counted().iter().filter(|c| c.excess > 0.0).count();
+        let legacy_slow = if self.near_zero.is_some() {
+            0
+        } else {
+            self.slow_unstable_count()
+        };
+        outside + legacy_slow + usize::from(self.fold_parity_mismatch)
     }
 
     /// The slow exponents in the right half-plane whose sign the split decides: real part
@@ -192,6 +303,9 @@ impl FloquetResult {
     /// 582.33 rad/s: +0.16 1/s one point before the fold, −3.4e-5 1/s elsewhere; see
     /// `docs/stability.md`).
     pub fn slow_unstable_count(&self) -> usize {
+        if self.near_zero.is_some() {
+            return self.near_zero_unstable().count();
+        }
         self.decided_slow()
             .filter(|l| BifurcationKind::of_exponent(**l) == BifurcationKind::NeimarkSacker)
             .count()
@@ -205,13 +319,13 @@ impl FloquetResult {
 
     /// Number of real fast multipliers beyond `1 + UNIT_CIRCLE_TOL` (the monodromy
     /// product's own count, without the fold-parity correction).
+    ///
+    /// With a near-zero disk, the fast multipliers outside it and the real exponents in
+    /// it with positive real part: the count of the joint set.
     pub fn product_real_above_one(&self) -> usize {
-        self.multipliers
+        self.counted()
             .iter()
-            .filter(|m| {
-                m.norm() > 1.0 + UNIT_CIRCLE_TOL
-                    && BifurcationKind::of_multiplier(**m) == BifurcationKind::SaddleNode
-            })
+            .filter(|c| c.excess > 0.0 && c.kind == BifurcationKind::SaddleNode)
             .count()
     }
 
@@ -221,6 +335,9 @@ impl FloquetResult {
     /// not separated (a fast multiplier near +1) and the verdict is uncertain. `None`
     /// without a split.
     pub fn split_ratio(&self) -> Option<f64> {
+        if self.near_zero.is_some() {
+            return None;
+        }
         let gap = self.fast_gap?;
         self.slow_exponents
             .iter()
@@ -406,6 +523,15 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
         return None;
     }
     let outside = if na > nb { after } else { before };
+    if outside.near_zero.is_some() && before.slow_unstable_count() != after.slow_unstable_count()
+    {
+        if let Some(l) = outside
+            .near_zero_unstable()
+            .min_by(|a, b| a.re.total_cmp(&b.re))
+        {
+            return Some(BifurcationKind::of_exponent(*l));
+        }
+    }
     if before.slow_unstable_count() != after.slow_unstable_count()
         && let Some(l) = outside.decided_slow().min_by(|a, b| a.re.total_cmp(&b.re))
     {
@@ -461,9 +587,9 @@ pub fn assess(
                 &FrozenOrbit::new(solution, system.n_therm()),
             )
         },
-        || slow::slow_exponents_with(hb, solution, jacobian),
+        || hill_near_zero::near_zero_exponents(hb, solution, jacobian, &HillOptions::default()),
     );
-    Ok(fast?.with_slow(slow?, solution.period()))
+    Ok(fast?.with_near_zero(slow?, solution.period()))
 }
 
 #[cfg(test)]

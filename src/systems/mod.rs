@@ -6,3 +6,4 @@ pub mod duffing;
 pub mod hill;
 pub mod jeffcott;
 pub mod period_doubling;
+pub mod thermo_duffing;

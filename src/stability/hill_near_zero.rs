@@ -1,0 +1,517 @@
+//! The coupled Floquet exponents nearest zero, exactly: Hill's eigenproblem of the
+//! harmonic balance, solved by shift-invert Arnoldi.
+//!
+//! ## Why
+//! A thermo-mechanical orbit has Floquet exponents on two time scales: the vibration's
+//! (`|λ|` of the order of the damping rates) and the temperatures' (`1/τ`, seconds to
+//! hours). Where a fast exponent comes near zero (a fold of the vibration with the
+//! temperatures frozen) the two interact: the thermal feedback can turn a real fast
+//! exponent and a slow one into a complex pair, a slow thermo-mechanical oscillation of
+//! the whole orbit. Neither the frozen-temperature monodromy product (it holds the
+//! temperatures) nor a quasi-static reduction (it assumes `|λ|` far below every fast
+//! exponent) sees that. The exponents of the full coupled linearisation nearest zero do.
+//!
+//! ## What
+//! A perturbation `e^{λt} p(t)` of a periodic orbit, `p` on the harmonic-balance basis,
+//! satisfies Hill's quadratic eigenproblem
+//!
+//! ```text
+//!   T(λ) p = (A0 + λ A1 + λ² A2) p = 0
+//!   A0 = ∂R/∂A                           (the harmonic-balance Jacobian)
+//!   A1 = [C + P[∂f/∂ẋ]] + 2 M D   (mech),   C_T + P[∂g/∂ẋ]  (thermal rows)
+//!   A2 = M                               (mech)
+//! ```
+//!
+//! (`D` the derivative on the basis, `P[·]` the Galerkin projection): the `λ` terms are
+//! the rate of `e^{λt}p` (`ṗ + λp`) and its second derivative (`p̈ + 2λṗ + λ²p`) in the
+//! equations of motion, and the thermal capacity's `λ C_T`. Each eigenvalue `λ` with
+//! `|Im λ| < ω_b/2` (`ω_b = 2π/P`) is a Floquet exponent of the truncated balance, with
+//! multiplier `exp(λP)`. `det T(0) = det ∂R/∂A`, so a real exponent passes zero exactly
+//! where the branch folds.
+//!
+//! ## How
+//! The linearisation `[[0, I], [−A0, 0]] w = λ [[E_mᵀ, 0], [A1, A2]] w`,
+//! `w = [p; λ p_m]` (the rate only of the mechanical unknowns `p_m`: the thermal
+//! equations are of first order and `A2` acts on the mechanical unknowns alone), is
+//! shift-inverted at a small real shift `σ`: one application of `(L − σB)⁻¹ B` costs
+//! the products with `A1` and `A2` and one solve with `T(σ)`. `T(σ)` has the harmonic-balance Jacobian's structure (per-harmonic linear
+//! blocks with `K → K + σC + σ²M`, `C → C + 2σM`, `K_T → K_T + σC_T`, and the dense
+//! nonlinear block plus `σ P[∂f/∂ẋ]`), so it is factored by the same condensation of
+//! the linear DoFs ([`crate::hb::LinearSolver`]). Arnoldi with full
+//! reorthogonalisation finds the Ritz values `θ` of largest modulus, `λ = σ + 1/θ`,
+//! accepted when their residual estimate is below a relative tolerance.
+
+use faer::Mat;
+use num_complex::Complex64;
+
+use super::StabilityError;
+use crate::hb::{HarmonicBalance, HbSolution, JacobianParts, LinearSolver};
+use crate::system::{DenseMatrix, LinearPart};
+
+/// Settings of the near-zero Hill eigenvalues.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HillOptions {
+    /// Fast (non-thermal) exponents wanted beyond the thermal ones: the solver converges
+    /// the `n_therm + extra` eigenvalues nearest the shift.
+    pub extra: usize,
+    /// Largest radius of the disk around zero, as a fraction of the base frequency
+    /// `ω_b = 2π/P`: inside `ω_b/2` each Floquet exponent appears once (its copies
+    /// `λ + i k ω_b` lie outside).
+    pub max_radius_fraction: f64,
+    /// Relative residual estimate below which a Ritz value is accepted.
+    pub tol: f64,
+    /// Largest Krylov dimension.
+    pub max_dim: usize,
+}
+
+impl Default for HillOptions {
+    /// `extra = 2`, disk up to `0.4 ω_b`, tolerance 1e-10, at most 400 Krylov vectors.
+    fn default() -> Self {
+        Self {
+            extra: 2,
+            max_radius_fraction: 0.4,
+            tol: 1e-10,
+            max_dim: 400,
+        }
+    }
+}
+
+/// The Floquet exponents of the truncated balance in a disk around zero.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NearZero {
+    /// Exponents `λ` (1/s), sorted by modulus, every one with `|λ| < radius`.
+    pub exponents: Vec<Complex64>,
+    /// Radius of the disk (1/s): every exponent of the balance inside it is in
+    /// `exponents`; the fast multipliers of a monodromy product with `|ln μ|/P` below it
+    /// are superseded by these.
+    pub radius: f64,
+    /// Arnoldi steps taken (solves with `T(σ)`).
+    pub steps: usize,
+}
+
+/// Hill's pencil `T(λ)` of the harmonic balance at a converged point.
+pub struct HillPencil<'a, 'h> {
+    hb: &'a HarmonicBalance<'h>,
+    parts: JacobianParts,
+    velocity: Vec<f64>,
+    /// The `(row, column)` nonlinear-DoF blocks of `velocity` with a nonzero entry (most
+    /// are zero: only velocity-dependent forces and heat have one).
+    velocity_blocks: Vec<(usize, usize)>,
+}
+
+impl<'a, 'h> HillPencil<'a, 'h> {
+    /// The pencil at `solution`, a converged point of `hb`; `parts`, when given and at the
+    /// same ω, is `∂R/∂A` there (the corrector's).
+    pub fn new(
+        hb: &'a HarmonicBalance<'h>,
+        solution: &HbSolution,
+        parts: Option<&JacobianParts>,
+    ) -> Result<Self, StabilityError> {
+        let omega = solution.omega;
+        let setup = |reason: String| StabilityError::Setup { omega, reason };
+        let coeffs = solution.unknowns();
+        let parts = match parts.filter(|p| p.omega == omega) {
+            Some(p) => p.clone(),
+            None => {
+                let mut r = vec![0.0; coeffs.len()];
+                hb.residual_jacobian(&coeffs, omega, &mut r)
+                    .map_err(|e| setup(e.to_string()))?
+            }
+        };
+        let velocity = hb
+            .velocity_sensitivity(&coeffs, omega)
+            .map_err(|e| setup(e.to_string()))?;
+        let nc = hb.n_coeffs();
+        let pt = hb.nonlinear_global().len();
+        let ld = pt * nc;
+        let velocity_blocks = (0..pt)
+            .flat_map(|k| (0..pt).map(move |l| (k, l)))
+            .filter(|&(k, l)| {
+                (0..nc).any(|r| {
+                    velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc]
+                        .iter()
+                        .any(|v| *v != 0.0)
+                })
+            })
+            .collect();
+        Ok(Self {
+            hb,
+            parts,
+            velocity,
+            velocity_blocks,
+        })
+    }
+
+    /// `T(s)` in the structured form of the Jacobian (see the module docs).
+    pub fn at(&self, s: f64) -> JacobianParts {
+        let lin = &self.parts.linear;
+        let comb = |terms: &[(f64, &DenseMatrix)], n: usize| {
+            let mut out = DenseMatrix::zeros(n);
+            for (f, m) in terms {
+                if *f != 0.0 {
+                    out.data.iter_mut().zip(&m.data).for_each(|(o, v)| *o += f * v);
+                }
+            }
+            out
+        };
+        let (n, nt) = (lin.mass.n, lin.thermal_capacity.n);
+        let linear = LinearPart {
+            mass: lin.mass.clone(),
+            damping: comb(&[(1.0, &lin.damping), (2.0 * s, &lin.mass)], n),
+            stiffness: comb(
+                &[(1.0, &lin.stiffness), (s, &lin.damping), (s * s, &lin.mass)],
+                n,
+            ),
+            thermal_capacity: lin.thermal_capacity.clone(),
+            thermal_conductance: comb(
+                &[(1.0, &lin.thermal_conductance), (s, &lin.thermal_capacity)],
+                nt,
+            ),
+        };
+        let nonlinear = self
+            .parts
+            .nonlinear
+            .iter()
+            .zip(&self.velocity)
+            .map(|(j, v)| j + s * v)
+            .collect();
+        JacobianParts {
+            omega: self.parts.omega,
+            linear,
+            nonlinear,
+        }
+    }
+
+    /// `out = T(λ) x` for complex `λ` and `x` (real and imaginary parts apart): the
+    /// residual of an eigenpair.
+    pub fn apply(&self, lambda: Complex64, x: &[Complex64]) -> Vec<Complex64> {
+        let re: Vec<f64> = x.iter().map(|v| v.re).collect();
+        let im: Vec<f64> = x.iter().map(|v| v.im).collect();
+        let n = x.len();
+        // T(λ) = A0 + λ A1 + λ² A2 with real A's
+        let mut a = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        let mut b = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
+        for (k, (ak, bk)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+            self.apply_power(k, &re, ak);
+            self.apply_power(k, &im, bk);
+        }
+        let l2 = lambda * lambda;
+        (0..n)
+            .map(|i| {
+                let v0 = Complex64::new(a[0][i], b[0][i]);
+                let v1 = Complex64::new(a[1][i], b[1][i]);
+                let v2 = Complex64::new(a[2][i], b[2][i]);
+                v0 + lambda * v1 + l2 * v2
+            })
+            .collect()
+    }
+
+    /// `out += A_k x` for `k` = 0, 1, 2.
+    fn apply_power(&self, k: usize, x: &[f64], out: &mut [f64]) {
+        let lin = &self.parts.linear;
+        let (n, nt) = (lin.mass.n, lin.thermal_capacity.n);
+        let zero = DenseMatrix::zeros(n);
+        let zero_t = DenseMatrix::zeros(nt);
+        let part = match k {
+            0 => lin.clone(),
+            1 => LinearPart {
+                mass: zero.clone(),
+                damping: scaled(&lin.mass, 2.0),
+                stiffness: lin.damping.clone(),
+                thermal_capacity: zero_t.clone(),
+                thermal_conductance: lin.thermal_capacity.clone(),
+            },
+            _ => LinearPart {
+                mass: zero.clone(),
+                damping: zero,
+                stiffness: lin.mass.clone(),
+                thermal_capacity: zero_t.clone(),
+                thermal_conductance: zero_t,
+            },
+        };
+        self.hb.add_linear(&part, self.parts.omega, x, out);
+        match k {
+            0 => self.add_nonlinear(&self.parts.nonlinear, 1.0, x, out),
+            1 => self.add_velocity(x, out),
+            _ => {}
+        }
+    }
+
+    /// `out += V x` with `V` the velocity sensitivity, on its nonzero blocks.
+    fn add_velocity(&self, x: &[f64], out: &mut [f64]) {
+        let nc = self.hb.n_coeffs();
+        let globals = self.hb.nonlinear_global();
+        let ld = globals.len() * nc;
+        for &(k, l) in &self.velocity_blocks {
+            let (gk, gl) = (globals[k], globals[l]);
+            let xs = &x[gl * nc..(gl + 1) * nc];
+            for r in 0..nc {
+                let row = &self.velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc];
+                out[gk * nc + r] += dot(row, xs);
+            }
+        }
+    }
+
+    /// `out += scale · B x` for a dense block `B` on the nonlinear DoFs (the layout of
+    /// [`JacobianParts::nonlinear`]).
+    fn add_nonlinear(&self, block: &[f64], scale: f64, x: &[f64], out: &mut [f64]) {
+        let nc = self.hb.n_coeffs();
+        let globals = self.hb.nonlinear_global();
+        let ld = globals.len() * nc;
+        let xs: Vec<f64> = globals
+            .iter()
+            .flat_map(|&g| x[g * nc..(g + 1) * nc].iter().copied())
+            .collect();
+        for (k, &g) in globals.iter().enumerate() {
+            for r in 0..nc {
+                let row = &block[(k * nc + r) * ld..(k * nc + r + 1) * ld];
+                let s: f64 = row.iter().zip(&xs).map(|(a, b)| a * b).sum();
+                out[g * nc + r] += scale * s;
+            }
+        }
+    }
+
+    /// The exponents nearest zero (see [`NearZero`]), with `want` of them converged at
+    /// least (fewer when the disk of `options.max_radius_fraction · ω_b` holds fewer).
+    pub fn near_zero(&self, want: usize, options: &HillOptions) -> Result<NearZero, StabilityError> {
+        let omega = self.parts.omega;
+        let setup = |reason: String| StabilityError::Setup { omega, reason };
+        let nu = self.hb.n_unknowns();
+        let nm = self.hb.n_mech_unknowns();
+        let dim = nu + nm;
+        let wb = self.hb.aft().base_frequency(omega);
+        let r_max = options.max_radius_fraction * wb;
+        // a shift slightly off zero (the Jacobian is singular at folds), small against
+        // the disk; a second one if T(σ) happens to be singular there
+        let mut last_err = String::new();
+        for shift in [1e-3 * r_max, -2.3e-3 * r_max] {
+            let fact = match LinearSolver::default().factor(self.hb, &self.at(shift), None) {
+                Ok(f) => f,
+                Err(e) => {
+                    last_err = e.to_string();
+                    continue;
+                }
+            };
+            let lin = &self.parts.linear;
+            // A1 (the thermal rows' C_T, the mechanical C and 2M·D) and A2 (M)
+            let a1 = LinearPart {
+                mass: DenseMatrix::zeros(lin.mass.n),
+                damping: scaled(&lin.mass, 2.0),
+                stiffness: lin.damping.clone(),
+                thermal_capacity: DenseMatrix::zeros(lin.thermal_capacity.n),
+                thermal_conductance: lin.thermal_capacity.clone(),
+            };
+            let a2 = LinearPart {
+                mass: DenseMatrix::zeros(lin.mass.n),
+                damping: DenseMatrix::zeros(lin.mass.n),
+                stiffness: lin.mass.clone(),
+                thermal_capacity: DenseMatrix::zeros(lin.thermal_capacity.n),
+                thermal_conductance: DenseMatrix::zeros(lin.thermal_capacity.n),
+            };
+            // u = [x; y] with y = λ x_m on the mechanical unknowns only (the thermal
+            // equations are of first order): r = A1 x + A2 (y + σ x_m),
+            // z = −T(σ)⁻¹ r, out = [z; x_m + σ z_m]
+            let mut w = vec![0.0; nu];
+            let op = |u: &[f64], out: &mut [f64]| -> Result<(), String> {
+                let (x, y) = u.split_at(nu);
+                for i in 0..nm {
+                    w[i] = y[i] + shift * x[i];
+                }
+                let mut r = vec![0.0; nu];
+                self.hb.add_linear(&a2, omega, &w, &mut r);
+                self.hb.add_linear(&a1, omega, x, &mut r);
+                self.add_velocity(x, &mut r);
+                let (z, _) = fact.solve(&r, 0.0).map_err(|e| e.to_string())?;
+                for i in 0..nu {
+                    out[i] = -z[i];
+                }
+                for i in 0..nm {
+                    out[nu + i] = x[i] - shift * z[i];
+                }
+                Ok(())
+            };
+            let want = want.min(dim.saturating_sub(2)).max(1);
+            return arnoldi_nearest(op, dim, want, shift, r_max, options)
+                .map_err(|e| setup(format!("Hill eigenvalues near zero: {e}")));
+        }
+        Err(setup(format!("Hill's matrix at the shift: {last_err}")))
+    }
+}
+
+/// The coupled exponents nearest zero of `solution`, a converged point of `hb` with a
+/// thermal field: the `n_therm + options.extra` nearest (see [`HillPencil::near_zero`]).
+/// `jacobian`, when given, is `∂R/∂A` at the point.
+pub fn near_zero_exponents(
+    hb: &HarmonicBalance<'_>,
+    solution: &HbSolution,
+    jacobian: Option<&JacobianParts>,
+    options: &HillOptions,
+) -> Result<NearZero, StabilityError> {
+    HillPencil::new(hb, solution, jacobian)?.near_zero(hb.n_therm() + options.extra, options)
+}
+
+fn scaled(m: &DenseMatrix, f: f64) -> DenseMatrix {
+    DenseMatrix {
+        n: m.n,
+        data: m.data.iter().map(|v| f * v).collect(),
+    }
+}
+
+/// Deterministic start vector with no structure (a linear congruential sequence).
+fn start_vector(dim: usize) -> Vec<f64> {
+    let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
+    (0..dim)
+        .map(|_| {
+            s = s
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        })
+        .collect()
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Arnoldi on the shift-inverted operator `op` (dimension `dim`) until the `want`
+/// eigenvalues nearest `shift` and the next one are converged, or every eigenvalue in
+/// the disk of radius `r_max` is, or the Krylov space is exhausted.
+fn arnoldi_nearest(
+    mut op: impl FnMut(&[f64], &mut [f64]) -> Result<(), String>,
+    dim: usize,
+    want: usize,
+    shift: f64,
+    r_max: f64,
+    options: &HillOptions,
+) -> Result<NearZero, String> {
+    let max_dim = options.max_dim.min(dim);
+    // the Krylov basis as columns, orthogonalised by two passes of classical
+    // Gram–Schmidt in matrix–vector form (the cost of the method besides the solves)
+    let mut basis = Mat::<f64>::zeros(dim, max_dim + 1);
+    // Hessenberg columns: h[j] has j + 2 entries
+    let mut h: Vec<Vec<f64>> = Vec::new();
+    let v = start_vector(dim);
+    let nv = dot(&v, &v).sqrt();
+    for (i, x) in v.iter().enumerate() {
+        basis[(i, 0)] = x / nv;
+    }
+    let mut w = Mat::<f64>::zeros(dim, 1);
+    let mut u = vec![0.0; dim];
+    let mut out = vec![0.0; dim];
+    // the first look after about half the wanted count, then every eight steps
+    let mut next_check = (want + 4).min(max_dim);
+    loop {
+        let j = h.len();
+        for (i, x) in u.iter_mut().enumerate() {
+            *x = basis[(i, j)];
+        }
+        op(&u, &mut out)?;
+        if out.iter().any(|x| !x.is_finite()) {
+            return Err("the shifted operator gave non-finite values".into());
+        }
+        for (i, x) in out.iter().enumerate() {
+            w[(i, 0)] = *x;
+        }
+        let mut col = vec![0.0; j + 2];
+        let q = basis.as_ref().subcols(0, j + 1);
+        // a second pass only when the first cancelled much of the vector (the DGKS
+        // criterion: the norm fell below 1/√2 of its value)
+        let mut norm_before = w.norm_l2();
+        let mut beta = norm_before;
+        for _ in 0..2 {
+            let c = q.transpose() * w.as_ref();
+            w -= q * c.as_ref();
+            for (k, ck) in col.iter_mut().take(j + 1).enumerate() {
+                *ck += c[(k, 0)];
+            }
+            beta = w.norm_l2();
+            if beta > std::f64::consts::FRAC_1_SQRT_2 * norm_before {
+                break;
+            }
+            norm_before = beta;
+        }
+        col[j + 1] = beta;
+        h.push(col);
+        let m = h.len();
+        let breakdown = beta <= 1e-14 * h[j].iter().map(|x| x.abs()).fold(0.0, f64::max);
+        if m >= next_check || breakdown || m >= max_dim {
+            if let Some(found) = ritz_check(&h, m, want, shift, r_max, options.tol, breakdown) {
+                return Ok(NearZero { steps: m, ..found });
+            }
+            if breakdown || m >= max_dim {
+                return Err(format!(
+                    "not converged in {m} Arnoldi steps (dimension {dim})"
+                ));
+            }
+            next_check = (m + 8).min(max_dim);
+        }
+        for i in 0..dim {
+            basis[(i, j + 1)] = w[(i, 0)] / beta;
+        }
+    }
+}
+
+/// The converged eigenvalues nearest the shift from the Hessenberg matrix of `m` steps,
+/// when the `want` nearest and the one after them (or all in the disk `r_max`) are.
+fn ritz_check(
+    h: &[Vec<f64>],
+    m: usize,
+    want: usize,
+    shift: f64,
+    r_max: f64,
+    tol: f64,
+    exact: bool,
+) -> Option<NearZero> {
+    let hm = Mat::from_fn(m, m, |i, j| if i <= j + 1 { h[j][i] } else { 0.0 });
+    let eig = hm.eigen().ok()?;
+    let (s, u) = (eig.S(), eig.U());
+    let beta = h[m - 1][m];
+    let mut ritz: Vec<(Complex64, bool)> = (0..m)
+        .filter_map(|k| {
+            let theta: Complex64 = s[k];
+            if !theta.re.is_finite() || !theta.im.is_finite() || theta.norm() == 0.0 {
+                return None;
+            }
+            let norm = (0..m).map(|i| u[(i, k)].norm_sqr()).sum::<f64>().sqrt();
+            let last = u[(m - 1, k)].norm() / norm.max(f64::MIN_POSITIVE);
+            let converged = exact || beta.abs() * last <= tol * theta.norm();
+            Some((Complex64::new(shift, 0.0) + theta.inv(), converged))
+        })
+        .collect();
+    ritz.sort_by(|a, b| {
+        (a.0 - shift)
+            .norm()
+            .total_cmp(&(b.0 - shift).norm())
+    });
+    // the leading run of converged values
+    let lead = ritz.iter().take_while(|(_, c)| *c).count();
+    let last_outside = lead > 0 && ritz[lead - 1].0.norm() >= r_max;
+    if !(lead > want || last_outside || (exact && lead > 0)) {
+        return None;
+    }
+    // the disk: the wanted count (a conjugate pair kept whole) within r_max, its edge
+    // halfway to the next converged value
+    let mut k = want.min(lead);
+    while k > 0 && k < lead && (ritz[k].0 - ritz[k - 1].0.conj()).norm() <= 1e-8 * ritz[k].0.norm() {
+        k += 1;
+    }
+    let inside: Vec<Complex64> = ritz[..k]
+        .iter()
+        .map(|(l, _)| *l)
+        .filter(|l| l.norm() < r_max)
+        .collect();
+    let edge_in = inside.iter().map(|l| l.norm()).fold(0.0, f64::max);
+    let edge_out = ritz[k..lead]
+        .iter()
+        .map(|(l, _)| l.norm())
+        .fold(r_max, f64::min);
+    let radius = 0.5 * (edge_in + edge_out.max(edge_in));
+    let mut exponents = inside;
+    exponents.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
+    Some(NearZero {
+        exponents,
+        radius,
+        steps: m,
+    })
+}
