@@ -35,6 +35,29 @@ fn main() -> anyhow::Result<()> {
         extra,
         ..HillOptions::default()
     };
+    if let Ok(i) = std::env::var("BETWEEN") {
+        let i: usize = i.parse()?;
+        let (pa, pb) = (&rec.points[i], &rec.points[i + 1]);
+        let (sa, sb) = (re.solution(pa), re.solution(pb));
+        let (ua, ub) = (sa.unknowns(), sb.unknowns());
+        for k in 0..=20 {
+            let f = k as f64 / 20.0;
+            let w = sa.omega + f * (sb.omega - sa.omega);
+            let guess: Vec<f64> = ua.iter().zip(&ub).map(|(a, b)| a + f * (b - a)).collect();
+            let (a, st) = tmrotor::hb::newton::solve_fixed(&hb, w, &guess, &Default::default())?;
+            let sol = tmrotor::hb::HbSolution::from_unknowns(w, hb.basis(), hb.n_mech(), &a, &st);
+            let nz = HillPencil::new(&hb, &sol, None)?.near_zero(hb.n_therm() + extra, &options)?;
+            let mut top = nz.exponents.clone();
+            top.sort_by(|a, b| (b.re / b.norm()).total_cmp(&(a.re / a.norm())));
+            let top: Vec<String> = top
+                .iter()
+                .take(3)
+                .map(|l| format!("{:.4e}{:+.4e}i", l.re, l.im))
+                .collect();
+            println!("ω {w:.6}: {top:?}");
+        }
+        return Ok(());
+    }
     for p in rec
         .points
         .iter()
@@ -59,9 +82,20 @@ fn main() -> anyhow::Result<()> {
                 hb.add_linear(&parts.linear, sol.omega, &rhs, &mut out);
             }
             let tl = t.elapsed() / 50;
-            println!("n_unknowns {} n_therm {} factor {:?} solve {:?} add_linear {:?}", hb.n_unknowns(), hb.n_therm(), tf, ts, tl);
+            println!(
+                "n_unknowns {} n_therm {} factor {:?} solve {:?} add_linear {:?}",
+                hb.n_unknowns(),
+                hb.n_therm(),
+                tf,
+                ts,
+                tl
+            );
             let nz = pencil.near_zero(hb.n_therm() + extra, &options)?;
-            let mods: Vec<String> = nz.exponents.iter().map(|l| format!("{:.2e}", l.norm())).collect();
+            let mods: Vec<String> = nz
+                .exponents
+                .iter()
+                .map(|l| format!("{:.2e}", l.norm()))
+                .collect();
             println!("{}", mods.join(" "));
             return Ok(());
         }
@@ -108,7 +142,11 @@ fn main() -> anyhow::Result<()> {
             near
         );
     }
-    for b in rec.bifurcations.iter().filter(|b| b.omega_rad_s >= from && b.omega_rad_s <= to) {
+    for b in rec
+        .bifurcations
+        .iter()
+        .filter(|b| b.omega_rad_s >= from && b.omega_rad_s <= to)
+    {
         let mut point = rec.points[0].clone();
         point.omega_rad_s = b.omega_rad_s;
         point.coeffs_mech.clone_from(&b.coeffs_mech);

@@ -214,7 +214,19 @@ pub fn audit_step(
         }
         audit.confirmed.push(confirmed);
     }
+    let near_zero = |f: Option<&FloquetResult>| f.is_some_and(|f| f.near_zero.is_some());
+    let exact = near_zero(before) && near_zero(after);
     if let (Some(a), Some(b)) = (before, after)
+        && folds == 1
+        && exact
+        && a.real_above_one().abs_diff(b.real_above_one()) > 1
+    {
+        audit.notes.push(format!(
+            "saddle-node {between}: the count of real exponents above zero of the coupled balance changes from {} to {}, not by one: a real exponent passes zero only where the branch folds (det J = 0), so the others entered as a complex pair crossing the imaginary axis (a Neimark–Sacker point) that split into two real ones, or at a second fold, within this one step — a smaller step (--ds-max) separates them",
+            a.real_above_one(),
+            b.real_above_one()
+        ));
+    } else if let (Some(a), Some(b)) = (before, after)
         && folds == 1
         && a.real_above_one().abs_diff(b.real_above_one()) > 1
     {
@@ -230,7 +242,13 @@ pub fn audit_step(
         && located.is_empty()
         && a.unstable_count() != b.unstable_count()
     {
-        let reason = if a.fold_parity_mismatch != b.fold_parity_mismatch {
+        let reason = if exact && a.near_zero_outside() != b.near_zero_outside() {
+            format!(
+                "the coupled exponents nearest zero changed from {} to {} with a positive real part, and the search could not follow a pair across the imaginary axis (a real exponent passes zero only at a fold, det J = 0, so the change is a pair's crossing, a Neimark–Sacker point, narrower than the step, or a fold pair inside it) — a smaller step (--ds-max) resolves it",
+                a.near_zero_outside(),
+                b.near_zero_outside()
+            )
+        } else if a.fold_parity_mismatch != b.fold_parity_mismatch {
             "a real multiplier of the monodromy product passes +1 where the branch does not fold: the truncated harmonic balance, whose real exponents pass zero only at folds, and the orbit's linearisation disagree here — raise the truncation order to decide"
                 .to_string()
         } else if a.split_uncertain() || b.split_uncertain() {
@@ -954,6 +972,35 @@ impl Recorder {
         self.branch_bifurcations.clear();
     }
 
+    /// The crossing pair of a located Neimark–Sacker point `b` and the modulation it
+    /// starts, with the thermal share of its mode when the pair is one of the coupled
+    /// exponents nearest zero (one more Hill solve, with the thermal capacities changed).
+    fn modulation(
+        &self,
+        problem: &SweepProblem,
+        b: &BranchPoint,
+    ) -> Option<crate::stability::Modulation> {
+        let f = b.stability.as_ref()?;
+        let mut m = f.crossing_pair(crate::system::PeriodicOrbit::period(&b.solution))?;
+        if let Some(l) = m.exponent {
+            let basis = self.run.basis().unwrap_or_else(|_| problem.basis.clone());
+            let options = crate::stability::HillOptions::default();
+            m.thermal_share = HarmonicBalance::new(
+                &problem.system,
+                &basis,
+                problem.settings.harmonic.aft_samples,
+            )
+            .ok()
+            .and_then(|hb| {
+                let want = hb.n_therm() + options.extra;
+                crate::stability::HillPencil::new(&hb, &b.solution, None)
+                    .and_then(|p| p.thermal_share(l, want, &options))
+                    .ok()
+            });
+        }
+        Some(m)
+    }
+
     /// Records an accepted point and the bifurcations located on the step to it: the
     /// step's audit, each bifurcation, the point (carrying the first bifurcation's type).
     fn accept(
@@ -996,6 +1043,9 @@ impl Recorder {
                     .map(|f| f.multipliers.clone())
                     .unwrap_or_default(),
                 confirmed,
+                modulation: (kind == BifurcationKind::NeimarkSacker)
+                    .then(|| self.modulation(problem, b))
+                    .flatten(),
                 coeffs_mech: b.solution.mech.clone(),
                 coeffs_therm: b.solution.therm.clone(),
             };
@@ -1004,7 +1054,25 @@ impl Recorder {
                 self.period_doublings.push((self.n_bif, b.solution.clone()));
             }
             self.n_bif += 1;
-            let located = (b.solution.omega, kind.label().to_string());
+            let label = match rec.modulation {
+                Some(m) => format!(
+                    "{}{} (angle {:.3e} rad: a modulation of {:.4} s, {:.0} revolutions{})",
+                    if m.thermo_mechanical() {
+                        "thermo-mechanical "
+                    } else {
+                        ""
+                    },
+                    kind.label(),
+                    m.angle_rad,
+                    m.period_s,
+                    m.period_s * b.solution.omega / std::f64::consts::TAU,
+                    m.thermal_share
+                        .map(|s| format!("; thermal share {s:.2}"))
+                        .unwrap_or_default()
+                ),
+                None => kind.label().to_string(),
+            };
+            let located = (b.solution.omega, label);
             if self.branch == 0 {
                 self.bifurcations.push(located);
             } else {

@@ -316,7 +316,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         writeln!(out, "  stability not assessed: {note}")?;
     }
     for (w, kind) in &report.bifurcations {
-        writeln!(out, "  {kind} at ω = {w:.3} rad/s")?;
+        writeln!(out, "  {}", located_line(kind, *w))?;
     }
     for b in &report.branches {
         writeln!(
@@ -337,7 +337,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             b.timings.summary(false)
         )?;
         for (w, kind) in &b.bifurcations {
-            writeln!(out, "    {kind} at ω = {w:.3} rad/s")?;
+            writeln!(out, "    {}", located_line(kind, *w))?;
         }
     }
     for st in &report.period_doubled {
@@ -406,5 +406,14 @@ pub fn progress_message(p: &Progress, omega: &str) -> String {
             plural(p.points, "point", "points"),
             plural(p.bifurcations, "bifurcation", "bifurcations")
         )
+    }
+}
+
+/// A located bifurcation's line of the summary: its label (the kind, with the details of
+/// a Neimark–Sacker point in parentheses) and where it lies.
+fn located_line(label: &str, w: f64) -> String {
+    match label.split_once(" (") {
+        Some((kind, details)) => format!("{kind} at ω = {w:.3} rad/s ({details}"),
+        None => format!("{label} at ω = {w:.3} rad/s"),
     }
 }

@@ -110,8 +110,6 @@ use crate::hb::{
     Factorization, HarmonicBalance, HbError, HbSolution, JacobianParts, LinearSolver, SolveError,
     condense::{Border, dot},
 };
-use num_complex::Complex64;
-
 use crate::stability::{BifurcationKind, FloquetResult, StabilityMethod, UNIT_CIRCLE_TOL};
 
 /// A fold is located until the ω-component of the unit tangent is this fraction of its
@@ -209,12 +207,23 @@ impl Family {
 
 /// Distances outside the circle ([`crate::stability::Counted::excess`]) of the counted
 /// multipliers of `family`, largest first.
+///
+/// For the near-zero exponents the distance is divided by the exponent's modulus (the
+/// cosine of its angle to the imaginary axis, less the tolerance): a pair crossing the
+/// axis passes zero continuously, while a real exponent stays at ±1 (the slowest thermal
+/// exponents, a few 1e-5 1/s below zero, would otherwise sit at zero on the stable side
+/// and end every search at its first trial; a real exponent crosses only at a fold).
 fn excesses_of(f: &FloquetResult, family: Family) -> Vec<f64> {
     let mut m: Vec<f64> = f
         .counted()
         .iter()
         .filter(|c| family.holds(c))
-        .map(|c| c.excess)
+        .map(|c| match (family, c.exponent) {
+            (Family::NearZero, Some(l)) if l.norm() > 0.0 => {
+                c.excess / (l.norm() * f.near_zero.map_or(1.0, |d| d.period))
+            }
+            _ => c.excess,
+        })
         .collect();
     m.sort_by(|x, y| y.total_cmp(x));
     m
@@ -2235,9 +2244,12 @@ impl<'a> Continuation<'a> {
             // the crossing exponent: the k-th largest real part at the located point
             Family::NearZero => {
                 let f = p.stability.as_ref()?;
-                let mut near: Vec<Complex64> = f.slow_exponents.clone();
-                near.sort_by(|a, b| b.re.total_cmp(&a.re));
-                BifurcationKind::of_exponent(*near.get(k)?)
+                let crossing = f
+                    .slow_exponents
+                    .iter()
+                    .filter(|l| l.norm() > 0.0)
+                    .min_by(|a, b| (a.re / a.norm()).abs().total_cmp(&(b.re / b.norm()).abs()))?;
+                BifurcationKind::of_exponent(*crossing)
             }
         };
         p.bifurcation = Some(kind);

@@ -422,6 +422,8 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
         real_above_one: p.floquet_counts.map_or(0, |c| c.real_above_one),
         fold_parity_mismatch: p.floquet_counts.is_some_and(|c| c.fold_parity_mismatch),
         split_ratio: p.floquet_counts.map_or(0.0, |c| c.split_ratio),
+        near_zero_radius_per_s: p.floquet_counts.map_or(0.0, |c| c.near_zero_radius),
+        slow_angles_rad: p.slow_exponents.iter().map(|l| l.im * p.period_s).collect(),
     });
     PointMessages {
         summary,
@@ -576,6 +578,7 @@ pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, S
             real_above_one: f.real_above_one,
             fold_parity_mismatch: f.fold_parity_mismatch,
             split_ratio: f.split_ratio,
+            near_zero_radius: f.near_zero_radius_per_s,
         }),
     };
     validate_point(run, &point)?;
@@ -596,6 +599,18 @@ pub fn bifurcation_record_to_pb(b: &BifurcationRecord) -> pb::Bifurcation {
         unconfirmed: !b.confirmed,
         coeffs_mech: b.coeffs_mech.clone(),
         coeffs_therm: b.coeffs_therm.clone(),
+        angle_rad: b.modulation.map_or(0.0, |m| m.angle_rad),
+        modulation_period_s: b.modulation.map_or(0.0, |m| m.period_s),
+        modulation_revolutions: b
+            .modulation
+            .map_or(0.0, |m| m.period_s * b.omega_rad_s / std::f64::consts::TAU),
+        near_zero: b.modulation.is_some_and(|m| m.exponent.is_some()),
+        exponent: b
+            .modulation
+            .and_then(|m| m.exponent)
+            .map(|l| complex_to_pb(&l)),
+        thermal_share: b.modulation.and_then(|m| m.thermal_share).unwrap_or(0.0),
+        thermo_mechanical: b.modulation.is_some_and(|m| m.thermo_mechanical()),
     }
 }
 
@@ -613,6 +628,16 @@ pub fn bifurcation_record_from_pb(m: &pb::Bifurcation) -> Result<BifurcationReco
         amplitude_rms_m: m.amplitude_rms_m.clone(),
         multipliers: m.multipliers.iter().map(complex_from_pb).collect(),
         confirmed: !m.unconfirmed,
+        modulation: (m.angle_rad > 0.0).then(|| crate::stability::Modulation {
+            exponent: m
+                .exponent
+                .as_ref()
+                .filter(|_| m.near_zero)
+                .map(complex_from_pb),
+            angle_rad: m.angle_rad,
+            period_s: m.modulation_period_s,
+            thermal_share: m.near_zero.then_some(m.thermal_share),
+        }),
         coeffs_mech: m.coeffs_mech.clone(),
         coeffs_therm: m.coeffs_therm.clone(),
     })

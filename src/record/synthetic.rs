@@ -300,6 +300,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
                 amplitude_rms_m: vec![(am * am + c * c).sqrt()],
                 multipliers: vec![Complex64::new(1.0, 0.0), Complex64::new(0.5, 0.0)],
                 confirmed: true,
+                modulation: None,
                 coeffs_mech: Vec::new(),
                 coeffs_therm: Vec::new(),
             });

@@ -206,6 +206,8 @@ pub struct FloquetCounts {
     pub fold_parity_mismatch: bool,
     /// 0 without slow exponents.
     pub split_ratio: f64,
+    /// Radius (1/s) of the disk of the coupled exponents nearest zero; 0 without it.
+    pub near_zero_radius: f64,
 }
 
 impl FloquetCounts {
@@ -216,6 +218,7 @@ impl FloquetCounts {
             real_above_one: f.real_above_one() as u32,
             fold_parity_mismatch: f.fold_parity_mismatch,
             split_ratio: f.split_ratio().unwrap_or(0.0),
+            near_zero_radius: f.near_zero.map_or(0.0, |d| d.radius),
         }
     }
 }
@@ -251,6 +254,9 @@ pub struct BifurcationRecord {
     /// Saddle-nodes: whether the monodromy product of the neighbouring orbits confirms the
     /// fold (see `proto/tmrotor/v1/bifurcation.proto`); `true` for the other kinds.
     pub confirmed: bool,
+    /// Neimark–Sacker points: the crossing pair and the modulation it starts (see
+    /// `proto/tmrotor/v1/bifurcation.proto`); `None` for the other kinds.
+    pub modulation: Option<crate::stability::Modulation>,
     /// Harmonic coefficients of the located point, mechanical and thermal DoFs (basis
     /// layout); empty in recordings written before they were recorded.
     pub coeffs_mech: Vec<f64>,

@@ -142,6 +142,44 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         })
     }
 
+    /// The share of the thermal capacity in the mode of the exponent `lambda` (one of
+    /// [`Self::near_zero`]'s with `want`): `−(C_T/λ) ∂λ/∂C_T` by a relative change of
+    /// 1e-3 of every thermal capacity, its real part clamped to `[0, 1]`. A purely thermal
+    /// mode (`λ ∝ 1/C_T`) has share 1, a purely mechanical one 0.
+    pub fn thermal_share(
+        &self,
+        lambda: Complex64,
+        want: usize,
+        options: &HillOptions,
+    ) -> Result<f64, StabilityError> {
+        let eps = 1e-3;
+        let mut scaled_parts = self.parts.clone();
+        scaled_parts
+            .linear
+            .thermal_capacity
+            .data
+            .iter_mut()
+            .for_each(|c| *c *= 1.0 + eps);
+        let scaled = HillPencil {
+            hb: self.hb,
+            parts: scaled_parts,
+            velocity: self.velocity.clone(),
+            velocity_blocks: self.velocity_blocks.clone(),
+        };
+        let nz = scaled.near_zero(want, options)?;
+        let moved = nz
+            .exponents
+            .iter()
+            .min_by(|a, b| (*a - lambda).norm().total_cmp(&(*b - lambda).norm()))
+            .ok_or_else(|| StabilityError::Setup {
+                omega: self.parts.omega,
+                reason: "no exponent near the crossing one with the thermal capacity changed"
+                    .into(),
+            })?;
+        let share = -((moved - lambda) / (eps * lambda)).re;
+        Ok(share.clamp(0.0, 1.0))
+    }
+
     /// `T(s)` in the structured form of the Jacobian (see the module docs).
     pub fn at(&self, s: f64) -> JacobianParts {
         let lin = &self.parts.linear;
@@ -149,7 +187,10 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             let mut out = DenseMatrix::zeros(n);
             for (f, m) in terms {
                 if *f != 0.0 {
-                    out.data.iter_mut().zip(&m.data).for_each(|(o, v)| *o += f * v);
+                    out.data
+                        .iter_mut()
+                        .zip(&m.data)
+                        .for_each(|(o, v)| *o += f * v);
                 }
             }
             out
@@ -246,7 +287,8 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             let (gk, gl) = (globals[k], globals[l]);
             let xs = &x[gl * nc..(gl + 1) * nc];
             for r in 0..nc {
-                let row = &self.velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc];
+                let row =
+                    &self.velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc];
                 out[gk * nc + r] += dot(row, xs);
             }
         }
@@ -273,7 +315,11 @@ impl<'a, 'h> HillPencil<'a, 'h> {
 
     /// The exponents nearest zero (see [`NearZero`]), with `want` of them converged at
     /// least (fewer when the disk of `options.max_radius_fraction · ω_b` holds fewer).
-    pub fn near_zero(&self, want: usize, options: &HillOptions) -> Result<NearZero, StabilityError> {
+    pub fn near_zero(
+        &self,
+        want: usize,
+        options: &HillOptions,
+    ) -> Result<NearZero, StabilityError> {
         let omega = self.parts.omega;
         let setup = |reason: String| StabilityError::Setup { omega, reason };
         let nu = self.hb.n_unknowns();
@@ -479,11 +525,7 @@ fn ritz_check(
             Some((Complex64::new(shift, 0.0) + theta.inv(), converged))
         })
         .collect();
-    ritz.sort_by(|a, b| {
-        (a.0 - shift)
-            .norm()
-            .total_cmp(&(b.0 - shift).norm())
-    });
+    ritz.sort_by(|a, b| (a.0 - shift).norm().total_cmp(&(b.0 - shift).norm()));
     // the leading run of converged values
     let lead = ritz.iter().take_while(|(_, c)| *c).count();
     let last_outside = lead > 0 && ritz[lead - 1].0.norm() >= r_max;
@@ -493,7 +535,8 @@ fn ritz_check(
     // the disk: the wanted count (a conjugate pair kept whole) within r_max, its edge
     // halfway to the next converged value
     let mut k = want.min(lead);
-    while k > 0 && k < lead && (ritz[k].0 - ritz[k - 1].0.conj()).norm() <= 1e-8 * ritz[k].0.norm() {
+    while k > 0 && k < lead && (ritz[k].0 - ritz[k - 1].0.conj()).norm() <= 1e-8 * ritz[k].0.norm()
+    {
         k += 1;
     }
     let inside: Vec<Complex64> = ritz[..k]

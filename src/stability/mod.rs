@@ -32,23 +32,23 @@
 pub mod exp_sip;
 pub mod expm;
 pub mod frozen;
+pub mod hill_near_zero;
 pub mod locate;
 pub mod modal;
 pub mod reduced;
 pub mod sip;
 pub mod slow;
-pub mod hill_near_zero;
 pub mod thermal;
 pub mod variational;
 
 pub use exp_sip::{ExpSip, IntervalMap, MeanSplit, panel_kernel_isa};
 pub use expm::expm;
 pub use frozen::{FrozenOrbit, FrozenTemperature};
+pub use hill_near_zero::{HillOptions, HillPencil, NearZero, near_zero_exponents};
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
 pub use slow::{slow_exponents, slow_exponents_with, thermal_schur};
-pub use hill_near_zero::{HillOptions, HillPencil, NearZero};
 pub use thermal::{MultiplierSplit, split_thermal, thermal_multiplier_estimates};
 pub use variational::{Shooting, Variational};
 
@@ -91,6 +91,31 @@ pub struct FloquetResult {
     /// above zero that the monodromy product of the orbit does not show, and it is counted
     /// as one multiplier outside the circle.
     pub fold_parity_mismatch: bool,
+}
+
+/// The slow modulation a Neimark–Sacker point starts: the crossing pair's angle and the
+/// period of the oscillation it grows into.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Modulation {
+    /// The crossing exponent `λ` (1/s, positive imaginary part) when the pair is one of
+    /// the near-zero disk's; `None` for a pair of fast multipliers.
+    pub exponent: Option<Complex64>,
+    /// Angle of the crossing multipliers, rad (`Im λ · P`, or `arg μ`), in `(0, π]`.
+    pub angle_rad: f64,
+    /// Period of the modulation, s: `2π P / angle`.
+    pub period_s: f64,
+    /// Share of the thermal capacity in the crossing mode, 0 (purely mechanical) … 1
+    /// (purely thermal): the exponent's relative change under a change of every thermal
+    /// capacity, `−(C_T/λ) ∂λ/∂C_T`; `None` when not computed.
+    pub thermal_share: Option<f64>,
+}
+
+impl Modulation {
+    /// A thermo-mechanical modulation: the crossing mode is mostly thermal (share above
+    /// one half).
+    pub fn thermo_mechanical(&self) -> bool {
+        self.thermal_share.is_some_and(|s| s > 0.5)
+    }
 }
 
 /// One multiplier as the verdict counts it ([`FloquetResult::counted`]).
@@ -211,6 +236,42 @@ impl FloquetResult {
             }));
         }
         out
+    }
+
+    /// The pair that crosses at a Neimark–Sacker point with this result on one side: of
+    /// the near-zero disk, the complex exponent nearest the imaginary axis (relative to
+    /// its modulus); else the complex fast multiplier nearest the unit circle. `period`
+    /// is the orbit's (s). `None` when there is no complex pair.
+    pub fn crossing_pair(&self, period: f64) -> Option<Modulation> {
+        let near = self
+            .slow_exponents
+            .iter()
+            .filter(|l| {
+                self.near_zero.is_some()
+                    && BifurcationKind::of_exponent(**l) == BifurcationKind::NeimarkSacker
+            })
+            .min_by(|a, b| (a.re / a.norm()).abs().total_cmp(&(b.re / b.norm()).abs()));
+        if let Some(l) = near {
+            let l = Complex64::new(l.re, l.im.abs());
+            let angle = l.im * period;
+            return Some(Modulation {
+                exponent: Some(l),
+                angle_rad: angle,
+                period_s: std::f64::consts::TAU * period / angle,
+                thermal_share: None,
+            });
+        }
+        let m = self
+            .counted_multipliers()
+            .filter(|m| BifurcationKind::of_multiplier(**m) == BifurcationKind::NeimarkSacker)
+            .min_by(|a, b| (a.norm() - 1.0).abs().total_cmp(&(b.norm() - 1.0).abs()))?;
+        let angle = m.arg().abs();
+        Some(Modulation {
+            exponent: None,
+            angle_rad: angle,
+            period_s: std::f64::consts::TAU * period / angle,
+            thermal_share: None,
+        })
     }
 
     /// The near-zero entries of [`Self::counted`] outside the circle.
@@ -523,14 +584,13 @@ pub fn classify_crossing(before: &FloquetResult, after: &FloquetResult) -> Optio
         return None;
     }
     let outside = if na > nb { after } else { before };
-    if outside.near_zero.is_some() && before.slow_unstable_count() != after.slow_unstable_count()
-    {
-        if let Some(l) = outside
+    if outside.near_zero.is_some()
+        && before.slow_unstable_count() != after.slow_unstable_count()
+        && let Some(l) = outside
             .near_zero_unstable()
             .min_by(|a, b| a.re.total_cmp(&b.re))
-        {
-            return Some(BifurcationKind::of_exponent(*l));
-        }
+    {
+        return Some(BifurcationKind::of_exponent(*l));
     }
     if before.slow_unstable_count() != after.slow_unstable_count()
         && let Some(l) = outside.decided_slow().min_by(|a, b| a.re.total_cmp(&b.re))
