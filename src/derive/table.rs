@@ -345,7 +345,9 @@ pub fn slow_exponents(rec: &Recording) -> Table {
 }
 
 /// The located bifurcations: number, type, ω, arc length, the point before, whether the
-/// multipliers leave a saddle-node unconfirmed, and the RMS amplitude per dynamic node.
+/// multipliers leave a saddle-node unconfirmed, a Neimark–Sacker point's angle, modulation
+/// period, thermal share and whether it is thermo-mechanical (empty for the other kinds),
+/// and the RMS amplitude per dynamic node.
 pub fn bifurcations(rec: &Recording) -> Table {
     let nodes: Vec<String> = rec.run.nodes.iter().map(|n| node_key(n.id)).collect();
     let mut t = Table::new(
@@ -357,6 +359,10 @@ pub fn bifurcations(rec: &Recording) -> Table {
             "arc_length",
             "after_point",
             "unconfirmed",
+            "angle_rad",
+            "modulation_period_s",
+            "thermal_share",
+            "thermo_mechanical",
         ]
         .iter()
         .map(|s| s.to_string())
@@ -371,6 +377,14 @@ pub fn bifurcations(rec: &Recording) -> Table {
             number(b.arc_length),
             b.after_point.to_string(),
             boolean(Some(!b.confirmed)),
+            number(b.modulation.map_or(f64::NAN, |m| m.angle_rad)),
+            number(b.modulation.map_or(f64::NAN, |m| m.period_s)),
+            number(
+                b.modulation
+                    .and_then(|m| m.thermal_share)
+                    .unwrap_or(f64::NAN),
+            ),
+            boolean(b.modulation.map(|m| m.thermo_mechanical())),
         ];
         entity_cells(&mut row, &b.amplitude_rms_m, nodes.len(), 1, |a| vec![*a]);
         t.rows.push(row);

@@ -109,6 +109,16 @@ def read(path: str | os.PathLike[str]) -> Recording:
     return Recording(p, scan(data, str(p)), notes)
 
 
+def _is_ns(b: Any) -> bool:
+    """Whether a ``/bifurcations`` message carries a Neimark–Sacker point's modulation."""
+    return float(getattr(b, "angle_rad", 0.0)) > 0.0
+
+
+def _ns_value(b: Any, v: float) -> float:
+    """A Neimark–Sacker field's value, NaN for the other kinds (and old recordings)."""
+    return float(v) if _is_ns(b) else np.nan
+
+
 class Recording:
     """A recording read back. Build it with :func:`read`.
 
@@ -538,7 +548,9 @@ class Recording:
     def bifurcations(self) -> pd.DataFrame:
         """One row per located bifurcation (``/bifurcations``, in file order): ``number``,
         ``type``, ``omega_rad_s``, ``arc_length``, ``after_point`` (it lies between this
-        point and the next), ``unconfirmed`` (boolean), then ``amp_rms_node<id>_m``."""
+        point and the next), ``unconfirmed`` (boolean), for Neimark–Sacker points
+        ``angle_rad``, ``modulation_period_s``, ``thermal_share`` (NaN otherwise) and
+        ``thermo_mechanical`` (boolean, NA otherwise), then ``amp_rms_node<id>_m``."""
         bifs = self._scan.bifurcations
         cols: dict[str, Any] = {
             "number": pd.Series([int(b.number) for b in bifs], dtype="int64"),
@@ -547,6 +559,23 @@ class Recording:
             "arc_length": pd.Series([b.arc_length for b in bifs], dtype="float64"),
             "after_point": pd.Series([int(b.after_point) for b in bifs], dtype="int64"),
             "unconfirmed": pd.array([bool(b.unconfirmed) for b in bifs], dtype="boolean"),
+            "angle_rad": pd.Series(
+                [_ns_value(b, b.angle_rad) for b in bifs], dtype="float64"
+            ),
+            "modulation_period_s": pd.Series(
+                [_ns_value(b, b.modulation_period_s) for b in bifs], dtype="float64"
+            ),
+            "thermal_share": pd.Series(
+                [
+                    _ns_value(b, b.thermal_share) if getattr(b, "near_zero", False) else np.nan
+                    for b in bifs
+                ],
+                dtype="float64",
+            ),
+            "thermo_mechanical": pd.array(
+                [bool(b.thermo_mechanical) if _is_ns(b) else None for b in bifs],
+                dtype="boolean",
+            ),
         }
         amps = np.full((len(bifs), len(self._node_keys)), np.nan)
         for row, b in enumerate(bifs):
