@@ -2236,7 +2236,14 @@ impl<'a> Continuation<'a> {
             }
         }
         let (g_best, mut p) = best?;
-        if g_best.abs() > CROSSING_MODULUS_TOL {
+        // The near-zero test is a cosine (see `excesses_of`): a pair that crosses fast
+        // keeps it far from zero until the bracket is narrow in ω; a bracket whose ends
+        // lie on either side with the crossing exponent complex at the trial nearest the
+        // axis is a crossing, not a jump (a real exponent sits at ±1)
+        let pair_crossing = family == Family::NearZero
+            && (search.end_g[0] < 0.0) != (search.end_g[1] < 0.0)
+            && g_best.abs() < 1.0 - 1e-9;
+        if g_best.abs() > CROSSING_MODULUS_TOL && !pair_crossing {
             return None;
         }
         let kind = match family {

@@ -1,6 +1,12 @@
 //! Slow (thermal) Floquet exponents from the quasi-static reduction of the harmonic-balance
 //! Jacobian onto the thermal mean values.
 //!
+//! No longer part of the verdict: [`super::assess`] takes the coupled exponents nearest zero
+//! from Hill's eigenproblem ([`super::hill_near_zero`]), exact where this reduction has a
+//! pole (at the folds of the frozen-temperature problem). Kept as a second method for the
+//! thermal exponents away from those points (`tests/stability_split.rs`,
+//! `examples/stability_split.rs`).
+//!
 //! ## Why
 //! A coupled thermo-mechanical orbit has two time scales: the vibration period `P`
 //! (milliseconds to a tenth of a second) and thermal time constants of seconds to hours.

@@ -153,6 +153,23 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
                 ", not confirmed by the multipliers"
             }
         )?;
+        if let Some(m) = b.modulation {
+            writeln!(
+                out,
+                "     {}angle {:.3e} rad: a modulation of {:.4} s ({:.0} revolutions){}",
+                if m.thermo_mechanical() {
+                    "thermo-mechanical, "
+                } else {
+                    ""
+                },
+                m.angle_rad,
+                m.period_s,
+                m.period_s * b.omega_rad_s / std::f64::consts::TAU,
+                m.thermal_share
+                    .map(|s| format!(", thermal share {s:.2}"))
+                    .unwrap_or_default()
+            )?;
+        }
     }
     if !rec.warnings.is_empty() {
         writeln!(out, "warnings:    {}", rec.warnings.len())?;
