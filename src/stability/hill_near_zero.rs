@@ -446,7 +446,7 @@ fn arnoldi_nearest(
     let mut u = vec![0.0; dim];
     let mut out = vec![0.0; dim];
     // the first look after about half the wanted count, then every eight steps
-    let mut next_check = (want + 4).min(max_dim);
+    let mut next_check = (want + want / 3 + 4).min(max_dim);
     loop {
         let j = h.len();
         for (i, x) in u.iter_mut().enumerate() {
@@ -490,7 +490,7 @@ fn arnoldi_nearest(
                     "not converged in {m} Arnoldi steps (dimension {dim})"
                 ));
             }
-            next_check = (m + 8).min(max_dim);
+            next_check = (m + 12).min(max_dim);
         }
         for i in 0..dim {
             basis[(i, j + 1)] = w[(i, 0)] / beta;
