@@ -429,7 +429,7 @@ impl SweepProblem {
 
     /// A continuation from `from` to `to` with the study's settings, started from `guess`
     /// (default: the system's initial guess), of at most `max_points` points.
-    fn continuation_over<'s>(
+    pub fn continuation_over<'s>(
         &'s self,
         from: f64,
         to: f64,

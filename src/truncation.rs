@@ -29,6 +29,8 @@
 //! lateral DoFs), thermal nodes by their 1-based position in the network (as in the
 //! paper: 41 = HPC disk, 58 = rolling elements of the 3# bearing).
 
+pub mod verify;
+
 use thiserror::Error;
 
 use crate::continuation::{Continuation, FinishReason, StepOutcome, crosses};

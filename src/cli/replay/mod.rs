@@ -24,6 +24,7 @@ pub mod orbit;
 pub mod plot;
 pub mod recover;
 pub mod stability;
+pub mod verify;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -83,6 +84,31 @@ pub enum Command {
         /// stored stability with a finer product. Costs about 1.3 s per point at 8192.
         #[arg(long, value_name = "N")]
         sip_intervals: Option<usize>,
+    },
+    /// Re-solve the run's located bifurcations at higher truncation orders (a window around
+    /// each group, from the recorded point before it) and say whether each one converged
+    /// (its ω and kind held), moved or vanished.
+    Verify {
+        file: PathBuf,
+        /// Truncation orders (comma-separated; default: the recorded order + 1 and + 2).
+        #[arg(long, value_delimiter = ',', value_name = "K")]
+        orders: Vec<u32>,
+        /// Half-width of the ω window around each group of bifurcations, rad/s.
+        #[arg(
+            long,
+            default_value_t = 1.0,
+            value_name = "RAD_S",
+            allow_negative_numbers = true
+        )]
+        window: f64,
+        /// A bifurcation that moved by at most this is converged, rad/s.
+        #[arg(
+            long,
+            default_value_t = 0.05,
+            value_name = "RAD_S",
+            allow_negative_numbers = true
+        )]
+        tolerance: f64,
     },
     /// Figures (PNG and SVG): amplitude–frequency curves, RC variations, temperatures
     /// grouped by bearing, one thermal node with stability, Floquet multipliers against the
@@ -191,6 +217,12 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result
             file,
             sip_intervals,
         } => stability::run(&open(&file, err)?, None, sip_intervals, out),
+        Command::Verify {
+            file,
+            orders,
+            window,
+            tolerance,
+        } => verify::run(&open(&file, err)?, &orders, window, tolerance, out, err),
         Command::Recover { file, out: target } => {
             // Everything, stored orbits included: the recovered file keeps the original form.
             let rec = open_with(&file, ReadOptions::default(), err)?;
