@@ -437,9 +437,24 @@ impl SweepProblem {
         stability: Option<&'s dyn StabilityMethod>,
         max_points: usize,
     ) -> Result<Continuation<'s>, SweepError> {
+        self.continuation_within(from, to, None, guess, stability, max_points)
+    }
+
+    /// [`Self::continuation_over`] with the ω range the branch may cover (`bounds`, see
+    /// [`ContinuationOptions::omega_bounds`]; default from `from` to `to`).
+    pub fn continuation_within<'s>(
+        &'s self,
+        from: f64,
+        to: f64,
+        bounds: Option<(f64, f64)>,
+        guess: Option<Vec<f64>>,
+        stability: Option<&'s dyn StabilityMethod>,
+        max_points: usize,
+    ) -> Result<Continuation<'s>, SweepError> {
         let s = &self.settings;
         let hb = HarmonicBalance::new(&self.system, &self.basis, s.harmonic.aft_samples)?;
         let mut opts = ContinuationOptions::new(from, to);
+        opts.omega_bounds = bounds;
         opts.ds_max = s.sweep.ds_max;
         opts.ds_initial = opts.ds_initial.min(s.sweep.ds_max);
         opts.max_points = max_points;

@@ -131,17 +131,43 @@ pub fn verify_bifurcations(
             let omegas: Vec<f64> = g.iter().map(|&i| bifs[i].omega_rad_s).collect();
             let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
             let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let (first, last) = if ascending { (lo, hi) } else { (hi, lo) };
-            let before = first - sign * options.window_rad_s;
-            let end = last + sign * options.window_rad_s;
+            let w = options.window_rad_s;
             let first_after = g.iter().map(|&i| bifs[i].after_point).min().unwrap_or(0);
-            // the last recorded point before the group at or beyond the window's start
-            let start = points
+            // the last recorded point before the group inside the window and at least half
+            // a window from each of its bifurcations (else the last one before it)
+            let before: Vec<_> = points.iter().filter(|p| p.index <= first_after).collect();
+            let start = before
                 .iter()
                 .rev()
-                .filter(|p| p.index <= first_after)
-                .find(|p| sign * (p.omega_rad_s - before) <= 0.0)
-                .or_else(|| points.first());
+                .find(|p| {
+                    p.omega_rad_s >= lo - w
+                        && p.omega_rad_s <= hi + w
+                        && omegas.iter().all(|o| (p.omega_rad_s - o).abs() >= 0.5 * w)
+                })
+                .or_else(|| before.last())
+                .copied();
+            // the branch is followed until it leaves the window, which holds the start
+            let bounds = start.map(|p| ((lo - w).min(p.omega_rad_s), (hi + w).max(p.omega_rad_s)));
+            // the way the recorded branch runs from the start point (it may be running
+            // back after a fold)
+            let forward = start
+                .and_then(|p| {
+                    points
+                        .iter()
+                        .find(|q| q.index > p.index)
+                        .map(|q| q.omega_rad_s >= p.omega_rad_s)
+                })
+                .unwrap_or(ascending);
+            let end = match bounds {
+                Some((a, b)) => {
+                    if forward {
+                        b
+                    } else {
+                        a
+                    }
+                }
+                None => hi + sign * w,
+            };
             let t0 = Instant::now();
             let found = match start {
                 None => Err("no recorded point before the group".to_string()),
@@ -157,9 +183,10 @@ pub fn verify_bifurcations(
                         &problem.basis,
                     );
                     problem
-                        .continuation_over(
+                        .continuation_within(
                             p.omega_rad_s,
                             end,
+                            bounds,
                             Some(guess),
                             Some(method.as_ref()),
                             options.max_points,
