@@ -35,37 +35,8 @@ impl Reference {
     /// time constant of the variational equations alone changed to `tau_var`: the
     /// linearisation's dependence on the thermal capacity, the orbit held.
     fn exponents_with_capacity(&self, y0: [f64; 3], tau_var: f64) -> Vec<Complex64> {
-        let n = 1600;
         let p = std::f64::consts::TAU / self.w;
-        let h = p / n as f64;
-        let mut y = y0;
-        let mut phi = DMatrix::<f64>::identity(3, 3);
-        let var = Reference {
-            w: self.w,
-            tau: tau_var,
-        };
-        let jm = |y: &[f64; 3]| {
-            let j = var.jac(y, false);
-            DMatrix::from_fn(3, 3, |r, c| j[r][c])
-        };
-        for k in 0..n {
-            let t = k as f64 * h;
-            let k1 = self.rhs(t, &y);
-            let y2 = [0, 1, 2].map(|i| y[i] + 0.5 * h * k1[i]);
-            let k2 = self.rhs(t + 0.5 * h, &y2);
-            let y3 = [0, 1, 2].map(|i| y[i] + 0.5 * h * k2[i]);
-            let k3 = self.rhs(t + 0.5 * h, &y3);
-            let y4 = [0, 1, 2].map(|i| y[i] + h * k3[i]);
-            let k4 = self.rhs(t + h, &y4);
-            let p1 = jm(&y) * &phi;
-            let p2 = jm(&y2) * (&phi + &p1 * (0.5 * h));
-            let p3 = jm(&y3) * (&phi + &p2 * (0.5 * h));
-            let p4 = jm(&y4) * (&phi + &p3 * h);
-            phi += (p1 + p2 * 2.0 + p3 * 2.0 + p4) * (h / 6.0);
-            for i in 0..3 {
-                y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-        }
+        let (_, phi) = self.period_map_with(y0, 1600, false, tau_var);
         phi.complex_eigenvalues()
             .iter()
             .map(|mu| mu.ln() / p)
@@ -116,6 +87,18 @@ impl Reference {
     /// State and monodromy after one period from `y0` (RK4, `n` steps, variational
     /// equations alongside).
     fn period_map(&self, y0: [f64; 3], n: usize, frozen: bool) -> ([f64; 3], DMatrix<f64>) {
+        self.period_map_with(y0, n, frozen, self.tau)
+    }
+
+    /// [`Self::period_map`] with the variational equations' time constant `tau_var` (the
+    /// orbit's stays `self.tau`).
+    fn period_map_with(
+        &self,
+        y0: [f64; 3],
+        n: usize,
+        frozen: bool,
+        tau_var: f64,
+    ) -> ([f64; 3], DMatrix<f64>) {
         let p = std::f64::consts::TAU / self.w;
         let h = p / n as f64;
         let mut y = y0;
@@ -123,8 +106,12 @@ impl Reference {
         let add = |a: &[f64; 3], b: &[f64; 3], s: f64| {
             [a[0] + s * b[0], a[1] + s * b[1], a[2] + s * b[2]]
         };
+        let var = Reference {
+            w: self.w,
+            tau: tau_var,
+        };
         let jm = |y: &[f64; 3]| {
-            let j = self.jac(y, frozen);
+            let j = var.jac(y, frozen);
             DMatrix::from_fn(3, 3, |r, c| j[r][c])
         };
         for k in 0..n {
@@ -202,6 +189,17 @@ fn branch(system: &ThermoDuffing, order: u32, stability: bool) -> Branch {
     cont.run(|_| {}).expect("branch")
 }
 
+/// The branch at order `order` with stability, and its located Neimark–Sacker point.
+fn located_neimark_sacker(system: &ThermoDuffing, order: u32) -> (Branch, usize) {
+    let b = branch(system, order, true);
+    let k = b
+        .bifurcations
+        .iter()
+        .position(|p| p.bifurcation == Some(BifurcationKind::NeimarkSacker))
+        .expect("a located Neimark–Sacker point");
+    (b, k)
+}
+
 fn hill(system: &ThermoDuffing, order: u32, s: &HbSolution) -> Vec<Complex64> {
     let basis = Basis::integer(order).expect("basis");
     let hb = HarmonicBalance::new(system, &basis, None).expect("hb");
@@ -269,12 +267,8 @@ fn neimark_sacker(tau_periods: f64) -> (f64, f64, f64, f64, f64) {
     let tau = tau_periods * std::f64::consts::TAU;
     let system = ThermoDuffing::new(tau);
     let order = 9;
-    let b = branch(&system, order, true);
-    let ns = b
-        .bifurcations
-        .iter()
-        .find(|p| p.bifurcation == Some(BifurcationKind::NeimarkSacker))
-        .expect("a located Neimark–Sacker point");
+    let (b, k) = located_neimark_sacker(&system, order);
+    let ns = &b.bifurcations[k];
     let s = &ns.solution;
     let tool = max_re(&hill(&system, order, s));
     let period = s.period();
@@ -419,12 +413,8 @@ fn the_crossing_pairs_thermal_share_matches_the_reference() {
     let tau = 100.0 * std::f64::consts::TAU;
     let system = ThermoDuffing::new(tau);
     let order = 9;
-    let b = branch(&system, order, true);
-    let ns = b
-        .bifurcations
-        .iter()
-        .find(|p| p.bifurcation == Some(BifurcationKind::NeimarkSacker))
-        .expect("a located Neimark–Sacker point");
+    let (b, k) = located_neimark_sacker(&system, order);
+    let ns = &b.bifurcations[k];
     let s = &ns.solution;
     let f = ns.stability.as_ref().expect("stability at the point");
     let m = f.crossing_pair(s.period()).expect("a crossing pair");
