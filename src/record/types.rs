@@ -224,6 +224,24 @@ impl FloquetCounts {
 }
 
 impl PointRecord {
+    /// The multipliers the stable flag counts: the fast ones outside the disk of the
+    /// coupled exponents nearest zero (all of them without it) and `exp(λP)` of those
+    /// exponents (see `docs/stability.md`).
+    pub fn counted_multipliers(&self) -> Vec<Complex64> {
+        let radius = self.floquet_counts.map_or(0.0, |c| c.near_zero_radius);
+        let p = self.period_s;
+        let mut out: Vec<Complex64> = self
+            .multipliers
+            .iter()
+            .filter(|m| radius <= 0.0 || p <= 0.0 || m.norm() == 0.0 || m.ln().norm() / p >= radius)
+            .copied()
+            .collect();
+        if radius > 0.0 {
+            out.extend(self.slow_exponents.iter().map(|l| (l * p).exp()));
+        }
+        out
+    }
+
     /// Largest multiplier modulus, 0 when none were computed.
     pub fn spectral_radius(&self) -> f64 {
         self.multipliers

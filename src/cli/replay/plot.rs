@@ -8,7 +8,7 @@
 //! | `clearance` | RC variation δv of every bearing against ω (unstable parts dashed) |
 //! | `temperatures` | mean temperatures against ω, a panel per bearing (its rolling elements, rings, lubricant, housing, named in the legend) and one of the shafts and disks |
 //! | `temperature_node<id>` | mean temperature of one thermal node against ω in the stability colours, bifurcations circled |
-//! | `multipliers_bifurcations` | Floquet multipliers against the unit circle, a panel per located bifurcation: the located point's multipliers (NS, PD), or those of the points on either side (SN) |
+//! | `multipliers_bifurcations` | Floquet multipliers against the unit circle, a panel per located bifurcation: the located point's multipliers (NS, PD of the fast multipliers), or the counted multipliers of the points on either side (SN, NS of the near-zero exponents: the fast ones outside their disk and `exp(λP)` of the exponents) |
 //! | `multipliers_point<N>` | the multipliers of one point against the unit circle |
 //! | `orbits_peaks` | orbits (x vertical over y horizontal, equal scales) of the dynamic nodes at the resonant peaks of the chosen node, a panel per peak and rotor, re-derived from the harmonic coefficients |
 //! | `bearing_loads_point<N>` | radial load of each bearing over one response period at one point (re-derived through the embedded model, else the recorded samples) |
@@ -455,15 +455,40 @@ impl Plotter<'_> {
         let rec = self.rec;
         let mut panels = Vec::new();
         let mut used = [false; 3];
+        // what the stable flag counts: the fast multipliers outside the disk of the
+        // coupled exponents nearest zero, and exp(λP) of those (docs/stability.md)
+        let counted: Vec<Vec<Complex64>> =
+            rec.points.iter().map(|p| p.counted_multipliers()).collect();
+        let counted_at = |idx: u64| {
+            rec.points
+                .iter()
+                .position(|p| p.index == idx)
+                .map(|i| counted[i].as_slice())
+                .filter(|m| !m.is_empty())
+        };
         for b in &rec.bifurcations {
             let title = format!(
-                "{} at {}{}",
+                "{} at {}{}{}",
                 bifurcation_label(b),
                 omega_at(b.omega_rad_s),
-                if b.confirmed { "" } else { " (not confirmed)" }
+                if b.confirmed { "" } else { " (not confirmed)" },
+                b.modulation
+                    .map(|m| format!(
+                        ", {}{:.0} s",
+                        if m.thermo_mechanical() {
+                            "thermo-mech., "
+                        } else {
+                            ""
+                        },
+                        m.period_s
+                    ))
+                    .unwrap_or_default()
             );
             let mut sets: Vec<(String, RGBColor, &[Complex64])> = Vec::new();
-            if !b.multipliers.is_empty() && b.kind != BifurcationKind::SaddleNode {
+            if !b.multipliers.is_empty()
+                && b.kind != BifurcationKind::SaddleNode
+                && b.modulation.is_none_or(|m| m.exponent.is_none())
+            {
                 sets.push(("at the located bifurcation".into(), AT, &b.multipliers));
                 used[2] = true;
             } else {
@@ -471,8 +496,8 @@ impl Plotter<'_> {
                     (b.after_point, "point before", BEFORE, 0),
                     (b.after_point + 1, "point after", AFTER, 1),
                 ] {
-                    if let Some(p) = rec.point(idx).filter(|p| !p.multipliers.is_empty()) {
-                        sets.push((text.into(), c, &p.multipliers));
+                    if let Some(m) = counted_at(idx) {
+                        sets.push((text.into(), c, m));
                         used[u] = true;
                     }
                 }
@@ -487,8 +512,14 @@ impl Plotter<'_> {
                 text: "unit circle".into(),
             }];
             for (u, (text, c)) in used.iter().zip([
-                ("multipliers of the point before (saddle-node)", BEFORE),
-                ("multipliers of the point after (saddle-node)", AFTER),
+                (
+                    "multipliers of the point before (SN; NS of the near-zero exponents)",
+                    BEFORE,
+                ),
+                (
+                    "multipliers of the point after (SN; NS of the near-zero exponents)",
+                    AFTER,
+                ),
                 ("multipliers at the located bifurcation (PD, NS)", AT),
             ]) {
                 if *u {
