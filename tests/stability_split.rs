@@ -272,3 +272,76 @@ fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
     assert!(!ok && text.contains("problems"), "{text}");
     assert!(text.contains("not flagged unstable"), "{text}");
 }
+
+/// The coupled exponents nearest zero (Hill's eigenproblem) on the dual rotor against two
+/// other methods at a point far from folds (10 L/min, 400 rad/s): the slowest one against
+/// the real multiplier nearest +1 of the product over the whole coupled state, and the
+/// thermal ones against the quasi-static reduction, which holds where they are slow
+/// against the fast exponent nearest zero.
+#[test]
+fn the_near_zero_exponents_match_the_coupled_product_and_the_reduction() {
+    let settings = StudySettings {
+        operating: OperatingSettings {
+            flow_l_min: 10.0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let hb = HarmonicBalance::new(
+        &problem.system,
+        &problem.basis,
+        settings.harmonic.aft_samples,
+    )
+    .expect("hb");
+    let sol = point(&problem, &hb, 400.0);
+    let nz = tmrotor::stability::near_zero_exponents(
+        &hb,
+        &sol,
+        None,
+        &tmrotor::stability::HillOptions::default(),
+    )
+    .expect("near zero");
+    assert!(
+        nz.exponents.len() >= hb.n_therm(),
+        "{} exponents",
+        nz.exponents.len()
+    );
+    let top = nz
+        .exponents
+        .iter()
+        .max_by(|a, b| a.re.total_cmp(&b.re))
+        .expect("exponents");
+    let method =
+        stability_method(&settings, &problem.system, settings.sweep.omega_start).expect("m");
+    let full = method.multipliers(&problem.system, &sol).expect("product");
+    let mu = full
+        .multipliers
+        .iter()
+        .filter(|m| m.im == 0.0)
+        .min_by(|a, b| (a.re - 1.0).abs().total_cmp(&(b.re - 1.0).abs()))
+        .expect("a real multiplier");
+    let from_product = mu.re.ln() / sol.period();
+    eprintln!("Hill: slowest {top} 1/s; coupled product → {from_product} 1/s");
+    assert!(
+        (from_product - top.re).abs() < 1e-5 * top.re.abs(),
+        "Hill {} vs product {from_product}",
+        top.re
+    );
+    // the reduction's thermal exponents, each matched by a Hill exponent
+    let slow = slow_exponents(&hb, &sol).expect("slow exponents");
+    let mut worst: f64 = 0.0;
+    for l in &slow {
+        let d = nz
+            .exponents
+            .iter()
+            .map(|m| (m - l).norm())
+            .fold(f64::INFINITY, f64::min);
+        worst = worst.max(d / l.norm());
+    }
+    eprintln!(
+        "reduction against Hill: worst relative difference {worst:.2e} over {} exponents",
+        slow.len()
+    );
+    assert!(worst < 1e-5, "{worst}");
+}
