@@ -299,6 +299,24 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
     }
 }
 
+/// The runs of a campaign directory: name and recording path, in manifest order.
+pub fn campaign_runs(dir: &Path) -> Result<Vec<(String, PathBuf)>, ReportError> {
+    let mpath = dir.join("manifest.toml");
+    let text = std::fs::read_to_string(&mpath).map_err(|e| ReportError::Input {
+        path: mpath.display().to_string(),
+        reason: format!("cannot read the manifest: {e}"),
+    })?;
+    let manifest: Manifest = toml::from_str(&text).map_err(|e| ReportError::Input {
+        path: mpath.display().to_string(),
+        reason: format!("not a campaign manifest: {}", e.message()),
+    })?;
+    Ok(manifest
+        .runs
+        .iter()
+        .map(|e| (e.name.clone(), dir.join(&e.recording)))
+        .collect())
+}
+
 /// Reads every run of a campaign directory.
 pub fn campaign_findings(dir: &Path) -> Result<Vec<RunFindings>, ReportError> {
     let mpath = dir.join("manifest.toml");
