@@ -23,9 +23,9 @@ pub struct ReportArgs {
     /// set) on the statements instead: the sensitivity table.
     #[arg(long)]
     pub sensitivity: bool,
-    /// Re-solve every run's located bifurcations at the recorded truncation order + 1 and
-    /// + 2 (`replay verify`) and add their verdicts as a table (about 10 s a run with
-    /// bifurcations on the dual rotor).
+    /// Re-solve every run's located bifurcations at the recorded truncation order plus
+    /// one and plus two (`replay verify`) and add their verdicts as a table (about 10 s a
+    /// run with bifurcations on the dual rotor).
     #[arg(long)]
     pub verify: bool,
 }
