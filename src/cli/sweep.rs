@@ -127,6 +127,11 @@ pub struct SweepArgs {
     /// More detail in the closing summary (the Floquet kernel's instruction set).
     #[arg(long, short)]
     pub verbose: bool,
+    /// After the sweep, re-solve its located bifurcations at the truncation order + 1 and
+    /// + 2 and say in the summary whether each converged, moved or vanished (`replay
+    /// verify` on the recording; a few seconds per group of bifurcations).
+    #[arg(long)]
+    pub verify: bool,
 }
 
 impl SweepArgs {
@@ -368,6 +373,39 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
                 "warnings"
             )
         )?;
+    }
+    if args.verify && report.status == crate::record::RunStatus::Completed {
+        let rec = crate::record::read_recording(&args.output)?;
+        if rec.bifurcations.iter().any(|b| b.branch == 0) {
+            let options =
+                crate::truncation::verify::VerifyOptions::for_order(settings.harmonic.order);
+            let verdicts = crate::truncation::verify::verify_bifurcations(&rec, &options, |msg| {
+                if log {
+                    eprintln!("verify: {msg}");
+                }
+            })?;
+            writeln!(out, "  at higher truncation orders (replay verify):")?;
+            for v in verdicts {
+                let cells: Vec<String> = v
+                    .orders
+                    .iter()
+                    .map(|(k, o)| match o {
+                        crate::truncation::verify::OrderVerdict::Converged { omega_rad_s }
+                        | crate::truncation::verify::OrderVerdict::Moved { omega_rad_s } => {
+                            format!("order {k} {} ({omega_rad_s:.3})", o.label())
+                        }
+                        other => format!("order {k} {}", other.label()),
+                    })
+                    .collect();
+                writeln!(
+                    out,
+                    "    {} at ω = {:.3} rad/s: {}",
+                    v.kind.label(),
+                    v.omega_rad_s,
+                    cells.join(", ")
+                )?;
+            }
+        }
     }
     let file = args.output.display();
     writeln!(
