@@ -45,6 +45,24 @@ fn the_recorded_order_finds_the_folds_again_and_higher_orders_give_a_verdict() {
             "{l}"
         );
     }
+    // the sweep's own summary, with --verify
+    let again = dir.path().join("v.mcap");
+    let sweep = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
+        .args(["sweep", "--omega", "515:530", "-q", "--lean", "--verify", "-o"])
+        .arg(&again)
+        .output()
+        .expect("tmrotor runs");
+    let summary = String::from_utf8_lossy(&sweep.stdout).to_string();
+    assert!(sweep.status.success(), "{summary}");
+    assert!(summary.contains("at higher truncation orders"), "{summary}");
+    assert_eq!(
+        summary
+            .lines()
+            .filter(|l| l.contains("saddle-node at ω") && l.contains("order 4 "))
+            .count(),
+        2,
+        "{summary}"
+    );
     // bad input is refused by name
     let bad = Command::new(env!("CARGO_BIN_EXE_replay"))
         .args(["verify"])
