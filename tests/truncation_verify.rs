@@ -48,7 +48,9 @@ fn the_recorded_order_finds_the_folds_again_and_higher_orders_give_a_verdict() {
     // the sweep's own summary, with --verify
     let again = dir.path().join("v.mcap");
     let sweep = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
-        .args(["sweep", "--omega", "515:530", "-q", "--lean", "--verify", "-o"])
+        .args([
+            "sweep", "--omega", "515:530", "-q", "--lean", "--verify", "-o",
+        ])
         .arg(&again)
         .output()
         .expect("tmrotor runs");
