@@ -60,7 +60,8 @@ pub struct HillOptions {
     pub max_radius_fraction: f64,
     /// Relative residual estimate below which a Ritz value is accepted.
     pub tol: f64,
-    /// Largest Krylov dimension.
+    /// Largest Krylov dimension (raised to twice the wanted count + 40 where that is
+    /// more: a large thermal network wants many exponents).
     pub max_dim: usize,
 }
 
@@ -431,7 +432,8 @@ fn arnoldi_nearest(
     r_max: f64,
     options: &HillOptions,
 ) -> Result<NearZero, String> {
-    let max_dim = options.max_dim.min(dim);
+    // at least twice the wanted count (a large thermal network wants many)
+    let max_dim = options.max_dim.max(2 * want + 40).min(dim);
     // the Krylov basis as columns, orthogonalised by two passes of classical
     // Gram–Schmidt in matrix–vector form (the cost of the method besides the solves)
     let mut basis = Mat::<f64>::zeros(dim, max_dim + 1);
@@ -446,7 +448,8 @@ fn arnoldi_nearest(
     let mut u = vec![0.0; dim];
     let mut out = vec![0.0; dim];
     // the first look after about half the wanted count, then every eight steps
-    let mut next_check = (want + want / 3 + 4).min(max_dim);
+    // (early enough for a large network whose disk holds fewer than the wanted count)
+    let mut next_check = (want + want / 3 + 4).min(96).min(max_dim);
     loop {
         let j = h.len();
         for (i, x) in u.iter_mut().enumerate() {
