@@ -45,6 +45,7 @@ use faer::Mat;
 use num_complex::Complex64;
 
 use super::StabilityError;
+use crate::hb::condense::dot;
 use crate::hb::{HarmonicBalance, HbSolution, JacobianParts, LinearSolver};
 use crate::system::{DenseMatrix, LinearPart};
 
@@ -98,6 +99,8 @@ pub struct HillPencil<'a, 'h> {
     /// The `(row, column)` nonlinear-DoF blocks of `velocity` with a nonzero entry (most
     /// are zero: only velocity-dependent forces and heat have one).
     velocity_blocks: Vec<(usize, usize)>,
+    /// Global DoF of each nonlinear DoF ([`HarmonicBalance::nonlinear_global`]).
+    globals: Vec<usize>,
 }
 
 impl<'a, 'h> HillPencil<'a, 'h> {
@@ -123,7 +126,8 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             .velocity_sensitivity(&coeffs, omega)
             .map_err(|e| setup(e.to_string()))?;
         let nc = hb.n_coeffs();
-        let pt = hb.nonlinear_global().len();
+        let globals = hb.nonlinear_global();
+        let pt = globals.len();
         let ld = pt * nc;
         let velocity_blocks = (0..pt)
             .flat_map(|k| (0..pt).map(move |l| (k, l)))
@@ -140,6 +144,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             parts,
             velocity,
             velocity_blocks,
+            globals,
         })
     }
 
@@ -166,6 +171,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             parts: scaled_parts,
             velocity: self.velocity.clone(),
             velocity_blocks: self.velocity_blocks.clone(),
+            globals: self.globals.clone(),
         };
         let nz = scaled.near_zero(want, options)?;
         let moved = nz
@@ -224,92 +230,17 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         }
     }
 
-    /// `out = T(λ) x` for complex `λ` and `x` (real and imaginary parts apart): the
-    /// residual of an eigenpair.
-    pub fn apply(&self, lambda: Complex64, x: &[Complex64]) -> Vec<Complex64> {
-        let re: Vec<f64> = x.iter().map(|v| v.re).collect();
-        let im: Vec<f64> = x.iter().map(|v| v.im).collect();
-        let n = x.len();
-        // T(λ) = A0 + λ A1 + λ² A2 with real A's
-        let mut a = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-        let mut b = [vec![0.0; n], vec![0.0; n], vec![0.0; n]];
-        for (k, (ak, bk)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
-            self.apply_power(k, &re, ak);
-            self.apply_power(k, &im, bk);
-        }
-        let l2 = lambda * lambda;
-        (0..n)
-            .map(|i| {
-                let v0 = Complex64::new(a[0][i], b[0][i]);
-                let v1 = Complex64::new(a[1][i], b[1][i]);
-                let v2 = Complex64::new(a[2][i], b[2][i]);
-                v0 + lambda * v1 + l2 * v2
-            })
-            .collect()
-    }
-
-    /// `out += A_k x` for `k` = 0, 1, 2.
-    fn apply_power(&self, k: usize, x: &[f64], out: &mut [f64]) {
-        let lin = &self.parts.linear;
-        let (n, nt) = (lin.mass.n, lin.thermal_capacity.n);
-        let zero = DenseMatrix::zeros(n);
-        let zero_t = DenseMatrix::zeros(nt);
-        let part = match k {
-            0 => lin.clone(),
-            1 => LinearPart {
-                mass: zero.clone(),
-                damping: scaled(&lin.mass, 2.0),
-                stiffness: lin.damping.clone(),
-                thermal_capacity: zero_t.clone(),
-                thermal_conductance: lin.thermal_capacity.clone(),
-            },
-            _ => LinearPart {
-                mass: zero.clone(),
-                damping: zero,
-                stiffness: lin.mass.clone(),
-                thermal_capacity: zero_t.clone(),
-                thermal_conductance: zero_t,
-            },
-        };
-        self.hb.add_linear(&part, self.parts.omega, x, out);
-        match k {
-            0 => self.add_nonlinear(&self.parts.nonlinear, 1.0, x, out),
-            1 => self.add_velocity(x, out),
-            _ => {}
-        }
-    }
-
     /// `out += V x` with `V` the velocity sensitivity, on its nonzero blocks.
     fn add_velocity(&self, x: &[f64], out: &mut [f64]) {
         let nc = self.hb.n_coeffs();
-        let globals = self.hb.nonlinear_global();
-        let ld = globals.len() * nc;
+        let ld = self.globals.len() * nc;
         for &(k, l) in &self.velocity_blocks {
-            let (gk, gl) = (globals[k], globals[l]);
+            let (gk, gl) = (self.globals[k], self.globals[l]);
             let xs = &x[gl * nc..(gl + 1) * nc];
             for r in 0..nc {
                 let row =
                     &self.velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc];
                 out[gk * nc + r] += dot(row, xs);
-            }
-        }
-    }
-
-    /// `out += scale · B x` for a dense block `B` on the nonlinear DoFs (the layout of
-    /// [`JacobianParts::nonlinear`]).
-    fn add_nonlinear(&self, block: &[f64], scale: f64, x: &[f64], out: &mut [f64]) {
-        let nc = self.hb.n_coeffs();
-        let globals = self.hb.nonlinear_global();
-        let ld = globals.len() * nc;
-        let xs: Vec<f64> = globals
-            .iter()
-            .flat_map(|&g| x[g * nc..(g + 1) * nc].iter().copied())
-            .collect();
-        for (k, &g) in globals.iter().enumerate() {
-            for r in 0..nc {
-                let row = &block[(k * nc + r) * ld..(k * nc + r + 1) * ld];
-                let s: f64 = row.iter().zip(&xs).map(|(a, b)| a * b).sum();
-                out[g * nc + r] += scale * s;
             }
         }
     }
@@ -415,10 +346,6 @@ fn start_vector(dim: usize) -> Vec<f64> {
             ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         })
         .collect()
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// Arnoldi on the shift-inverted operator `op` (dimension `dim`) until the `want`
