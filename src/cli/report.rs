@@ -58,7 +58,7 @@ pub fn run(args: &ReportArgs, out: &mut impl std::io::Write) -> anyhow::Result<(
 /// The campaign's bifurcations re-solved at higher truncation orders, as a markdown
 /// section (one row per bifurcation of a run's own branch).
 fn verdicts(dir: &std::path::Path) -> anyhow::Result<String> {
-    use crate::truncation::verify::{OrderVerdict, VerifyOptions, verify_bifurcations};
+    use crate::truncation::verify::{VerifyOptions, verify_bifurcations};
     let mut rows = Vec::new();
     let mut orders_seen = Vec::new();
     for (name, path) in campaign_runs(dir)? {
@@ -76,14 +76,7 @@ fn verdicts(dir: &std::path::Path) -> anyhow::Result<String> {
             let cells: Vec<String> = v
                 .orders
                 .iter()
-                .map(|(_, o)| match o {
-                    OrderVerdict::Converged { omega_rad_s }
-                    | OrderVerdict::Moved { omega_rad_s } => {
-                        format!("{} ({omega_rad_s:.4})", o.label())
-                    }
-                    OrderVerdict::Vanished => "vanished".to_string(),
-                    OrderVerdict::Failed(e) => format!("failed: {}", e.replace('|', "/")),
-                })
+                .map(|(_, o)| o.describe(4).replace('|', "/"))
                 .collect();
             rows.push(format!(
                 "| {name} | {} | {:.4} | {} |",

@@ -389,13 +389,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
                 let cells: Vec<String> = v
                     .orders
                     .iter()
-                    .map(|(k, o)| match o {
-                        crate::truncation::verify::OrderVerdict::Converged { omega_rad_s }
-                        | crate::truncation::verify::OrderVerdict::Moved { omega_rad_s } => {
-                            format!("order {k} {} ({omega_rad_s:.3})", o.label())
-                        }
-                        other => format!("order {k} {}", other.label()),
-                    })
+                    .map(|(k, o)| format!("order {k} {}", o.describe(3)))
                     .collect();
                 writeln!(
                     out,

@@ -319,25 +319,15 @@ pub fn campaign_runs(dir: &Path) -> Result<Vec<(String, PathBuf)>, ReportError> 
 
 /// Reads every run of a campaign directory.
 pub fn campaign_findings(dir: &Path) -> Result<Vec<RunFindings>, ReportError> {
-    let mpath = dir.join("manifest.toml");
-    let text = std::fs::read_to_string(&mpath).map_err(|e| ReportError::Input {
-        path: mpath.display().to_string(),
-        reason: format!("cannot read the manifest: {e}"),
-    })?;
-    let manifest: Manifest = toml::from_str(&text).map_err(|e| ReportError::Input {
-        path: mpath.display().to_string(),
-        reason: format!("not a campaign manifest: {}", e.message()),
-    })?;
     let mut out = Vec::new();
-    for entry in &manifest.runs {
-        let path: PathBuf = dir.join(&entry.recording);
+    for (name, path) in campaign_runs(dir)? {
         let rec = read_recording(&path)
             .map_err(|e| ReportError::Input {
                 path: path.display().to_string(),
                 reason: e.to_string(),
             })?
             .own_branch();
-        out.push(run_findings(&entry.name, &rec));
+        out.push(run_findings(&name, &rec));
     }
     Ok(out)
 }

@@ -67,6 +67,18 @@ impl OrderVerdict {
             Self::Failed(_) => "failed",
         }
     }
+
+    /// The label with where it was found (ω to `decimals` places) or why it failed:
+    /// `converged (521.7483)`, `vanished`, `failed: …`.
+    pub fn describe(&self, decimals: usize) -> String {
+        match self {
+            Self::Converged { omega_rad_s } | Self::Moved { omega_rad_s } => {
+                format!("{} ({omega_rad_s:.decimals$})", self.label())
+            }
+            Self::Vanished => self.label().to_string(),
+            Self::Failed(e) => format!("failed: {e}"),
+        }
+    }
 }
 
 /// One recorded bifurcation and its verdict per order.
@@ -206,37 +218,32 @@ pub fn verify_bifurcations(
                 "order {order}: window done in {:.1} s",
                 t0.elapsed().as_secs_f64()
             ));
+            // one-to-one: the closest pairs (distance, recorded, found, its ω) of the
+            // same kind first
+            let mut pairs: Vec<(f64, usize, usize, f64)> = Vec::new();
             if let Ok(list) = &found {
                 let listed: Vec<String> = list
                     .iter()
                     .map(|(k, w)| format!("{} {w:.4}", k.abbreviation()))
                     .collect();
                 progress(&format!("order {order}: located {}", listed.join(", ")));
-            }
-            // one-to-one: the closest pairs of the same kind first
-            let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-            if let Ok(list) = &found {
                 for &i in g {
                     for (j, (k, w)) in list.iter().enumerate() {
                         let d = (w - bifs[i].omega_rad_s).abs();
                         if *k == bifs[i].kind && d <= options.window_rad_s {
-                            pairs.push((d, i, j));
+                            pairs.push((d, i, j, *w));
                         }
                     }
                 }
             }
             pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-            let mut taken_rec = Vec::new();
             let mut taken_new = Vec::new();
             let mut matched: Vec<(usize, f64)> = Vec::new();
-            for (d, i, j) in pairs {
-                if taken_rec.contains(&i) || taken_new.contains(&j) {
+            for (_, i, j, w) in pairs {
+                if matched.iter().any(|(m, _)| *m == i) || taken_new.contains(&j) {
                     continue;
                 }
-                taken_rec.push(i);
                 taken_new.push(j);
-                let _ = d;
-                let w = found_omega(&found, j);
                 matched.push((i, w));
             }
             for &i in g {
@@ -256,11 +263,6 @@ pub fn verify_bifurcations(
         }
     }
     Ok(verdicts)
-}
-
-/// The ω of the `j`-th bifurcation a window located.
-fn found_omega(found: &Result<Vec<(BifurcationKind, f64)>, String>, j: usize) -> f64 {
-    found.as_ref().map_or(f64::NAN, |list| list[j].1)
 }
 
 /// Coefficients on basis `from` (mechanical blocks, then thermal, each

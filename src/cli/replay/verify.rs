@@ -3,7 +3,7 @@
 use std::io::Write;
 
 use crate::record::reader::Recording;
-use crate::truncation::verify::{OrderVerdict, VerifyOptions, verify_bifurcations};
+use crate::truncation::verify::{VerifyOptions, verify_bifurcations};
 
 /// Runs the check and prints one line per bifurcation and order.
 pub fn run(
@@ -54,13 +54,7 @@ pub fn run(
         let cells: Vec<String> = v
             .orders
             .iter()
-            .map(|(k, o)| match o {
-                OrderVerdict::Converged { omega_rad_s } | OrderVerdict::Moved { omega_rad_s } => {
-                    format!("order {k} {} ({omega_rad_s:.4})", o.label())
-                }
-                OrderVerdict::Vanished => format!("order {k} vanished"),
-                OrderVerdict::Failed(e) => format!("order {k} failed: {e}"),
-            })
+            .map(|(k, o)| format!("order {k} {}", o.describe(4)))
             .collect();
         writeln!(
             out,
