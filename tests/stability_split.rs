@@ -76,15 +76,39 @@ fn the_thermal_schur_complement_equals_the_dense_one() {
     );
 }
 
-#[test]
-fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
-    let settings = StudySettings {
+/// 10 L/min on the built-in model: the point of the exponent comparisons.
+fn ten_l_min() -> StudySettings {
+    StudySettings {
         operating: OperatingSettings {
             flow_l_min: 10.0,
             ..Default::default()
         },
         ..Default::default()
-    };
+    }
+}
+
+/// `ln μ / P` of the real multiplier nearest +1 of the product over the whole coupled state
+/// (mechanical and thermal) at `sol`: the slowest exponent by a second method.
+fn coupled_product_slowest(
+    settings: &StudySettings,
+    problem: &SweepProblem,
+    sol: &HbSolution,
+) -> f64 {
+    let method =
+        stability_method(settings, &problem.system, settings.sweep.omega_start).expect("m");
+    let full = method.multipliers(&problem.system, sol).expect("product");
+    let mu = full
+        .multipliers
+        .iter()
+        .filter(|m| m.im == 0.0)
+        .min_by(|a, b| (a.re - 1.0).abs().total_cmp(&(b.re - 1.0).abs()))
+        .expect("a real multiplier");
+    mu.re.ln() / sol.period()
+}
+
+#[test]
+fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
+    let settings = ten_l_min();
     let problem = SweepProblem::new(&settings).expect("problem");
     let hb = HarmonicBalance::new(
         &problem.system,
@@ -101,17 +125,8 @@ fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
     assert!(top.im == 0.0 && top.re < 0.0, "slowest exponent {top}");
 
     // second method: the product over the whole coupled state (mechanical and thermal)
-    let method =
-        stability_method(&settings, &problem.system, settings.sweep.omega_start).expect("m");
-    let full = method.multipliers(&problem.system, &sol).expect("product");
-    let mu = full
-        .multipliers
-        .iter()
-        .filter(|m| m.im == 0.0)
-        .min_by(|a, b| (a.re - 1.0).abs().total_cmp(&(b.re - 1.0).abs()))
-        .expect("a real multiplier");
-    let from_product = mu.re.ln() / sol.period();
-    eprintln!("slowest exponent {top} 1/s; coupled product μ = {mu} → {from_product} 1/s");
+    let from_product = coupled_product_slowest(&settings, &problem, &sol);
+    eprintln!("slowest exponent {top} 1/s; coupled product → {from_product} 1/s");
     assert!(
         (from_product - top.re).abs() < 1e-5 * top.re.abs(),
         "reduction {} vs product {from_product}",
@@ -280,13 +295,7 @@ fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
 /// against the fast exponent nearest zero.
 #[test]
 fn the_near_zero_exponents_match_the_coupled_product_and_the_reduction() {
-    let settings = StudySettings {
-        operating: OperatingSettings {
-            flow_l_min: 10.0,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let settings = ten_l_min();
     let problem = SweepProblem::new(&settings).expect("problem");
     let hb = HarmonicBalance::new(
         &problem.system,
@@ -312,16 +321,7 @@ fn the_near_zero_exponents_match_the_coupled_product_and_the_reduction() {
         .iter()
         .max_by(|a, b| a.re.total_cmp(&b.re))
         .expect("exponents");
-    let method =
-        stability_method(&settings, &problem.system, settings.sweep.omega_start).expect("m");
-    let full = method.multipliers(&problem.system, &sol).expect("product");
-    let mu = full
-        .multipliers
-        .iter()
-        .filter(|m| m.im == 0.0)
-        .min_by(|a, b| (a.re - 1.0).abs().total_cmp(&(b.re - 1.0).abs()))
-        .expect("a real multiplier");
-    let from_product = mu.re.ln() / sol.period();
+    let from_product = coupled_product_slowest(&settings, &problem, &sol);
     eprintln!("Hill: slowest {top} 1/s; coupled product → {from_product} 1/s");
     assert!(
         (from_product - top.re).abs() < 1e-5 * top.re.abs(),
