@@ -3,6 +3,12 @@
 //! multipliers of the frozen-temperature product nearest +1 as recorded.
 //!
 //!     cargo run --release --example hill_spectrum -- FILE.mcap FROM:TO [EXTRA]
+//!
+//! With `BETWEEN=I` it instead solves 21 speeds between points I and I + 1 at fixed ω and
+//! prints the exponents nearest the imaginary axis there (how a pair crosses inside a
+//! step); with `HILL_PROFILE=1` it times the factorization of `T(σ)`, one solve and one
+//! product with the linear part at the first point in range, and lists the moduli of the
+//! exponents found.
 
 use std::time::Instant;
 
@@ -170,6 +176,3 @@ fn main() -> anyhow::Result<()> {
     }
     Ok(())
 }
-
-#[allow(dead_code)]
-fn profile_parts() {}
