@@ -242,11 +242,11 @@ pub fn audit_step(
         && located.is_empty()
         && a.unstable_count() != b.unstable_count()
     {
-        let reason = if exact && a.near_zero_outside() != b.near_zero_outside() {
+        let reason = if exact && a.slow_unstable_count() != b.slow_unstable_count() {
             format!(
                 "the coupled exponents nearest zero changed from {} to {} with a positive real part, and the search could not follow a pair across the imaginary axis (a real exponent passes zero only at a fold, det J = 0, so the change is a pair's crossing, a Neimark–Sacker point, narrower than the step, or a fold pair inside it) — a smaller step (--ds-max) resolves it",
-                a.near_zero_outside(),
-                b.near_zero_outside()
+                a.slow_unstable_count(),
+                b.slow_unstable_count()
             )
         } else if a.fold_parity_mismatch != b.fold_parity_mismatch {
             "a real multiplier of the monodromy product passes +1 where the branch does not fold: the truncated harmonic balance, whose real exponents pass zero only at folds, and the orbit's linearisation disagree here — raise the truncation order to decide"

@@ -228,15 +228,21 @@ impl PointRecord {
     /// coupled exponents nearest zero (all of them without it) and `exp(λP)` of those
     /// exponents (see `docs/stability.md`).
     pub fn counted_multipliers(&self) -> Vec<Complex64> {
-        let radius = self.floquet_counts.map_or(0.0, |c| c.near_zero_radius);
         let p = self.period_s;
+        let disk = self
+            .floquet_counts
+            .map(|c| crate::stability::NearZeroDisk {
+                radius: c.near_zero_radius,
+                period: p,
+            })
+            .filter(|d| d.radius > 0.0 && p > 0.0);
         let mut out: Vec<Complex64> = self
             .multipliers
             .iter()
-            .filter(|m| radius <= 0.0 || p <= 0.0 || m.norm() == 0.0 || m.ln().norm() / p >= radius)
+            .filter(|m| !disk.is_some_and(|d| d.holds(**m)))
             .copied()
             .collect();
-        if radius > 0.0 {
+        if disk.is_some() {
             out.extend(self.slow_exponents.iter().map(|l| (l * p).exp()));
         }
         out

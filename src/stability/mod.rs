@@ -274,11 +274,6 @@ impl FloquetResult {
         })
     }
 
-    /// The near-zero entries of [`Self::counted`] outside the circle.
-    pub fn near_zero_outside(&self) -> usize {
-        self.near_zero_unstable().count()
-    }
-
     /// The same result, noting the intervals of the product.
     pub fn with_intervals(self, intervals: usize) -> Self {
         Self {
