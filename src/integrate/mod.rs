@@ -25,6 +25,7 @@ mod dopri;
 mod orbit;
 mod state_space;
 mod steady;
+mod transient;
 mod variational;
 
 pub use dopri::{Dopri5, Dopri5Options, Dopri5Stats, HermiteStep, rk4};
@@ -32,6 +33,9 @@ pub use orbit::SampledOrbit;
 pub use state_space::{StateSpace, Workspace};
 pub use steady::{
     SteadyState, SteadyStateOptions, poincare_samples, steady_state, steady_state_with,
+};
+pub use transient::{
+    SpeedProfile, StepView, ThermalStepping, Transient, TransientOptions, TransientStats,
 };
 pub use variational::{
     FlowSensitivity, ShootingOptions, flow_with_sensitivity, monodromy_along_orbit, shoot_periodic,

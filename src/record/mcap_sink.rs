@@ -46,6 +46,7 @@ use super::convert::{
 use super::pb::foxglove::log::Level;
 use super::schema::{self, Topic, names};
 use super::sink::{Sink, SinkChecks};
+use super::transient::{Revolution, Samples, TransientInfo, TransientSink, time_ns};
 use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// One millisecond in nanoseconds: the step of the branch clock.
@@ -132,6 +133,8 @@ pub struct McapSink {
     last_time_ns: u64,
     /// Notes written with [`Sink::write_note`], counted into the closing status.
     warnings: u32,
+    /// Revolutions of a transient run written so far.
+    revolutions: u64,
 }
 
 impl McapSink {
@@ -181,6 +184,7 @@ impl McapSink {
             since_flush: 0,
             warnings: 0,
             last_time_ns: 0,
+            revolutions: 0,
         })
     }
 
@@ -301,10 +305,12 @@ impl McapSink {
             RunStatus::Interrupted => Level::Warning,
             RunStatus::Failed(_) => Level::Error,
         };
-        let points = self
-            .checks
-            .last_index()
-            .map_or("no points".to_string(), |i| format!("last point {i}"));
+        let points = match (self.checks.last_index(), self.revolutions) {
+            (Some(i), _) => format!("last point {i}"),
+            (None, 0) => "no points".to_string(),
+            (None, 1) => "1 revolution".to_string(),
+            (None, r) => format!("{r} revolutions"),
+        };
         let warned = match self.warnings {
             0 => String::new(),
             1 => ", 1 warning".to_string(),
@@ -336,7 +342,7 @@ impl McapSink {
         drop(inner);
         let written = logged.and(status_md).and(finished.map(|_| ())).and(flushed);
         // into place (or, without points over an earlier recording, away), then unlock
-        let has_points = self.checks.last_index().is_some();
+        let has_points = self.checks.last_index().is_some() || self.revolutions > 0;
         let committed = super::output::commit(&self.target, has_points);
         self.lock = None;
         self.committed = *committed.as_ref().unwrap_or(&false);
@@ -344,8 +350,10 @@ impl McapSink {
     }
 }
 
-impl Sink for McapSink {
-    fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+impl McapSink {
+    /// The start every recording shares: the run checked and kept, the model and settings
+    /// attached, the run and settings metadata (with the recording's `clock`).
+    fn start(&mut self, run: &RunInfo, clock: &str) -> Result<(), RecordError> {
         self.checks.begin(run)?;
         self.run = Some(std::sync::Arc::new(run.clone()));
         let model_name = if run.model_name.is_empty() {
@@ -371,16 +379,20 @@ impl Sink for McapSink {
                 ("model_name".to_string(), model_name),
                 ("model_sha256".to_string(), sha256_hex(&run.model_text)),
                 ("created_unix_s".to_string(), created.to_string()),
-                (
-                    "clock".to_string(),
-                    "branch clock: point i at (i+1) ms".into(),
-                ),
+                ("clock".to_string(), clock.to_string()),
             ]),
         )?;
         self.metadata(
             names::METADATA_SETTINGS,
             run.settings.iter().cloned().collect(),
         )?;
+        Ok(())
+    }
+}
+
+impl Sink for McapSink {
+    fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
+        self.start(run, "branch clock: point i at (i+1) ms")?;
         self.publish(schema::TOPIC_RUN_INFO, 0, &run_info_to_pb(run))?;
         let text = format!(
             "run started: {} {}, model {}, {} nodes, {} thermal nodes, {} bearings",
@@ -482,6 +494,44 @@ impl Sink for McapSink {
         self.publish(schema::TOPIC_LOG, t, &log)?;
         self.warnings += 1;
         self.flush()
+    }
+}
+
+impl TransientSink for McapSink {
+    fn begin_transient(&mut self, run: &RunInfo, info: &TransientInfo) -> Result<(), RecordError> {
+        self.start(run, "simulated time")?;
+        self.publish(schema::TOPIC_RUN_INFO, 0, &run_info_to_pb(run))?;
+        self.publish(schema::TOPIC_TRANSIENT_INFO, 0, info)?;
+        let text = format!(
+            "transient started: {} {}, model {}; {}; start: {}",
+            run.tool_name, run.tool_version, run.model_name, info.profile, info.start
+        );
+        self.publish(schema::TOPIC_LOG, 0, &log_to_pb(0, Level::Info, &text))?;
+        self.flush()
+    }
+
+    fn write_samples(&mut self, samples: &Samples) -> Result<(), RecordError> {
+        if self.run.is_none() {
+            return Err(RecordError::NotStarted("write_samples"));
+        }
+        self.publish(schema::TOPIC_SAMPLES, time_ns(samples.time_s), samples)
+    }
+
+    /// Each revolution closes the chunk and flushes the file: a killed run keeps every
+    /// revolution written.
+    fn write_revolution(&mut self, revolution: &Revolution) -> Result<(), RecordError> {
+        if self.run.is_none() {
+            return Err(RecordError::NotStarted("write_revolution"));
+        }
+        let t = time_ns(revolution.time_s);
+        self.publish(schema::TOPIC_REVOLUTIONS, t, revolution)?;
+        self.revolutions += 1;
+        self.flush()
+    }
+
+    fn finish_transient(&mut self, status: RunStatus) -> Result<(), RecordError> {
+        self.checks.finish()?;
+        self.close(&status)
     }
 }
 

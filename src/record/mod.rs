@@ -42,6 +42,7 @@ pub mod scan;
 pub mod schema;
 pub mod sink;
 pub mod synthetic;
+pub mod transient;
 pub mod types;
 
 use std::path::PathBuf;
@@ -51,6 +52,7 @@ use thiserror::Error;
 pub use mcap_sink::{McapOptions, McapSink};
 pub use reader::{ReadError, ReadOptions, Recording, read_recording, read_recording_with};
 pub use sink::{MemorySink, Sink, install_interrupt_flag, record_run};
+pub use transient::{MemoryTransient, TransientSink};
 pub use types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// Errors writing a recording.

@@ -23,6 +23,7 @@ use super::convert::{
 use super::pb::tmrotor::v1 as pb;
 use super::scan;
 use super::schema::{self, names};
+use super::transient::{Revolution, Samples, TransientInfo};
 use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
 
 /// Errors reading a recording. Every variant names the file.
@@ -78,6 +79,18 @@ pub struct Recording {
     pub metadata: BTreeMap<String, BTreeMap<String, String>>,
     /// Names of the attachments.
     pub attachments: Vec<String>,
+    /// The records of a transient run (`tmrotor transient`); `None` for a sweep.
+    pub transient: Option<TransientRecords>,
+}
+
+/// The records of a transient run read back, in time order.
+#[derive(Clone, Debug, Default)]
+pub struct TransientRecords {
+    pub info: Option<TransientInfo>,
+    pub revolutions: Vec<Revolution>,
+    pub samples: Vec<Samples>,
+    /// Revolution numbers lost before the last one read (damaged chunks).
+    pub missing: Vec<u64>,
 }
 
 impl Recording {
@@ -220,6 +233,8 @@ struct Collected {
     /// point is built when its `/summary` arrives and its messages are freed: memory then
     /// holds the points, not every message of the file.
     run_early: Option<RunInfo>,
+    /// Transient records (`/transient/*`), when the file has any.
+    transient: Option<TransientRecords>,
     /// Points built as their `/summary` arrived, with which optional messages they had.
     built: BTreeMap<u64, (PointRecord, Presence)>,
 }
@@ -236,6 +251,12 @@ impl Collected {
             return;
         }
         let topic = ch.topic.clone();
+        if topic.starts_with("/transient/") {
+            if let Err(reason) = self.transient_message(&topic, data) {
+                self.undecodable.push(format!("{topic}: {reason}"));
+            }
+            return;
+        }
         match decode_message(
             &topic,
             data,
@@ -249,6 +270,18 @@ impl Collected {
             Ok(None) => {}
             Err(reason) => self.undecodable.push(format!("{topic}: {reason}")),
         }
+    }
+
+    /// Keeps one message of a transient run.
+    fn transient_message(&mut self, topic: &str, data: &[u8]) -> Result<(), String> {
+        let rec = self.transient.get_or_insert_with(TransientRecords::default);
+        match topic {
+            t if t == schema::TOPIC_TRANSIENT_INFO.name => rec.info = Some(decode(data)?),
+            t if t == schema::TOPIC_REVOLUTIONS.name => rec.revolutions.push(decode(data)?),
+            t if t == schema::TOPIC_SAMPLES.name => rec.samples.push(decode(data)?),
+            _ => {}
+        }
+        Ok(())
     }
 
     /// Builds point `index` from its messages (the `/summary` is written last), unless the
@@ -514,6 +547,18 @@ fn read_from<R: std::io::Read + std::io::Seek>(
     if !missing.is_empty() {
         notes.push(format!("points missing: {}", index_ranges(&missing)));
     }
+    // Revolutions are numbered 1, 2, …: a gap is a lost revolution.
+    let mut transient = c.transient.take();
+    if let Some(t) = &mut transient {
+        let present: std::collections::BTreeSet<u64> =
+            t.revolutions.iter().map(|r| r.index).collect();
+        let last = present.iter().next_back().copied().unwrap_or(0);
+        t.missing = (1..last).filter(|i| !present.contains(i)).collect();
+        if !t.missing.is_empty() {
+            notes.push(format!("revolutions missing: {}", index_ranges(&t.missing)));
+        }
+    }
+    let transient_gap = transient.as_ref().is_some_and(|t| !t.missing.is_empty());
     // The summary section's counts against what was read.
     let mut count_mismatch = false;
     if let Some((chunk_count, counts)) = &c.statistics {
@@ -559,6 +604,7 @@ fn read_from<R: std::io::Read + std::io::Seek>(
     let complete = report.cut.is_none()
         && !damaged
         && missing.is_empty()
+        && !transient_gap
         && lost.is_empty()
         && !count_mismatch
         && report.end_magic
@@ -588,6 +634,7 @@ fn read_from<R: std::io::Read + std::io::Seek>(
             .collect(),
         metadata: c.metadata,
         attachments: c.attachments.into_iter().map(|(n, _)| n).collect(),
+        transient,
     })
 }
 

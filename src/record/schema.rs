@@ -59,11 +59,15 @@ pub const MAP_PAIR_END: SchemaEntry =
     schema!("tmrotor.v1.MapPairEnd", "tmrotor/v1/operating_map.proto");
 pub const MAP_REGION: SchemaEntry =
     schema!("tmrotor.v1.MapRegion", "tmrotor/v1/operating_map.proto");
+pub const TRANSIENT_INFO: SchemaEntry =
+    schema!("tmrotor.v1.TransientInfo", "tmrotor/v1/transient.proto");
+pub const REVOLUTION: SchemaEntry = schema!("tmrotor.v1.Revolution", "tmrotor/v1/transient.proto");
+pub const SAMPLES: SchemaEntry = schema!("tmrotor.v1.Samples", "tmrotor/v1/transient.proto");
 pub const SCENE_UPDATE: SchemaEntry = schema!("foxglove.SceneUpdate", "foxglove/SceneUpdate.proto");
 pub const LOG: SchemaEntry = schema!("foxglove.Log", "foxglove/Log.proto");
 
 /// Every schema a recording or an operating map may contain.
-pub const ALL_SCHEMAS: [SchemaEntry; 17] = [
+pub const ALL_SCHEMAS: [SchemaEntry; 20] = [
     RUN_INFO,
     POINT_SUMMARY,
     HARMONICS,
@@ -81,6 +85,9 @@ pub const ALL_SCHEMAS: [SchemaEntry; 17] = [
     MAP_CURVE,
     MAP_PAIR_END,
     MAP_REGION,
+    TRANSIENT_INFO,
+    REVOLUTION,
+    SAMPLES,
 ];
 
 /// A topic of a recording: name, message type, meaning (see `schemas/README.md`).
@@ -202,6 +209,25 @@ pub const MAP_TOPICS: [Topic; 4] = [
     TOPIC_MAP_PAIR_ENDS,
     TOPIC_MAP_REGIONS,
 ];
+
+pub const TOPIC_TRANSIENT_INFO: Topic = Topic {
+    name: "/transient/info",
+    schema: TRANSIENT_INFO,
+    meaning: "transient run: speed profile, start state, integrator settings (once, at t = 0)",
+};
+pub const TOPIC_REVOLUTIONS: Topic = Topic {
+    name: "/transient/revolution",
+    schema: REVOLUTION,
+    meaning: "per revolution: speed, RMS and peak amplitude per node, temperatures, clearances, bearing loads",
+};
+pub const TOPIC_SAMPLES: Topic = Topic {
+    name: "/transient/samples",
+    schema: SAMPLES,
+    meaning: "x, y of every dynamic node, decimated to a few samples per revolution",
+};
+
+/// Every topic of a transient recording (beside `/run_info` and `/log`).
+pub const TRANSIENT_TOPICS: [Topic; 3] = [TOPIC_TRANSIENT_INFO, TOPIC_REVOLUTIONS, TOPIC_SAMPLES];
 
 /// Names of the MCAP metadata records and attachments.
 pub mod names {
