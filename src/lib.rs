@@ -50,6 +50,7 @@ pub mod sweep;
 pub mod system;
 pub mod systems;
 pub mod thermal;
+pub mod transient;
 pub mod truncation;
 
 /// Runs faer's dense kernels (LU, eigenvalues, matrix products through operators) on the

@@ -26,6 +26,7 @@ const RANKS: &[(&str, u32)] = &[
     ("study", 30),
     ("derive", 40),
     ("sweep", 50),
+    ("transient", 50),
     // applications
     ("figure", 60),
     ("campaign", 61),

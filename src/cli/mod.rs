@@ -9,6 +9,7 @@ pub mod modes;
 pub mod replay;
 pub mod report;
 pub mod sweep;
+pub mod transient;
 pub mod truncation;
 pub mod unbalance;
 
@@ -60,6 +61,9 @@ pub enum Command {
     /// Truncation study (paper Section 5.1): per order, amplitudes, temperatures and the
     /// residual of the governing equations (Eq. 36) at points A–D.
     Truncation(truncation::TruncationArgs),
+    /// The coupled rotor in time: a fixed speed, a run-up or coast-down, or a speed table,
+    /// from a cold start or a recorded point; an MCAP recording on the simulated time axis.
+    Transient(transient::TransientArgs),
 }
 
 /// An error with its causes, as `{:#}` prints it, but without a cause whose text the
@@ -282,6 +286,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Some(Command::Unbalance(args)) => unbalance::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Report(args)) => report::run(&args, &mut std::io::stdout().lock()),
         Some(Command::Truncation(args)) => truncation::run(&args, &mut std::io::stdout().lock()),
+        Some(Command::Transient(args)) => transient::run(&args, &mut std::io::stdout().lock()),
     }
 }
 

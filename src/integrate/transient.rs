@@ -103,7 +103,7 @@ impl SpeedProfile {
                     return bad("table time", rows[0].0, "the first row must be at t = 0 s");
                 }
                 for w in rows.windows(2) {
-                    if !(w[1].0 > w[0].0) || !w[1].0.is_finite() {
+                    if w[1].0 <= w[0].0 || !w[1].0.is_finite() {
                         return bad("table time", w[1].0, "times must increase strictly");
                     }
                 }

@@ -80,6 +80,10 @@ pub enum RecordError {
     InvalidBifurcation { number: u32, reason: String },
     #[error("point index {index} after {previous}: indices must increase strictly")]
     NonIncreasingIndex { index: u64, previous: u64 },
+    /// The output path cannot be written without destroying something the tool did not
+    /// write.
+    #[error("output {path}: {reason}; nothing was written")]
+    Target { path: PathBuf, reason: String },
     #[error("{0} called before begin_run")]
     NotStarted(&'static str),
     #[error("begin_run called twice")]

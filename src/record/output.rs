@@ -43,6 +43,54 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     std::fs::rename(&tmp, path)
 }
 
+/// Refuses an output path that is not a regular file or absent (a directory, a device, a
+/// FIFO, a socket), or that is one of the command's `inputs` (a model, study or campaign
+/// file, a recording being read): the recording is renamed over its target when the run
+/// ends, which would destroy what is there. Call before any computing.
+pub fn check_target(target: &Path, inputs: &[&Path]) -> Result<(), RecordError> {
+    let refuse = |reason: String| {
+        Err(RecordError::Target {
+            path: target.to_path_buf(),
+            reason,
+        })
+    };
+    if target.as_os_str().is_empty() {
+        return refuse("the path is empty".into());
+    }
+    match std::fs::symlink_metadata(target) {
+        Ok(meta) => {
+            let kind = meta.file_type();
+            if kind.is_dir() {
+                return refuse("it is a directory; give a file name inside it".into());
+            }
+            if kind.is_symlink() {
+                return refuse("it is a symbolic link; give the file it points to".into());
+            }
+            if !kind.is_file() {
+                return refuse(
+                    "it is not a regular file (a device, FIFO or socket); the recording would replace it"
+                        .into(),
+                );
+            }
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+        Err(e) => return refuse(format!("cannot inspect it: {e}")),
+    }
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    for input in inputs {
+        if same(target, input) {
+            return refuse(format!(
+                "it is an input of this command ({}); write the output elsewhere",
+                input.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The lock file of a recording `target`.
 pub fn lock_path(target: &Path) -> PathBuf {
     with_suffix(target, ".lock")

@@ -1,0 +1,393 @@
+//! `tmrotor transient`: the coupled rotor integrated in time (a fixed speed, a run-up or
+//! coast-down, or a table of speeds), from a cold start or from a recorded point, written
+//! to an MCAP recording on the simulated time axis.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Context, bail};
+use clap::Args;
+use indicatif::ProgressBar;
+
+use super::sweep::{StudyArgs, parse_range};
+use crate::derive::CoupledRederive;
+use crate::integrate::{SpeedProfile, ThermalStepping, TransientOptions};
+use crate::record::output::check_target;
+use crate::record::{McapOptions, McapSink, install_interrupt_flag, read_recording};
+use crate::study::SweepProblem;
+use crate::system::System;
+use crate::transient::{StartState, TransientSettings, describe_profile, run_transient};
+
+/// Speed profile, start state and integrator settings of a transient run.
+#[derive(Debug, Clone, Args)]
+pub struct TransientArgs {
+    #[command(flatten)]
+    pub base: StudyArgs,
+    /// Truncation order of the harmonic basis: sets the recording's basis and the window of
+    /// the RMS amplitudes (the basis's period) [default: 3].
+    #[arg(long)]
+    pub order: Option<u32>,
+    /// Mechanical model only (no thermal network, clearances fixed at δ0).
+    #[arg(long)]
+    pub no_thermal: bool,
+    /// A fixed speed, rad/s (default with --from: the point's speed).
+    #[arg(long, value_name = "RAD_S")]
+    pub speed: Option<f64>,
+    /// A linear run-up (START < END) or coast-down (START > END), rad/s, at --accel.
+    #[arg(long, value_name = "START:END", conflicts_with = "speed")]
+    pub ramp: Option<String>,
+    /// Magnitude of the ramp's acceleration, rad/s² [default: 10].
+    #[arg(long, value_name = "RAD_S2", requires = "ramp")]
+    pub accel: Option<f64>,
+    /// A speed table: a CSV file of `time_s,omega_rad_s` rows (a header line is allowed),
+    /// times increasing from 0; the speed is linear between rows and held after the last.
+    #[arg(long, value_name = "CSV", conflicts_with_all = ["speed", "ramp"])]
+    pub profile: Option<PathBuf>,
+    /// Simulated time, s [default: the ramp's or table's end plus 1 s; 100 revolutions at a
+    /// fixed speed].
+    #[arg(long, value_name = "S")]
+    pub duration: Option<f64>,
+    /// Start on the orbit of a point of this sweep recording (with --point) instead of a
+    /// cold start; the model and study are the recording's.
+    #[arg(long, value_name = "RECORDING", requires = "point")]
+    pub from: Option<PathBuf>,
+    /// Index of the recorded point to start from.
+    #[arg(long, value_name = "I", requires = "from")]
+    pub point: Option<u64>,
+    /// Scale the start's vibration (displacements about their mean, and velocities) by
+    /// 1 + F, e.g. 0.05 for a 5 % larger orbit.
+    #[arg(
+        long,
+        value_name = "F",
+        allow_negative_numbers = true,
+        default_value_t = 0.0
+    )]
+    pub perturb: f64,
+    /// Add K kelvin to every start temperature.
+    #[arg(
+        long,
+        value_name = "K",
+        allow_negative_numbers = true,
+        default_value_t = 0.0
+    )]
+    pub perturb_temp: f64,
+    /// Relative local error tolerance of the mechanical integrator [default: 1e-4].
+    #[arg(long)]
+    pub rtol: Option<f64>,
+    /// Advance the temperatures after every mechanical step with that step's heat (single
+    /// rate, the reference for the default averaged macro steps).
+    #[arg(long)]
+    pub single_rate: bool,
+    /// Most revolutions in one thermal macro step [default: 50].
+    #[arg(long, value_name = "N")]
+    pub max_thermal_revolutions: Option<u32>,
+    /// Displacement samples per revolution on /transient/samples; 0 for none [default: 16].
+    #[arg(long, value_name = "N", default_value_t = 16)]
+    pub samples_per_rev: u32,
+    /// Output recording.
+    #[arg(short, long, default_value = "transient.mcap")]
+    pub output: PathBuf,
+    /// No progress output.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// The default relative tolerance of the command: 1e-4 holds a settled orbit to about
+/// 1e-3 of its amplitude on the built-in model at a third of the cost of 1e-6
+/// (docs/transient.md).
+pub const DEFAULT_RTOL: f64 = 1e-4;
+
+/// Reads a `time_s,omega_rad_s` table.
+fn read_table(path: &Path) -> anyhow::Result<Vec<(f64, f64)>> {
+    let meta = std::fs::metadata(path).with_context(|| format!("reading {}", path.display()))?;
+    if !meta.is_file() {
+        bail!("{}: not a regular file", path.display());
+    }
+    if meta.len() > 16 << 20 {
+        bail!(
+            "{}: {} bytes, above the limit of 16 MiB for a speed table",
+            path.display(),
+            meta.len()
+        );
+    }
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let mut rows = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let mut cols = line.split(',').map(str::trim);
+        let (Some(a), Some(b), None) = (cols.next(), cols.next(), cols.next()) else {
+            bail!(
+                "{}:{}: expected two columns time_s,omega_rad_s",
+                path.display(),
+                i + 1
+            );
+        };
+        match (a.parse::<f64>(), b.parse::<f64>()) {
+            (Ok(t), Ok(w)) => rows.push((t, w)),
+            _ if rows.is_empty() && i == 0 => {} // header
+            _ => bail!("{}:{}: {line:?} is not two numbers", path.display(), i + 1),
+        }
+    }
+    let profile = SpeedProfile::Table(rows.clone());
+    profile
+        .check()
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    Ok(rows)
+}
+
+impl TransientArgs {
+    fn profile(&self, start_speed: Option<f64>) -> anyhow::Result<SpeedProfile> {
+        let profile = if let Some(r) = &self.ramp {
+            let (from, to) = parse_range("--ramp", r)?;
+            if from == to {
+                bail!("--ramp {r}: START and END are equal; use --speed for a fixed speed");
+            }
+            SpeedProfile::Ramp {
+                from,
+                to,
+                accel: self.accel.unwrap_or(10.0),
+            }
+        } else if let Some(path) = &self.profile {
+            SpeedProfile::Table(read_table(path)?)
+        } else if let Some(w) = self.speed.or(start_speed) {
+            SpeedProfile::Constant(w)
+        } else {
+            bail!(
+                "no speed: give --speed RAD_S, --ramp START:END, --profile CSV or --from REC --point I"
+            );
+        };
+        profile.check().map_err(|e| anyhow::anyhow!("{e}"))?;
+        Ok(profile)
+    }
+
+    fn options(&self) -> anyhow::Result<TransientOptions> {
+        let mut o = TransientOptions {
+            rtol: self.rtol.unwrap_or(DEFAULT_RTOL),
+            ..TransientOptions::default()
+        };
+        if self.single_rate {
+            o.thermal = ThermalStepping::EveryStep;
+        } else if let Some(n) = self.max_thermal_revolutions {
+            if n == 0 {
+                bail!("--max-thermal-revolutions 0: at least 1 revolution a thermal step");
+            }
+            if let ThermalStepping::Averaged {
+                max_revolutions, ..
+            } = &mut o.thermal
+            {
+                *max_revolutions = n;
+            }
+        }
+        if !(self.perturb.is_finite() && self.perturb > -1.0) {
+            bail!(
+                "--perturb {}: the factor must be finite and above -1",
+                self.perturb
+            );
+        }
+        if !self.perturb_temp.is_finite() || self.perturb_temp.abs() > 500.0 {
+            bail!("--perturb-temp {}: at most ±500 K", self.perturb_temp);
+        }
+        if self.samples_per_rev > 4096 {
+            bail!("--samples-per-rev {}: at most 4096", self.samples_per_rev);
+        }
+        Ok(o)
+    }
+}
+
+/// Runs the transient and prints a summary.
+pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
+    let mut inputs: Vec<&Path> = Vec::new();
+    inputs.extend(args.base.model.as_deref());
+    inputs.extend(args.base.study.as_deref());
+    inputs.extend(args.from.as_deref());
+    inputs.extend(args.profile.as_deref());
+    check_target(&args.output, &inputs)?;
+    let options = args.options()?;
+    let (problem, start, start_speed) = match (&args.from, args.point) {
+        (Some(rec_path), Some(index)) => {
+            if args.base.model.is_some() || args.base.study.is_some() || !args.base.set.is_empty() {
+                bail!(
+                    "--from takes the model and study of the recording; leave out --model, --study and --set"
+                );
+            }
+            let rec = read_recording(rec_path)?;
+            let point = rec.point(index).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: no point {index} (the recording holds {} points{})",
+                    rec_path.display(),
+                    rec.points.len(),
+                    rec.points
+                        .last()
+                        .map_or(String::new(), |p| format!(", indices up to {}", p.index))
+                )
+            })?;
+            let run = rec
+                .run_of(point.branch)
+                .ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "{}: point {index} is on branch {} which the recording does not describe",
+                        rec_path.display(),
+                        point.branch
+                    )
+                })?
+                .into_owned();
+            let rederive = CoupledRederive::from_run(&run)
+                .with_context(|| format!("rebuilding the model of {}", rec_path.display()))?;
+            let sol = rederive.solution(point);
+            let problem = rederive.problem();
+            let sys = &problem.system;
+            let mean: Vec<f64> = (0..sys.n_mech()).map(|d| sol.mech_coeffs(d)[0]).collect();
+            let label = format!(
+                "point {index} of {} (ω = {} rad/s{})",
+                rec_path.display(),
+                point.omega_rad_s,
+                match point.stable {
+                    Some(true) => ", stable",
+                    Some(false) => ", unstable",
+                    None => "",
+                }
+            );
+            let start = StartState::on_orbit(&sol, sys.n_mech(), sys.n_therm(), label).perturbed(
+                &mean,
+                args.perturb,
+                args.perturb_temp,
+            );
+            // the recording's problem, rebuilt once more to own it
+            let problem = SweepProblem::with_model(&problem.settings, problem.model.clone())?;
+            (problem, start, Some(point.omega_rad_s))
+        }
+        _ => {
+            let mut settings = args.base.settings()?;
+            if let Some(o) = args.order {
+                settings.harmonic.order = o;
+            }
+            if args.no_thermal {
+                settings.operating.thermal = false;
+            }
+            let problem = SweepProblem::new(&settings)?;
+            let cold = StartState::cold(&problem);
+            let mean = cold.x.clone();
+            let start = cold.perturbed(&mean, 0.0, args.perturb_temp);
+            (problem, start, None)
+        }
+    };
+    let profile = args.profile(start_speed)?;
+    let duration = match args.duration {
+        Some(d) => d,
+        None => match profile.end_time() {
+            Some(t) => t + 1.0,
+            None => 100.0 * std::f64::consts::TAU / profile.omega(0.0),
+        },
+    };
+    if !(duration.is_finite() && duration > 0.0) {
+        bail!("--duration {duration}: the simulated time must be finite and above 0 s");
+    }
+    let settings = TransientSettings {
+        profile: profile.clone(),
+        duration_s: duration,
+        options,
+        samples_per_revolution: args.samples_per_rev,
+    };
+    let mut sink = McapSink::create(&args.output, McapOptions::default())?;
+    if let Some(kept) = sink.stale_partial() {
+        eprintln!(
+            "note: an earlier run writing {} was killed; what it recorded was moved to {}",
+            args.output.display(),
+            kept.display()
+        );
+    }
+    let interrupt = install_interrupt_flag().ok();
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        let b = ProgressBar::new((duration * 1000.0).ceil() as u64);
+        b.set_style(super::bar_style("{elapsed_precise} [{bar:30}] {msg}"));
+        b
+    };
+    let log = !args.quiet && !std::io::stderr().is_terminal();
+    if log {
+        eprintln!(
+            "transient: {}, {duration} s simulated, start: {}; writing {}",
+            describe_profile(&profile),
+            start.label,
+            args.output.display()
+        );
+    }
+    let began = Instant::now();
+    let mut last_line = began;
+    let biggest = |r: &crate::record::transient::Revolution| {
+        r.amplitude_rms_m.iter().fold(0.0f64, |m, v| m.max(*v))
+    };
+    let report = run_transient(
+        &problem,
+        &start,
+        &settings,
+        &mut sink,
+        &mut |r| {
+            bar.set_position((r.time_s * 1000.0) as u64);
+            let msg = format!(
+                "t {:.3} s  ω {:.2} rad/s  largest RMS amplitude {:.3} µm",
+                r.time_s,
+                r.omega_rad_s,
+                biggest(r) * 1e6
+            );
+            if log && last_line.elapsed() >= super::LOG_EVERY {
+                last_line = Instant::now();
+                eprintln!("{msg}");
+            }
+            bar.set_message(msg);
+        },
+        interrupt,
+    )?;
+    bar.finish_and_clear();
+    writeln!(
+        out,
+        "{} revolutions, {:.4} s simulated in {:.1} s ({:.3} simulated s per wall s); {} steps ({} rejected), {} thermal steps, {} factorizations",
+        report.revolutions,
+        report.simulated_s,
+        report.wall_s,
+        report.speed(),
+        report.stats.accepted,
+        report.stats.rejected,
+        report.stats.thermal_steps,
+        report.stats.factorizations
+    )?;
+    if let Some(last) = &report.last {
+        let run = &problem.run;
+        let (k, a) =
+            last.amplitude_rms_m
+                .iter()
+                .enumerate()
+                .fold(
+                    (0, 0.0f64),
+                    |(bk, ba), (k, a)| if *a > ba { (k, *a) } else { (bk, ba) },
+                );
+        let node = run.nodes.get(k).map_or("?", |n| n.name.as_str());
+        writeln!(
+            out,
+            "at the end: ω {:.3} rad/s, largest RMS amplitude {:.4} µm at {node}{}",
+            last.omega_rad_s,
+            a * 1e6,
+            last.temperature_c
+                .iter()
+                .cloned()
+                .fold(None, |m: Option<f64>, v| Some(m.map_or(v, |m| m.max(v))))
+                .map_or(String::new(), |t| format!(", hottest node {t:.2} °C"))
+        )?;
+    }
+    if report.interrupted {
+        writeln!(
+            out,
+            "interrupted: every revolution up to the stop is in {}",
+            args.output.display()
+        )?;
+    }
+    writeln!(out, "recording: {}", args.output.display())?;
+    let _ = began;
+    Ok(())
+}

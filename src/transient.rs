@@ -1,0 +1,440 @@
+//! One transient run of the coupled rotor into a [`TransientSink`]: the driver beside
+//! [`crate::sweep`], on the time axis instead of the speed axis.
+//!
+//! The engine's [`Transient`] integrates the model the sweep built ([`SweepProblem`]); this
+//! module chooses the start state (a cold start, or a point of a recorded branch, possibly
+//! perturbed), turns the integrator's steps into per-revolution records (RMS amplitude of
+//! Eq. 35 over the basis's period, so that a settled transient reads the same number as the
+//! harmonic-balance point; temperatures; clearances; bearing loads) and decimated
+//! displacement samples, and stops cleanly on an interrupt with every written revolution
+//! kept.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use thiserror::Error;
+
+use crate::integrate::{
+    IntegrateError, SpeedProfile, StepView, ThermalStepping, Transient, TransientOptions,
+    TransientStats,
+};
+use crate::record::transient::{Revolution, Samples, TransientInfo, TransientSink};
+use crate::record::{RecordError, RunStatus};
+use crate::study::SweepProblem;
+use crate::system::{PeriodicOrbit, System};
+
+/// Errors of a transient run.
+#[derive(Debug, Error)]
+pub enum TransientError {
+    #[error("transient integration: {0}")]
+    Integrate(#[from] IntegrateError),
+    #[error(transparent)]
+    Record(#[from] RecordError),
+    #[error("transient setting {field} = {value}: {reason}")]
+    Setting {
+        field: &'static str,
+        value: String,
+        reason: String,
+    },
+}
+
+/// Where the run starts.
+#[derive(Clone, Debug)]
+pub struct StartState {
+    /// Displacements, velocities (length `n_mech`) and temperatures (`n_therm`).
+    pub x: Vec<f64>,
+    pub v: Vec<f64>,
+    pub temp: Vec<f64>,
+    /// In words, for the recording ("cold start", "point 12 of sweep.mcap").
+    pub label: String,
+}
+
+impl StartState {
+    /// At rest in the static gravity equilibrium on the bearings, every temperature at
+    /// ambient.
+    pub fn cold(problem: &SweepProblem) -> Self {
+        let sys = &problem.system;
+        Self {
+            x: sys.static_equilibrium(),
+            v: vec![0.0; sys.n_mech()],
+            temp: vec![sys.ambient_temp_c(); sys.n_therm()],
+            label: "cold start: at rest in the static equilibrium, temperatures at ambient".into(),
+        }
+    }
+
+    /// On a periodic orbit at its time 0 (a harmonic-balance point).
+    pub fn on_orbit(
+        orbit: &dyn PeriodicOrbit,
+        n_mech: usize,
+        n_therm: usize,
+        label: String,
+    ) -> Self {
+        let (mut x, mut v, mut temp) = (vec![0.0; n_mech], vec![0.0; n_mech], vec![0.0; n_therm]);
+        orbit.state_at(0.0, &mut x, &mut v, &mut temp);
+        Self { x, v, temp, label }
+    }
+
+    /// Scales the oscillating part of the displacements and the velocities by `1 + factor`
+    /// about `mean` (the orbit's mean displacement) and adds `temp_shift` K to every
+    /// temperature.
+    pub fn perturbed(mut self, mean: &[f64], factor: f64, temp_shift: f64) -> Self {
+        for (x, m) in self.x.iter_mut().zip(mean) {
+            *x = m + (1.0 + factor) * (*x - m);
+        }
+        for v in &mut self.v {
+            *v *= 1.0 + factor;
+        }
+        for t in &mut self.temp {
+            *t += temp_shift;
+        }
+        if factor != 0.0 || temp_shift != 0.0 {
+            self.label = format!(
+                "{}, perturbed: vibration ×{:.6}, temperatures {:+} K",
+                self.label,
+                1.0 + factor,
+                temp_shift
+            );
+        }
+        self
+    }
+}
+
+/// Settings of one transient run.
+#[derive(Clone, Debug)]
+pub struct TransientSettings {
+    pub profile: SpeedProfile,
+    /// Simulated time (s).
+    pub duration_s: f64,
+    pub options: TransientOptions,
+    /// Displacement samples per revolution on `/transient/samples` (0: none). Default 16.
+    pub samples_per_revolution: u32,
+}
+
+/// What a finished (or stopped) run reports.
+#[derive(Clone, Debug)]
+pub struct TransientReport {
+    pub revolutions: u64,
+    pub simulated_s: f64,
+    pub wall_s: f64,
+    pub stats: TransientStats,
+    pub interrupted: bool,
+    /// The last revolution written.
+    pub last: Option<Revolution>,
+}
+
+impl TransientReport {
+    /// Simulated seconds per wall-clock second.
+    pub fn speed(&self) -> f64 {
+        self.simulated_s / self.wall_s.max(1e-9)
+    }
+}
+
+/// The profile in words.
+pub fn describe_profile(profile: &SpeedProfile) -> String {
+    match profile {
+        SpeedProfile::Constant(w) => format!("fixed speed {w} rad/s"),
+        SpeedProfile::Ramp { from, to, accel } => format!(
+            "{} {from} -> {to} rad/s at {accel} rad/s^2",
+            if to > from { "run-up" } else { "coast-down" }
+        ),
+        SpeedProfile::Table(rows) => format!("speed table of {} rows", rows.len()),
+    }
+}
+
+fn describe_thermal(t: ThermalStepping) -> String {
+    match t {
+        ThermalStepping::EveryStep => "every step (single rate)".into(),
+        ThermalStepping::Averaged {
+            max_revolutions,
+            temp_tol,
+            max_temp_step,
+        } => format!(
+            "averaged over 1..{max_revolutions} revolutions (local error {temp_tol} K, at most {max_temp_step} K a step)"
+        ),
+    }
+}
+
+/// Per-node running sums over one revolution.
+#[derive(Clone, Default)]
+struct RevolutionSums {
+    span: f64,
+    /// ∫x, ∫y, ∫x², ∫y² per node.
+    sums: Vec<[f64; 4]>,
+    /// Largest |(x, y) − (x₀, y₀)| seen, with the window start's mean subtracted later:
+    /// kept as the extreme x and y per node.
+    extremes: Vec<[f64; 4]>,
+    steps: u32,
+    load_max: Vec<f64>,
+}
+
+/// Runs the transient of `problem` from `start` into `sink`. `progress` sees each
+/// revolution; `interrupt` set stops at the next step with status `interrupted`.
+pub fn run_transient(
+    problem: &SweepProblem,
+    start: &StartState,
+    settings: &TransientSettings,
+    sink: &mut dyn TransientSink,
+    progress: &mut dyn FnMut(&Revolution),
+    interrupt: Option<Arc<AtomicBool>>,
+) -> Result<TransientReport, TransientError> {
+    let d = settings.duration_s;
+    if !(d.is_finite() && d > 0.0) {
+        return Err(TransientError::Setting {
+            field: "duration",
+            value: d.to_string(),
+            reason: "the simulated time must be finite and above 0 s".into(),
+        });
+    }
+    let sys = &problem.system;
+    let run = &problem.run;
+    let window = problem.basis.base_den().max(1);
+    let corners: Vec<(f64, f64)> = match &settings.profile {
+        SpeedProfile::Table(rows) => rows.clone(),
+        p => {
+            let mut c = vec![(0.0, p.omega(0.0))];
+            if let Some(te) = p.end_time()
+                && te > 0.0
+            {
+                c.push((te, p.omega(te)));
+            }
+            c.push((d, p.omega(d)));
+            c
+        }
+    };
+    let info = TransientInfo {
+        profile: describe_profile(&settings.profile),
+        start: start.label.clone(),
+        duration_s: d,
+        profile_time_s: corners.iter().map(|c| c.0).collect(),
+        profile_omega_rad_s: corners.iter().map(|c| c.1).collect(),
+        thermal_stepping: describe_thermal(settings.options.thermal),
+        rtol: settings.options.rtol,
+        atol: settings.options.atol,
+        window_revolutions: window,
+        samples_per_revolution: settings.samples_per_revolution,
+    };
+    let mut integ = Transient::new(
+        sys,
+        settings.profile.clone(),
+        &start.x,
+        &start.v,
+        &start.temp,
+        settings.options,
+    )?;
+    sink.begin_transient(run, &info)?;
+    let outcome = drive(
+        problem,
+        &mut integ,
+        settings,
+        window,
+        sink,
+        progress,
+        interrupt.as_deref(),
+    );
+    let status = match &outcome {
+        Ok(r) if r.interrupted => RunStatus::Interrupted,
+        Ok(_) => RunStatus::Completed,
+        Err(e) => RunStatus::Failed(e.to_string()),
+    };
+    let finished = sink.finish_transient(status);
+    let report = outcome?;
+    finished?;
+    Ok(report)
+}
+
+fn drive(
+    problem: &SweepProblem,
+    integ: &mut Transient<'_>,
+    settings: &TransientSettings,
+    window: u32,
+    sink: &mut dyn TransientSink,
+    progress: &mut dyn FnMut(&Revolution),
+    interrupt: Option<&AtomicBool>,
+) -> Result<TransientReport, TransientError> {
+    let sys = &problem.system;
+    let run = &problem.run;
+    let n_nodes = run.nodes.len();
+    let n_bear = run.bearings.len();
+    let clearances0 = sys.initial_clearances_m();
+    let wall = Instant::now();
+    let tau = std::f64::consts::TAU;
+    let samples_per_rev = settings.samples_per_revolution;
+    let load_samples = samples_per_rev.max(16);
+    let mut current = RevolutionSums {
+        sums: vec![[0.0; 4]; n_nodes],
+        extremes: vec![
+            [
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY
+            ];
+            n_nodes
+        ],
+        load_max: vec![0.0; n_bear],
+        ..Default::default()
+    };
+    let mut history: std::collections::VecDeque<RevolutionSums> = Default::default();
+    let mut revolution: u64 = 0;
+    let mut last_t = 0.0;
+    let mut last_xy: Vec<(f64, f64)> = run
+        .nodes
+        .iter()
+        .map(|n| {
+            let (x, _, _) = integ.state();
+            (x[n.dof_x], x[n.dof_y])
+        })
+        .collect();
+    let mut next_sample_phase = 0.0;
+    let mut next_load_phase = 0.0;
+    let mut failure: Option<TransientError> = None;
+    let mut interrupted = false;
+    let mut last_rev: Option<Revolution> = None;
+    let mut observer = |s: &StepView<'_>| -> bool {
+        if interrupt.is_some_and(|f| f.load(Ordering::Relaxed)) {
+            interrupted = true;
+            return false;
+        }
+        let h = s.t - last_t;
+        last_t = s.t;
+        current.span += h;
+        current.steps += 1;
+        for (k, n) in run.nodes.iter().enumerate() {
+            let (x, y) = (s.x[n.dof_x], s.x[n.dof_y]);
+            let (x0, y0) = last_xy[k];
+            let acc = &mut current.sums[k];
+            acc[0] += 0.5 * h * (x + x0);
+            acc[1] += 0.5 * h * (y + y0);
+            acc[2] += 0.5 * h * (x * x + x0 * x0);
+            acc[3] += 0.5 * h * (y * y + y0 * y0);
+            let e = &mut current.extremes[k];
+            e[0] = e[0].min(x);
+            e[1] = e[1].max(x);
+            e[2] = e[2].min(y);
+            e[3] = e[3].max(y);
+            last_xy[k] = (x, y);
+        }
+        let ts = s.phase / s.omega;
+        if samples_per_rev > 0 && s.phase >= next_sample_phase {
+            next_sample_phase = s.phase + tau / f64::from(samples_per_rev);
+            let msg = Samples {
+                time_s: s.t,
+                omega_rad_s: s.omega,
+                x_m: run.nodes.iter().map(|n| s.x[n.dof_x]).collect(),
+                y_m: run.nodes.iter().map(|n| s.x[n.dof_y]).collect(),
+            };
+            if let Err(e) = sink.write_samples(&msg) {
+                failure = Some(e.into());
+                return false;
+            }
+        }
+        if n_bear > 0 && s.phase >= next_load_phase {
+            next_load_phase = s.phase + tau / f64::from(load_samples);
+            for (m, b) in current
+                .load_max
+                .iter_mut()
+                .zip(sys.bearing_states(s.omega, ts, s.x, s.temp))
+            {
+                *m = m.max(b.fb_n);
+            }
+        }
+        if s.phase < tau * (revolution + 1) as f64 {
+            return true;
+        }
+        revolution += 1;
+        let done = std::mem::replace(
+            &mut current,
+            RevolutionSums {
+                sums: vec![[0.0; 4]; n_nodes],
+                extremes: vec![
+                    [
+                        f64::INFINITY,
+                        f64::NEG_INFINITY,
+                        f64::INFINITY,
+                        f64::NEG_INFINITY
+                    ];
+                    n_nodes
+                ],
+                load_max: vec![0.0; n_bear],
+                ..Default::default()
+            },
+        );
+        let steps = done.steps;
+        let load_max = done.load_max.clone();
+        history.push_back(done);
+        while history.len() > window as usize {
+            history.pop_front();
+        }
+        let span: f64 = history.iter().map(|r| r.span).sum();
+        let mut rms = Vec::with_capacity(n_nodes);
+        let mut peak = Vec::with_capacity(n_nodes);
+        for k in 0..n_nodes {
+            let mut acc = [0.0; 4];
+            let mut ext = [
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+                f64::NEG_INFINITY,
+            ];
+            for r in &history {
+                for (a, v) in acc.iter_mut().zip(&r.sums[k]) {
+                    *a += v;
+                }
+                ext[0] = ext[0].min(r.extremes[k][0]);
+                ext[1] = ext[1].max(r.extremes[k][1]);
+                ext[2] = ext[2].min(r.extremes[k][2]);
+                ext[3] = ext[3].max(r.extremes[k][3]);
+            }
+            let (mx, my) = (acc[0] / span, acc[1] / span);
+            let var = (acc[2] / span - mx * mx).max(0.0) + (acc[3] / span - my * my).max(0.0);
+            rms.push(var.sqrt());
+            let dx = (ext[0] - mx).abs().max((ext[1] - mx).abs());
+            let dy = (ext[2] - my).abs().max((ext[3] - my).abs());
+            peak.push(dx.hypot(dy));
+        }
+        let states = sys.bearing_states(s.omega, ts, s.x, s.temp);
+        let msg = Revolution {
+            index: revolution,
+            time_s: s.t,
+            omega_rad_s: s.omega,
+            amplitude_rms_m: rms,
+            amplitude_max_m: peak,
+            temperature_c: run.thermal_nodes.iter().map(|n| s.temp[n.dof]).collect(),
+            delta_v_m: states.iter().map(|b| b.delta_v_m).collect(),
+            effective_clearance_m: states
+                .iter()
+                .zip(&clearances0)
+                .map(|(b, c0)| c0 + b.delta_v_m)
+                .collect(),
+            bearing_load_n: states.iter().map(|b| b.fb_n).collect(),
+            bearing_load_max_n: load_max
+                .iter()
+                .zip(&states)
+                .map(|(m, b)| m.max(b.fb_n))
+                .collect(),
+            step_count: steps,
+            last_step_s: h,
+        };
+        if let Err(e) = sink.write_revolution(&msg) {
+            failure = Some(e.into());
+            return false;
+        }
+        progress(&msg);
+        last_rev = Some(msg);
+        true
+    };
+    let reached = integ.advance(settings.duration_s, &mut observer);
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    reached?;
+    Ok(TransientReport {
+        revolutions: revolution,
+        simulated_s: integ.time(),
+        wall_s: wall.elapsed().as_secs_f64(),
+        stats: integ.stats(),
+        interrupted,
+        last: last_rev,
+    })
+}
