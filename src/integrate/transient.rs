@@ -716,8 +716,13 @@ impl<'a> Transient<'a> {
             let want = self.h.min(cap);
             let limited = want < self.h;
             let mut h = self.ladder(want);
-            if t_end - self.t < h {
-                h = t_end - self.t;
+            // never a sliver before the end: the last two steps share what is left (a tiny
+            // step makes a₁ = (x₁ − x̃)/(βh²) lose its digits)
+            let left = t_end - self.t;
+            if left <= h {
+                h = left;
+            } else if left < 2.0 * h {
+                h = 0.5 * left;
             }
             let Some((x1, v1, a1, err)) = self.try_step(h)? else {
                 self.stats.rejected += 1;
