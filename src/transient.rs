@@ -317,7 +317,11 @@ fn drive(
         }
         let ts = s.phase / s.omega;
         if samples_per_rev > 0 && s.phase >= next_sample_phase {
-            next_sample_phase = s.phase + tau / f64::from(samples_per_rev);
+            // on a grid of phases: the first step at or past each grid angle
+            let spacing = tau / f64::from(samples_per_rev);
+            while next_sample_phase <= s.phase {
+                next_sample_phase += spacing;
+            }
             let msg = Samples {
                 time_s: s.t,
                 omega_rad_s: s.omega,
@@ -330,7 +334,10 @@ fn drive(
             }
         }
         if n_bear > 0 && s.phase >= next_load_phase {
-            next_load_phase = s.phase + tau / f64::from(load_samples);
+            let spacing = tau / f64::from(load_samples);
+            while next_load_phase <= s.phase {
+                next_load_phase += spacing;
+            }
             for (m, b) in current
                 .load_max
                 .iter_mut()

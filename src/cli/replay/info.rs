@@ -97,6 +97,9 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
             indexed(r.bearings.iter().map(|b| b.name.as_str()).collect())
         )?;
     }
+    if let Some(t) = &rec.transient {
+        transient_info(t, out)?;
+    }
     writeln!(out, "points:      {}", rec.points.len())?;
     if let Some((lo, hi)) = rec.omega_range() {
         writeln!(out, "ω range:     {lo:.4} … {hi:.4} rad/s")?;
@@ -263,5 +266,47 @@ pub fn map(
         )?;
     }
     writeln!(out, "regions:     {}", map.regions.len())?;
+    Ok(())
+}
+
+/// The transient run of a recording (`tmrotor transient`): its profile, start, extent and
+/// the last revolution.
+fn transient_info(
+    t: &crate::record::reader::TransientRecords,
+    out: &mut dyn Write,
+) -> anyhow::Result<()> {
+    if let Some(i) = &t.info {
+        writeln!(out, "transient:   {}; {} s asked", i.profile, i.duration_s)?;
+        writeln!(out, "start:       {}", i.start)?;
+        writeln!(out, "thermal:     {}", i.thermal_stepping)?;
+    }
+    writeln!(
+        out,
+        "revolutions: {}{}; {} displacement samples",
+        t.revolutions.len(),
+        if t.missing.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} lost)", t.missing.len())
+        },
+        t.samples.len()
+    )?;
+    if let Some(last) = t.revolutions.last() {
+        let (k, a) =
+            last.amplitude_rms_m
+                .iter()
+                .enumerate()
+                .fold(
+                    (0, 0.0f64),
+                    |(bk, ba), (k, a)| if *a > ba { (k, *a) } else { (bk, ba) },
+                );
+        writeln!(
+            out,
+            "last:        t {:.4} s, ω {:.3} rad/s, largest RMS amplitude {:.4} µm at node index {k}",
+            last.time_s,
+            last.omega_rad_s,
+            a * 1e6
+        )?;
+    }
     Ok(())
 }

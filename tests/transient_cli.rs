@@ -1,0 +1,98 @@
+//! `tmrotor transient` end to end: the recording on the time axis read back, and outputs
+//! that would destroy an input or a non-file refused before any computing.
+
+use std::process::Command;
+
+use tmrotor::record::read_recording;
+
+fn tmrotor() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_tmrotor"))
+}
+
+#[test]
+fn a_fixed_speed_run_is_recorded_on_the_time_axis() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("t.mcap");
+    let status = tmrotor()
+        .args([
+            "transient",
+            "--speed",
+            "400",
+            "--duration",
+            "0.2",
+            "-q",
+            "-o",
+        ])
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(
+        status.status.success(),
+        "{}",
+        String::from_utf8_lossy(&status.stderr)
+    );
+    let rec = read_recording(&out).expect("reads");
+    assert!(rec.complete, "{:?}", rec.notes);
+    assert!(rec.points.is_empty());
+    let t = rec.transient.expect("transient records");
+    let info = t.info.expect("info");
+    assert_eq!(info.profile, "fixed speed 400 rad/s");
+    // 0.2 s at 400 rad/s: 12.7 revolutions
+    assert_eq!(t.revolutions.len(), 12);
+    for (k, r) in t.revolutions.iter().enumerate() {
+        assert_eq!(r.index, k as u64 + 1);
+        let expected = (k + 1) as f64 * std::f64::consts::TAU / 400.0;
+        assert!(
+            (r.time_s - expected).abs() < 1e-3,
+            "{} {}",
+            r.time_s,
+            expected
+        );
+        assert_eq!(r.amplitude_rms_m.len(), rec.run.nodes.len());
+        assert_eq!(r.temperature_c.len(), rec.run.thermal_nodes.len());
+        assert_eq!(r.bearing_load_n.len(), rec.run.bearings.len());
+    }
+    assert!(t.samples.len() >= 16 * 12, "{}", t.samples.len());
+    assert!(t.samples.windows(2).all(|s| s[1].time_s > s[0].time_s));
+}
+
+#[test]
+fn outputs_that_are_inputs_or_not_files_are_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let model = dir.path().join("m.toml");
+    let text = tmrotor()
+        .args(["model", "show"])
+        .output()
+        .expect("runs")
+        .stdout;
+    std::fs::write(&model, &text).expect("write");
+    let before = std::fs::read(&model).expect("read");
+    let run = |out: &std::path::Path| {
+        tmrotor()
+            .args([
+                "transient",
+                "--speed",
+                "400",
+                "--duration",
+                "0.01",
+                "-q",
+                "--model",
+            ])
+            .arg(&model)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .expect("runs")
+    };
+    let o = run(&model);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("is an input of this command"), "{err}");
+    assert_eq!(std::fs::read(&model).expect("read"), before);
+    let o = run(dir.path());
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("is a directory"));
+    let o = run(std::path::Path::new("/dev/null"));
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("not a regular file"));
+}
