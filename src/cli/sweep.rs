@@ -216,6 +216,10 @@ pub fn parse_range(option: &str, r: &str) -> anyhow::Result<(f64, f64)> {
 /// Runs the sweep and prints a summary.
 pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()> {
     let (cpu_start, steal_start) = (super::process_cpu_seconds(), super::steal_seconds());
+    let mut inputs: Vec<&std::path::Path> = Vec::new();
+    inputs.extend(args.base.model.as_deref());
+    inputs.extend(args.base.study.as_deref());
+    crate::record::output::check_target(&args.output, &inputs)?;
     let settings = args.settings()?;
     let problem = SweepProblem::new(&settings)?;
     let options = if args.lean {
