@@ -1,5 +1,5 @@
-//! One transient run of the coupled rotor into a [`TransientSink`]: the driver beside
-//! driver beside the sweep (`sweep.rs`), on the time axis instead of the speed axis.
+//! One transient run of the coupled rotor into a [`TransientSink`]: the driver beside the
+//! sweep (`sweep.rs`), on the time axis instead of the speed axis.
 //!
 //! The engine's [`Transient`] integrates the model the sweep built ([`SweepProblem`]); this
 //! module chooses the start state (a cold start, or a point of a recorded branch, possibly
