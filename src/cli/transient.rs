@@ -75,6 +75,10 @@ pub struct TransientArgs {
     /// Relative local error tolerance of the mechanical integrator [default: 1e-4].
     #[arg(long)]
     pub rtol: Option<f64>,
+    /// HHT-α parameter in [−1/3, 0]: 0 is the trapezoidal rule (no numerical damping),
+    /// below 0 damps the unresolved upper modes [default: −0.05].
+    #[arg(long, value_name = "ALPHA", allow_negative_numbers = true)]
+    pub alpha: Option<f64>,
     /// Advance the temperatures after every mechanical step with that step's heat (single
     /// rate, the reference for the default averaged macro steps).
     #[arg(long)]
@@ -170,6 +174,9 @@ impl TransientArgs {
             rtol: self.rtol.unwrap_or(DEFAULT_RTOL),
             ..TransientOptions::default()
         };
+        if let Some(a) = self.alpha {
+            o.alpha = a;
+        }
         if self.single_rate {
             o.thermal = ThermalStepping::EveryStep;
         } else if let Some(n) = self.max_thermal_revolutions {

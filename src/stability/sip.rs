@@ -231,7 +231,8 @@ pub(crate) fn interval_means_with<T: Send>(
     let dofs = space.dofs();
     let (p, q) = (dofs.mech.len(), dofs.therm.len());
     let mut part = vec![0.0; (2 * p + q) * intervals * per];
-    let gathered = {
+    // (a linear system has no nonlinear DoFs: nothing to gather, the whole state is sampled)
+    let gathered = p + q > 0 && {
         let (x, rest) = part[..2 * p + q].split_at_mut(p);
         let (v, temp) = rest.split_at_mut(p);
         orbit.dofs_at(time(0, 0), (&dofs.mech, &dofs.therm), x, v, temp)

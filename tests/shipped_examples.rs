@@ -1,0 +1,46 @@
+//! Every shipped model file sweeps without a panic: a short range of each, through the
+//! command line as a user runs it (linear rotors included: nothing nonlinear to assess is
+//! not a crash).
+
+use std::process::Command;
+
+#[test]
+fn every_shipped_rotor_sweeps_without_a_panic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<_> = std::fs::read_dir(root.join("examples/rotors"))
+        .expect("examples/rotors")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    let mut failures = Vec::new();
+    for f in &files {
+        let out = dir
+            .path()
+            .join(f.file_stem().expect("stem"))
+            .with_extension("mcap");
+        let o = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
+            .args(["sweep", "--max-points", "12", "-q", "--model"])
+            .arg(f)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .expect("runs");
+        let err = String::from_utf8_lossy(&o.stderr);
+        println!("{}: exit {:?}", f.display(), o.status.code());
+        if o.status.code() == Some(101) || err.contains("panicked") {
+            failures.push(format!("{}: {err}", f.display()));
+        } else if !o.status.success() {
+            // a clean refusal must name the file
+            if !err.contains(f.file_name().and_then(|n| n.to_str()).unwrap_or("?")) {
+                failures.push(format!(
+                    "{}: error without the file's name: {err}",
+                    f.display()
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:#?}");
+}
