@@ -114,6 +114,12 @@ pub struct HarmonicSettings {
     /// such (a multiplier through −1) and the branch cannot drift into the period-doubled
     /// response (see [`primary_basis`]).
     pub half_orders: bool,
+    /// Add the combination tones of the two rotors' speeds (`(λ − 1)ω = ω/5`, `4ω/5`,
+    /// `(1 + λ)ω = 11ω/5`, … for λ = 6/5): every multiple of `ω/den(λ)` up to the basis's
+    /// highest harmonic ([`combination_basis`]). Default false, the paper's basis (Eq. 34),
+    /// which has none of them; the nonlinear bearings make them, and near a resonance they
+    /// change the response (docs/transient.md: the time response against the balance).
+    pub combination_tones: bool,
 }
 
 impl Default for HarmonicSettings {
@@ -122,6 +128,7 @@ impl Default for HarmonicSettings {
             order: 3,
             aft_samples: None,
             half_orders: true,
+            combination_tones: false,
         }
     }
 }
@@ -225,6 +232,7 @@ pub struct FlatSettings {
     pub reduction_cutoff_rad_s: f64,
     pub aft_samples: Option<usize>,
     pub half_orders: bool,
+    pub combination_tones: bool,
     #[serde(skip_serializing_if = "ModelSet::is_empty")]
     pub set: ModelSet,
 }
@@ -264,6 +272,7 @@ impl From<StudySettings> for FlatSettings {
             reduction_cutoff_rad_s: floquet.reduction_cutoff_rad_s,
             aft_samples: harmonic.aft_samples,
             half_orders: harmonic.half_orders,
+            combination_tones: harmonic.combination_tones,
             set,
         }
     }
@@ -283,6 +292,7 @@ impl From<FlatSettings> for StudySettings {
                 order: f.order,
                 aft_samples: f.aft_samples,
                 half_orders: f.half_orders,
+                combination_tones: f.combination_tones,
             },
             sweep: SweepSettings {
                 omega_start: f.omega_start,
@@ -485,6 +495,12 @@ impl SweepProblem {
         let lambda = speed_ratio(&model);
         let basis = if lambda == (Ratio { num: 1, den: 1 }) {
             Basis::integer(settings.harmonic.order)?
+        } else if settings.harmonic.combination_tones {
+            combination_basis(
+                settings.harmonic.order,
+                lambda,
+                settings.harmonic.half_orders,
+            )?
         } else if settings.harmonic.half_orders {
             Basis::paper(settings.harmonic.order, lambda)?
         } else {
@@ -584,6 +600,38 @@ impl FloquetSettings {
         }
         Ok(())
     }
+}
+
+/// The paper's basis at `order` with every combination tone of the two speeds added: all
+/// multiples of `ω/den(λ)` up to its highest harmonic (with `half_orders`, also the half
+/// orders of Eq. 34: multiples of `ω/(2 den(λ))` where Eq. 34 has them).
+pub fn combination_basis(
+    order: u32,
+    lambda: Ratio,
+    half_orders: bool,
+) -> Result<Basis, crate::hb::BasisError> {
+    let paper = Basis::paper(order, lambda)?;
+    let top = paper
+        .harmonics()
+        .iter()
+        .map(|h| h.value())
+        .fold(0.0f64, f64::max);
+    let den = lambda.den;
+    let mut list: Vec<Ratio> = Vec::new();
+    let mut m = 1;
+    while f64::from(m) / f64::from(den) <= top + 1e-12 {
+        list.push(Ratio::new(m, den)?);
+        m += 1;
+    }
+    if half_orders {
+        for h in paper.harmonics() {
+            if !list.contains(h) {
+                list.push(*h);
+            }
+        }
+    }
+    list.sort_by(|a, b| a.value().total_cmp(&b.value()));
+    Basis::new(list)
 }
 
 /// The paper's basis (Eq. 34) without the harmonics that no combination `aω + bλω` of
@@ -751,6 +799,7 @@ mod tests {
             "reduction_cutoff_rad_s",
             "aft_samples",
             "half_orders",
+            "combination_tones",
             "model",
         ];
         expected.sort();

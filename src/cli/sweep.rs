@@ -88,6 +88,12 @@ pub struct SweepArgs {
     /// located as such.
     #[arg(long)]
     pub no_half_orders: bool,
+    /// Add the combination tones of the two rotors' speeds to the basis (ω/5, 4ω/5, 11ω/5,
+    /// … for λ = 6/5; study key `combination_tones`): the paper's basis has none, the
+    /// bearings make them (about 10 % of the amplitude near 522 rad/s on the built-in
+    /// model, docs/transient.md); 2.4× the harmonics, several times the cost.
+    #[arg(long)]
+    pub combination_tones: bool,
     /// Do not follow the period-doubled branches from the period doublings located on the
     /// primary basis (with --no-half-orders the sweep follows each as a branch of its own).
     #[arg(long)]
@@ -155,6 +161,9 @@ impl SweepArgs {
         }
         if self.no_half_orders {
             s.harmonic.half_orders = false;
+        }
+        if self.combination_tones {
+            s.harmonic.combination_tones = true;
         }
         if self.no_switch {
             s.sweep.switch_branches = false;
