@@ -39,6 +39,7 @@ pub mod coupled;
 pub mod derive;
 pub mod figure;
 pub mod hb;
+pub mod input;
 pub mod integrate;
 pub mod linear;
 pub mod model;

@@ -12,6 +12,7 @@ const RANKS: &[(&str, u32)] = &[
     ("system", 0),
     ("hb", 1),
     ("integrate", 1),
+    ("input", 0),
     ("stability", 2),
     ("systems", 3),
     ("continuation", 3),

@@ -192,9 +192,11 @@ pub struct Manifest {
 /// Reads and resolves a campaign file.
 pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), CampaignError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|source| CampaignError::Io {
-        path: file.clone(),
-        source,
+    let text = crate::input::read_text(path, crate::input::MAX_INPUT_BYTES).map_err(|source| {
+        CampaignError::Io {
+            path: file.clone(),
+            source,
+        }
     })?;
     let spec: CampaignFile = toml::from_str(&text).map_err(|e| CampaignError::File {
         file: file.clone(),
@@ -439,9 +441,11 @@ pub fn sha256_file(path: &Path) -> Result<String, std::io::Error> {
 /// Reads `path` as a campaign manifest; errors name the file and the reason.
 pub fn parse_manifest(path: &Path) -> Result<Manifest, CampaignError> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| CampaignError::File {
-        file: file.clone(),
-        reason: format!("cannot read the campaign manifest: {e}"),
+    let text = crate::input::read_text(path, crate::input::MAX_INPUT_BYTES).map_err(|e| {
+        CampaignError::File {
+            file: file.clone(),
+            reason: format!("cannot read the campaign manifest: {e}"),
+        }
     })?;
     toml::from_str(&text).map_err(|e| CampaignError::File {
         file,

@@ -16,10 +16,10 @@ pub struct CampbellArgs {
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Reference-speed grid START:END:COUNT in rad/s (COUNT points, ends included).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub speeds: String,
     /// Number of modes followed (lowest first).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value_t = 10, value_parser = super::positive_count)]
     pub count: usize,
     /// Write the diagram as CSV to this file (speed_rad_s, mode, frequency_rad_s,
     /// frequency_hz, damping_ratio, log_decrement, whirl, forward_share, mac), one row per
@@ -33,6 +33,10 @@ pub struct CampbellArgs {
     #[command(flatten)]
     pub figure_args: super::FigureArgs,
 }
+
+/// The most speeds of a grid: 100 000 (a Campbell diagram at 0.01 rad/s over 1 000 rad/s;
+/// minutes of eigenproblems).
+pub const MAX_SPEEDS: usize = 100_000;
 
 /// Parses `START:END:COUNT`.
 pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
@@ -52,6 +56,11 @@ pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
         .trim()
         .parse()
         .with_context(|| format!("--speeds count {:?}", parts[2]))?;
+    if count > MAX_SPEEDS {
+        anyhow::bail!(
+            "--speeds count {count}: at most {MAX_SPEEDS} speeds (each is an eigenproblem of the whole rotor)"
+        );
+    }
     Ok(linear::speed_grid(start, end, count)?)
 }
 

@@ -70,6 +70,16 @@ pub enum Command {
 /// message already holds: several of the crate's errors name their I/O error in their own
 /// message and also keep it as the source, which printed it twice ("cannot read f.mcap: No
 /// such file or directory (os error 2): No such file or directory (os error 2)").
+/// A count flag's value: a whole number of at least 1 (a count of 0 would run and print
+/// nothing).
+pub fn positive_count(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("{text:?} is not a whole number")),
+    }
+}
+
 pub fn error_text(err: &anyhow::Error) -> String {
     let mut text = err.to_string();
     for cause in err.chain().skip(1) {

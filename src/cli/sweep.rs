@@ -197,7 +197,7 @@ impl SweepArgs {
 pub fn load_study(path: Option<&std::path::Path>) -> anyhow::Result<StudySettings> {
     match path {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
+            let text = crate::input::read_text(path, crate::input::MAX_INPUT_BYTES)
                 .with_context(|| format!("reading study file {}", path.display()))?;
             toml::from_str::<StudySettings>(&text)
                 .map_err(|e| anyhow::anyhow!("{}: {}", path.display(), e.to_string().trim_end()))

@@ -32,13 +32,18 @@ pub struct TransientArgs {
     #[arg(long)]
     pub no_thermal: bool,
     /// A fixed speed, rad/s (default with --from: the point's speed).
-    #[arg(long, value_name = "RAD_S")]
+    #[arg(long, value_name = "RAD_S", allow_negative_numbers = true)]
     pub speed: Option<f64>,
     /// A linear run-up (START < END) or coast-down (START > END), rad/s, at --accel.
     #[arg(long, value_name = "START:END", conflicts_with = "speed")]
     pub ramp: Option<String>,
     /// Magnitude of the ramp's acceleration, rad/s² [default: 10].
-    #[arg(long, value_name = "RAD_S2", requires = "ramp")]
+    #[arg(
+        long,
+        value_name = "RAD_S2",
+        requires = "ramp",
+        allow_negative_numbers = true
+    )]
     pub accel: Option<f64>,
     /// A speed table: a CSV file of `time_s,omega_rad_s` rows (a header line is allowed),
     /// times increasing from 0; the speed is linear between rows and held after the last.
@@ -46,7 +51,7 @@ pub struct TransientArgs {
     pub profile: Option<PathBuf>,
     /// Simulated time, s [default: the ramp's or table's end plus 1 s; 100 revolutions at a
     /// fixed speed].
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub duration: Option<f64>,
     /// Start on the orbit of a point of this sweep recording (with --point) instead of a
     /// cold start; the model and study are the recording's.
@@ -104,19 +109,8 @@ pub const DEFAULT_RTOL: f64 = 1e-4;
 
 /// Reads a `time_s,omega_rad_s` table.
 fn read_table(path: &Path) -> anyhow::Result<Vec<(f64, f64)>> {
-    let meta = std::fs::metadata(path).with_context(|| format!("reading {}", path.display()))?;
-    if !meta.is_file() {
-        bail!("{}: not a regular file", path.display());
-    }
-    if meta.len() > 16 << 20 {
-        bail!(
-            "{}: {} bytes, above the limit of 16 MiB for a speed table",
-            path.display(),
-            meta.len()
-        );
-    }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::input::read_text(path, crate::input::MAX_INPUT_BYTES)
+        .with_context(|| format!("reading speed table {}", path.display()))?;
     let mut rows = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line = line.trim();

@@ -16,7 +16,7 @@ pub struct UnbalanceArgs {
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Reference-speed grid START:END:COUNT in rad/s (COUNT points, ends included).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     pub speeds: String,
     /// Node ids to draw and print (comma-separated) [default: the nodes of the unbalanced
     /// disks]; the CSV holds every node.

@@ -72,10 +72,13 @@ impl Model {
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
         let path = path.as_ref();
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|cause| ModelError::Io {
-            file: name.clone(),
-            cause,
-        })?;
+        let text =
+            crate::input::read_text(path, crate::input::MAX_INPUT_BYTES).map_err(|cause| {
+                ModelError::Io {
+                    file: name.clone(),
+                    cause,
+                }
+            })?;
         Self::from_str(&text, &name)
     }
 
@@ -86,10 +89,12 @@ impl Model {
         let (text, name) = match path {
             Some(path) => {
                 let name = path.display().to_string();
-                let text = std::fs::read_to_string(path).map_err(|cause| ModelError::Io {
-                    file: name.clone(),
-                    cause,
-                })?;
+                let text = crate::input::read_text(path, crate::input::MAX_INPUT_BYTES).map_err(
+                    |cause| ModelError::Io {
+                        file: name.clone(),
+                        cause,
+                    },
+                )?;
                 (text, name)
             }
             None => (BUILTIN_TOML.to_string(), BUILTIN_NAME.to_string()),
