@@ -96,3 +96,39 @@ fn outputs_that_are_inputs_or_not_files_are_refused() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("not a regular file"));
 }
+
+#[test]
+fn replay_transient_draws_runs_and_names_their_steepest_change() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let run = dir.path().join("up.mcap");
+    let o = tmrotor()
+        .args([
+            "transient",
+            "--ramp",
+            "400:420",
+            "--accel",
+            "100",
+            "--samples-per-rev",
+            "0",
+            "-q",
+            "-o",
+        ])
+        .arg(&run)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let figs = dir.path().join("figs");
+    let o = Command::new(env!("CARGO_BIN_EXE_replay"))
+        .arg("transient")
+        .arg(&run)
+        .args(["--node", "14", "--format", "svg", "--out"])
+        .arg(&figs)
+        .output()
+        .expect("replay");
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("up ") && text.contains("420.000"), "{text}");
+    let csv = std::fs::read_to_string(figs.join("transient_amplitude.csv")).expect("csv");
+    assert!(csv.lines().count() > 20, "{csv}");
+    assert!(figs.join("transient_amplitude.svg").exists());
+}

@@ -24,6 +24,7 @@ pub mod orbit;
 pub mod plot;
 pub mod recover;
 pub mod stability;
+pub mod transient;
 pub mod verify;
 
 use std::io::Write;
@@ -133,6 +134,25 @@ pub enum Command {
         #[arg(long, value_name = "N")]
         point: Option<u64>,
     },
+    /// Transient runs (`tmrotor transient`) over a sweep's branch: a figure of one node's
+    /// RMS amplitude against ω (the branch stable and unstable, each run on top), the speed
+    /// where each run changes fastest (its jump), and the runs as CSV.
+    Transient {
+        /// Transient recordings.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// A sweep recording whose branch is drawn beneath.
+        #[arg(long, value_name = "SWEEP")]
+        branch: Option<PathBuf>,
+        /// Dynamic node (default: node 8 when recorded, else the first).
+        #[arg(long, value_name = "ID")]
+        node: Option<u32>,
+        /// Output directory (created if missing).
+        #[arg(long, default_value = ".")]
+        out: PathBuf,
+        #[command(flatten)]
+        figures: super::FigureArgs,
+    },
     /// Write a clean recording of every intact point of a damaged or cut one (OUT must not
     /// exist); what was lost is logged in it and printed.
     Recover { file: PathBuf, out: PathBuf },
@@ -223,6 +243,20 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result
             window,
             tolerance,
         } => verify::run(&open(&file, err)?, &orders, window, tolerance, out, err),
+        Command::Transient {
+            files,
+            branch,
+            node,
+            out: dir,
+            figures,
+        } => {
+            let runs = files
+                .iter()
+                .map(|f| Ok((f.clone(), open(f, err)?)))
+                .collect::<anyhow::Result<Vec<_>>>()?;
+            let branch = branch.as_ref().map(|b| open(b, err)).transpose()?;
+            transient::run(&runs, branch.as_ref(), node, &dir, &figures.output()?, out)
+        }
         Command::Recover { file, out: target } => {
             // Everything, stored orbits included: the recovered file keeps the original form.
             let rec = open_with(&file, ReadOptions::default(), err)?;
