@@ -28,7 +28,7 @@ pub fn steepest_change(t: &TransientRecords, k: usize, window: usize) -> Option<
     let r = &t.revolutions;
     let w = window.max(1);
     (w..r.len().checked_sub(w)?)
-        .map(|i| {
+        .filter_map(|i| {
             let (a, b) = (&r[i], &r[i + w]);
             let change = b.amplitude_rms_m.get(k)? - a.amplitude_rms_m.get(k)?;
             let mid = &r[i + w / 2];
@@ -38,7 +38,6 @@ pub fn steepest_change(t: &TransientRecords, k: usize, window: usize) -> Option<
                 change_m: change,
             })
         })
-        .flatten()
         .max_by(|a, b| a.change_m.abs().total_cmp(&b.change_m.abs()))
 }
 
