@@ -33,6 +33,9 @@ TOPIC_SUMMARY = "/summary"
 TOPIC_BIFURCATIONS = "/bifurcations"
 TOPIC_BRANCHES = "/branches"
 TOPIC_LOG = "/log"
+TOPIC_TRANSIENT_INFO = "/transient/info"
+TOPIC_REVOLUTIONS = "/transient/revolution"
+TOPIC_SAMPLES = "/transient/samples"
 TOPIC_SCENE = "/scene"
 #: Per-point topics (every message carries ``index``), as in ``schemas/README.md``.
 POINT_TOPICS = (
@@ -117,6 +120,10 @@ class Scan:
     #: /branches messages: the branches beside the run's own, in order
     branches: list[Any] = field(default_factory=list)
     log: list[LogEntry] = field(default_factory=list)
+    #: a transient run's /transient/info, /transient/revolution and /transient/samples
+    transient_info: Any = None
+    revolutions: list[Any] = field(default_factory=list)
+    samples: list[Any] = field(default_factory=list)
     #: topic -> {"schema": name, "messages": count}, in order of first appearance
     topics: dict[str, dict[str, Any]] = field(default_factory=dict)
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
@@ -241,6 +248,12 @@ def _file_message(out: Scan, topic: str, msg: Any, log_time: int, file: str) -> 
         out.points.setdefault(int(msg.index), {})[topic] = msg
     elif topic == TOPIC_BIFURCATIONS:
         out.bifurcations.append(msg)
+    elif topic == TOPIC_TRANSIENT_INFO:
+        out.transient_info = msg
+    elif topic == TOPIC_REVOLUTIONS:
+        out.revolutions.append(msg)
+    elif topic == TOPIC_SAMPLES:
+        out.samples.append(msg)
     elif topic == TOPIC_BRANCHES:
         out.branches.append(msg)
     elif topic == TOPIC_LOG:

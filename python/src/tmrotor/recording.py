@@ -264,7 +264,30 @@ class Recording:
             "points": len(self.points),
             "status": status,
             "warnings": [e.message for e in self.log_entries if e.name == AUDIT_LOG_NAME],
+            "revolutions": len(s.revolutions),
         }
+        # a transient run (tmrotor transient): its settings, and revolutions lost in
+        # damaged chunks (numbered from 1)
+        ti = s.transient_info
+        self.transient_info: dict[str, Any] | None = (
+            None
+            if ti is None
+            else {
+                "profile": ti.profile,
+                "start": ti.start,
+                "duration_s": ti.duration_s,
+                "thermal_stepping": ti.thermal_stepping,
+                "rtol": ti.rtol,
+                "window_revolutions": int(ti.window_revolutions),
+                "samples_per_revolution": int(ti.samples_per_revolution),
+            }
+        )
+        seen = sorted(int(r.index) for r in s.revolutions)
+        if seen:
+            missing = sorted(set(range(1, seen[-1])) - set(seen))
+            if missing:
+                notes.append(f"revolutions missing: {len(missing)} (first {missing[0]})")
+                self.info["complete"] = False
 
     # ------------------------------------------------------------------ helpers
 
@@ -343,6 +366,57 @@ class Recording:
         return cols
 
     # ------------------------------------------------------------------ tables
+
+    @cached_property
+    def revolutions(self) -> pd.DataFrame:
+        """A transient run's records, one row per revolution (empty for a sweep):
+        ``revolution``, ``time_s``, ``omega_rad_s``, ``step_count``, ``last_step_s``, then
+        ``amp_rms_node<id>_m`` and ``amp_max_node<id>_m`` per dynamic node (RMS amplitude
+        of Eq. 35 over the last basis period, largest excursion), ``tnode<id>_c`` per
+        thermal node, and per bearing ``<bearing>_delta_v_m``,
+        ``<bearing>_clearance_m``, ``<bearing>_load_n``, ``<bearing>_load_max_n``
+        (see ``schemas/README.md``, topic ``/transient/revolution``)."""
+        revs = sorted(self._scan.revolutions, key=lambda r: int(r.index))
+        cols: dict[str, Any] = {
+            "revolution": pd.Series([int(r.index) for r in revs], dtype="int64"),
+            "time_s": pd.Series([r.time_s for r in revs], dtype="float64"),
+            "omega_rad_s": pd.Series([r.omega_rad_s for r in revs], dtype="float64"),
+            "step_count": pd.Series([int(r.step_count) for r in revs], dtype="int64"),
+            "last_step_s": pd.Series([r.last_step_s for r in revs], dtype="float64"),
+        }
+
+        def per(keys: list[str], suffix: str, attr: str) -> None:
+            for k, key in enumerate(keys):
+                cols[f"{key}{suffix}"] = pd.Series(
+                    [
+                        getattr(r, attr)[k] if k < len(getattr(r, attr)) else np.nan
+                        for r in revs
+                    ],
+                    dtype="float64",
+                )
+
+        per([f"amp_rms_{k}" for k in self.node_columns], "_m", "amplitude_rms_m")
+        per([f"amp_max_{k}" for k in self.node_columns], "_m", "amplitude_max_m")
+        per(self.thermal_node_columns, "_c", "temperature_c")
+        per(self.bearing_columns, "_delta_v_m", "delta_v_m")
+        per(self.bearing_columns, "_clearance_m", "effective_clearance_m")
+        per(self.bearing_columns, "_load_n", "bearing_load_n")
+        per(self.bearing_columns, "_load_max_n", "bearing_load_max_n")
+        return pd.DataFrame(cols)
+
+    @cached_property
+    def samples(self) -> pd.DataFrame:
+        """A transient run's decimated displacements (empty for a sweep): ``time_s``,
+        ``omega_rad_s``, then ``<node>_x_m`` and ``<node>_y_m`` per dynamic node."""
+        ss = self._scan.samples
+        cols: dict[str, Any] = {
+            "time_s": pd.Series([m.time_s for m in ss], dtype="float64"),
+            "omega_rad_s": pd.Series([m.omega_rad_s for m in ss], dtype="float64"),
+        }
+        for k, key in enumerate(self.node_columns):
+            cols[f"{key}_x_m"] = pd.Series([m.x_m[k] for m in ss], dtype="float64")
+            cols[f"{key}_y_m"] = pd.Series([m.y_m[k] for m in ss], dtype="float64")
+        return pd.DataFrame(cols)
 
     @cached_property
     def branch(self) -> pd.DataFrame:
