@@ -559,13 +559,15 @@ fn the_rotor_convection_factor_scales_only_the_rotor_surfaces() {
 }
 
 #[test]
-fn a_negative_rotor_convection_factor_is_refused_by_path() {
-    let mut s = spec();
-    s.air.rotor_convection_factor = -0.5;
-    let err = ThermalNetwork::new(&s)
-        .map(|_| ())
-        .expect_err("refused")
-        .to_string();
-    assert!(err.contains("air.rotor_convection_factor"), "{err}");
-    assert!(err.contains(">= 0"), "{err}");
+fn a_rotor_convection_factor_outside_0_to_1_is_refused_by_path() {
+    for bad in [-0.5, 1.5] {
+        let mut s = spec();
+        s.air.rotor_convection_factor = bad;
+        let err = ThermalNetwork::new(&s)
+            .map(|_| ())
+            .expect_err("refused")
+            .to_string();
+        assert!(err.contains("air.rotor_convection_factor"), "{err}");
+        assert!(err.contains("must lie in 0–1"), "{err}");
+    }
 }

@@ -209,6 +209,18 @@ fn same_speed_ratios(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledErr
     };
     let differs = |a: f64, b: f64| (a - b).abs() > 1e-9 * b.abs().max(1.0);
     for (i, sh) in spec.shafts.iter().enumerate() {
+        if ratio_of_rotor(&sh.chain).is_none() {
+            let ids: Vec<&str> = model.spec.rotors.iter().map(|r| r.id.as_str()).collect();
+            return Err(mismatch(
+                model,
+                &format!("thermal.shafts[{i}].chain"),
+                format!(
+                    "{:?} names no rotor of [[rotors]] (ids: {}); a conduction chain is one rotor's shaft, and a misspelt name splits it",
+                    sh.chain,
+                    ids.join(", ")
+                ),
+            ));
+        }
         if let Some(r) = ratio_of_rotor(&sh.chain)
             && differs(sh.speed_ratio, r)
         {
@@ -249,6 +261,65 @@ fn same_speed_ratios(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledErr
     Ok(())
 }
 
+/// Every rotor must be connected to the ground by bearings, supports or nonlinear elements,
+/// directly or through other rotors: a rotor held by nothing has a singular stiffness, and
+/// the balance cannot solve for its static position. (The linear analyses take such a
+/// rotor: its rigid-body modes are at 0.)
+fn every_rotor_held(model: &Model) -> Result<(), CoupledError> {
+    let n = model.spec.rotors.len();
+    // union–find over the rotors and the ground (index n)
+    let mut parent: Vec<usize> = (0..=n).collect();
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let rotor = |node: Option<u32>| match node {
+        None => Some(n),
+        Some(id) => model.node_index(id).map(|i| model.rotor_of(i)),
+    };
+    let links = model
+        .spec
+        .bearings
+        .iter()
+        .map(|b| (Some(b.inner_node), b.outer_node))
+        .chain(
+            model
+                .spec
+                .supports
+                .iter()
+                .map(|s| (Some(s.node), s.to_node)),
+        )
+        .chain(
+            model
+                .spec
+                .nonlinear
+                .iter()
+                .map(|e| (Some(e.node), e.to_node)),
+        );
+    for (a, b) in links {
+        if let (Some(a), Some(b)) = (rotor(a), rotor(b)) {
+            let (ra, rb) = (root(&mut parent, a), root(&mut parent, b));
+            parent[ra] = rb;
+        }
+    }
+    for (i, r) in model.spec.rotors.iter().enumerate() {
+        if root(&mut parent, i) != root(&mut parent, n) {
+            return Err(mismatch(
+                model,
+                &format!("rotors[{i}]"),
+                format!(
+                    "rotor {:?} is held by nothing: no bearing, support or nonlinear element connects it, directly or through another rotor, to the ground; a sweep needs its static position (modes and campbell take it, with rigid-body modes at 0)",
+                    r.id
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 impl CoupledRotor {
     /// Builds the coupled system from a validated model, study overrides and coupling
     /// options.
@@ -257,6 +328,7 @@ impl CoupledRotor {
         study: &StudyOverrides,
         options: CouplingOptions,
     ) -> Result<Self, CoupledError> {
+        every_rotor_held(model)?;
         let assembly = Assembly::new(model)?;
         let spec = match options.thermal {
             true => ThermalSpec::of_model(model)?,

@@ -995,7 +995,7 @@ pub const KEYS: &[Key] = &[
         unit: "°C",
         need: Need::Required,
         default: "",
-        range: "finite",
+        range: "above −273.15 °C and below 1000 °C",
         meaning: "Ambient temperature T_∞: the air temperature of the convection to ambient and the assembly temperature from which the expansions of Eqs. 1–2 are measured.",
     },
     Key {
@@ -1004,7 +1004,7 @@ pub const KEYS: &[Key] = &[
         unit: "°C",
         need: Need::Required,
         default: "",
-        range: "finite",
+        range: "above −273.15 °C and below 1000 °C",
         meaning: "Lubricant cooling temperature T_L∞ of Eq. 14.",
     },
     Key {
@@ -1013,7 +1013,7 @@ pub const KEYS: &[Key] = &[
         unit: "L/min",
         need: Need::Required,
         default: "",
-        range: "≥ 0",
+        range: "> 0",
         meaning: "Lubricant flow rate q_l delivered to each bearing, removing ρ_l c_l q_l (T_L − T_L∞) at each lubricant node (Eq. 14).",
     },
     Key {
@@ -1196,7 +1196,7 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Optional,
         default: "1",
-        range: "≥ 0 (physical range 0–1)",
+        range: "0–1",
         meaning: "Factor on the shafts' and disks' convection to ambient air (Table 1, \"shafts and ambient\"): 1 = every rotor surface in free air at the ambient temperature; 0 = rotor surfaces enclosed (casings; the LP shaft inside the HP shaft's bore) that lose no heat to ambient. The built-in model is calibrated at 0 (docs/calibration.md).",
     },
     // ───────────────────────────── [thermal.materials] ─────────────────────────────
@@ -1807,7 +1807,7 @@ pub const KEYS: &[Key] = &[
         unit: "°C",
         need: Need::Optional,
         default: "25",
-        range: "finite",
+        range: "above −273.15 °C and below 1000 °C",
         meaning: "Ambient temperature T_∞, as in a written table.",
     },
     Key {
@@ -1816,7 +1816,7 @@ pub const KEYS: &[Key] = &[
         unit: "°C",
         need: Need::Optional,
         default: "25",
-        range: "finite",
+        range: "above −273.15 °C and below 1000 °C",
         meaning: "Lubricant cooling temperature T_L∞ (Eq. 14).",
     },
     Key {
@@ -1825,7 +1825,7 @@ pub const KEYS: &[Key] = &[
         unit: "L/min",
         need: Need::Optional,
         default: "2",
-        range: "≥ 0",
+        range: "> 0",
         meaning: "Lubricant flow rate q_l delivered to each bearing (Eq. 14).",
     },
     Key {

@@ -283,6 +283,22 @@ fn non_negative(v: f64) -> bool {
     v.is_finite() && v >= 0.0
 }
 
+/// A temperature in °C: above absolute zero and below 1000 °C (the bound of the
+/// `--cooling-temp` and `--ambient-temp` flags and of study files).
+fn temperature(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
+    if v.is_finite() && v > -273.15 && v < 1000.0 {
+        Ok(())
+    } else {
+        Err(invalid(
+            file,
+            path,
+            format!(
+                "a temperature must lie between absolute zero (−273.15 °C) and 1000 °C, got {v}"
+            ),
+        ))
+    }
+}
+
 fn finite(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
     if v.is_finite() {
         Ok(())
@@ -424,13 +440,18 @@ impl ThermalSpec {
         if self.n_nodes == 0 {
             return Err(invalid(file, p("n_nodes"), "must be > 0"));
         }
-        found.extend(finite(file, p("ambient_temp_c"), self.ambient_temp_c).err());
-        found.extend(finite(file, p("cooling_temp_c"), self.cooling_temp_c).err());
-        if !non_negative(self.flow_l_min) {
+        found.extend(temperature(file, p("ambient_temp_c"), self.ambient_temp_c).err());
+        found.extend(temperature(file, p("cooling_temp_c"), self.cooling_temp_c).err());
+        // the bound of `--flow` and of a study file: no lubricant flow leaves the bearings'
+        // heat without its main path out (Eq. 14)
+        if !(self.flow_l_min.is_finite() && self.flow_l_min > 0.0) {
             return Err(invalid(
                 file,
                 p("flow_l_min"),
-                format!("must be >= 0, got {}", self.flow_l_min),
+                format!(
+                    "the lubricant flow rate must be above 0 L/min, got {}",
+                    self.flow_l_min
+                ),
             ));
         }
         found.extend(positive(file, p("min_contact_load_n"), self.min_contact_load_n).err());
@@ -475,11 +496,16 @@ impl ThermalSpec {
         if !non_negative(self.air.housing_h_w_m2_k) {
             return Err(invalid(file, p("air.housing_h_w_m2_k"), "must be >= 0"));
         }
-        if !non_negative(self.air.rotor_convection_factor) {
+        if !(non_negative(self.air.rotor_convection_factor)
+            && self.air.rotor_convection_factor <= 1.0)
+        {
             return Err(invalid(
                 file,
                 p("air.rotor_convection_factor"),
-                "must be >= 0 (0: the shafts and disks lose no heat to ambient; 1: Table 1's correlation)",
+                format!(
+                    "must lie in 0–1, got {} (the share of the rotor surfaces in free air: 0 none, 1 all, Table 1's correlation)",
+                    self.air.rotor_convection_factor
+                ),
             ));
         }
         for (name, m) in [
