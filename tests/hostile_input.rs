@@ -98,6 +98,29 @@ fn a_chain_naming_no_rotor_and_a_rotor_held_by_nothing_are_refused() {
 }
 
 #[test]
+fn a_generated_network_too_fine_to_compute_is_refused_with_its_size() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let f = root.join("examples/rotors/dual_rotor_generated.toml");
+    let f = f.to_str().expect("path");
+    let start = std::time::Instant::now();
+    refused(
+        &tmrotor(&[
+            "model",
+            "check",
+            f,
+            "--set",
+            "thermal.segment_length_m=1e-7",
+        ]),
+        &[
+            "thermal.segment_length_m",
+            "shaft segment nodes",
+            "above the limit of 2000",
+        ],
+    );
+    assert!(start.elapsed().as_secs() < 5, "{:?}", start.elapsed());
+}
+
+#[test]
 fn devices_fifos_and_huge_files_are_refused_before_reading() {
     let dir = tempfile::tempdir().expect("tempdir");
     refused(

@@ -258,6 +258,11 @@ impl Numbering {
     }
 }
 
+/// The most shaft segment nodes a generated network may have: 2 000 (the dual rotor's
+/// generated network makes 37 at the default segment length; a network of 353 nodes
+/// already costs 4.6 s of stability a point, docs/stability.md).
+pub const MAX_SEGMENT_NODES: usize = 2000;
+
 /// Checks the per-kind and per-bearing settings; errors name `thermal.…`.
 fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalError> {
     let file = &model.source;
@@ -269,6 +274,31 @@ fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalErro
         ));
     }
     positive(file, "thermal.segment_length_m".into(), g.segment_length_m)?;
+    // the segment nodes the shafts make, counted before anything is allocated: the
+    // network's conductance is a dense matrix and the stability's Hill problem holds every
+    // thermal exponent, so thousands of nodes cost minutes and gigabytes a point
+    let segments: f64 = model
+        .spec
+        .shafts
+        .iter()
+        .map(|sh| (sh.length_m / g.segment_length_m).ceil().max(1.0))
+        .sum();
+    if !(segments <= MAX_SEGMENT_NODES as f64) {
+        return Err(invalid(
+            file,
+            "thermal.segment_length_m".into(),
+            format!(
+                "{} m makes {segments:.3e} shaft segment nodes, above the limit of {MAX_SEGMENT_NODES}; use a longer segment (the default 0.11 m makes {:.0})",
+                g.segment_length_m,
+                model
+                    .spec
+                    .shafts
+                    .iter()
+                    .map(|sh| (sh.length_m / 0.11).ceil().max(1.0))
+                    .sum::<f64>()
+            ),
+        ));
+    }
     for (name, kind) in [
         ("ball_bearings", &g.ball_bearings),
         ("roller_bearings", &g.roller_bearings),
