@@ -283,7 +283,7 @@ fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalErro
         .iter()
         .map(|sh| (sh.length_m / g.segment_length_m).ceil().max(1.0))
         .sum();
-    if !(segments <= MAX_SEGMENT_NODES as f64) {
+    if segments.is_nan() || segments > MAX_SEGMENT_NODES as f64 {
         return Err(invalid(
             file,
             "thermal.segment_length_m".into(),
