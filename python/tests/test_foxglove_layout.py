@@ -151,3 +151,33 @@ def test_invalid_json_and_shape_are_rejected(layout_recording, tmp_path):
     del doc["configById"]["Table!nodes"]  # used inside the Tab panel
     run = check(write(doc, tmp_path / "nocfg.json"), layout_recording)
     assert run.returncode == 1 and "'Table!nodes' has no entry in configById" in run.stderr, run.stderr
+
+
+TRANSIENT_LAYOUT = LAYOUT.with_name("tmrotor-transient-layout.json")
+
+
+@pytest.fixture(scope="module")
+def transient_recording(tmp_path_factory) -> Path:
+    if not os.access(TMROTOR_BIN, os.X_OK):
+        reason = f"no tmrotor binary at {TMROTOR_BIN} (build it or set TMROTOR_BIN)"
+        if os.environ.get("CI", "").lower() == "true":
+            pytest.fail(f"{reason} (CI=true: required)")
+        pytest.skip(reason)
+    out = tmp_path_factory.mktemp("foxglove_transient") / "transient.mcap"
+    run = subprocess.run(
+        [str(TMROTOR_BIN), "transient", "--speed", "400", "--duration", "0.2", "-q", "-o", str(out)],
+        capture_output=True, text=True, timeout=600,
+    )
+    assert run.returncode == 0, run.stdout + run.stderr
+    return out
+
+
+def test_shipped_transient_layout_resolves(transient_recording):
+    run = check(TRANSIENT_LAYOUT, transient_recording)
+    assert run.returncode == 0, run.stdout + run.stderr
+    out = run.stdout
+    assert out.rstrip().splitlines()[-1].startswith("OK:"), out
+    for panel in ("Plot!amplitude", "Plot!temperatures", "Plot!clearance", "Plot!loads",
+                  "Plot!displacement", "Plot!speed", "RosOut!events"):
+        assert f"[{panel}]" in out, f"{panel} not checked:\n{out}"
+    assert "/transient/revolution.amplitude_rms_m[13] -> double" in out
