@@ -198,3 +198,47 @@ fn a_second_interrupt_stops_at_once_and_keeps_the_points_written() {
     };
     assert!(!rec.points.is_empty(), "{stderr}");
 }
+
+/// A transient run stopped by SIGINT keeps every revolution it wrote, in a complete
+/// recording with status `interrupted`, and exits with 130.
+#[test]
+fn sigint_stops_a_transient_with_a_complete_recording() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("t.mcap");
+    let mut child = Command::new(BIN)
+        .args(["transient", "--ramp", "300:700", "--accel", "1", "-o"])
+        .arg(&out)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the transient starts");
+    let partial = dir.path().join("t.mcap.partial");
+    let start = Instant::now();
+    while !partial.exists() {
+        assert!(start.elapsed() < Duration::from_secs(60), "no recording");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_secs(2));
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -INT {}", child.id())])
+        .status()
+        .expect("sh runs");
+    assert!(kill.success());
+    let output = child.wait_with_output().expect("the run ends");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(130), "{stderr}");
+    assert!(stderr.contains("the transient stopped after"), "{stderr}");
+    let rec = read_recording(&out).expect("a readable recording");
+    assert!(rec.complete, "{:?}", rec.notes);
+    assert_eq!(rec.status, Some(RunStatus::Interrupted));
+    let t = rec.transient.expect("transient records");
+    let counted: usize = stderr
+        .split("the transient stopped after ")
+        .nth(1)
+        .and_then(|rest| rest.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .expect("a revolution count");
+    assert!(counted > 0);
+    assert_eq!(t.revolutions.len(), counted, "{stderr}");
+    assert!(t.missing.is_empty());
+}

@@ -319,8 +319,7 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
             args.output.display()
         );
     }
-    let began = Instant::now();
-    let mut last_line = began;
+    let mut last_line = Instant::now();
     let biggest = |r: &crate::record::transient::Revolution| {
         r.amplitude_rms_m.iter().fold(0.0f64, |m, v| m.max(*v))
     };
@@ -381,14 +380,15 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
                 .map_or(String::new(), |t| format!(", hottest node {t:.2} °C"))
         )?;
     }
-    if report.interrupted {
-        writeln!(
-            out,
-            "interrupted: every revolution up to the stop is in {}",
-            args.output.display()
-        )?;
-    }
     writeln!(out, "recording: {}", args.output.display())?;
-    let _ = began;
+    if report.interrupted {
+        return Err(super::Interrupted(format!(
+            "the transient stopped after {} revolutions ({:.4} s simulated); {} is a complete recording of them",
+            report.revolutions,
+            report.simulated_s,
+            args.output.display()
+        ))
+        .into());
+    }
     Ok(())
 }
