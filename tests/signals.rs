@@ -205,7 +205,7 @@ fn a_second_interrupt_stops_at_once_and_keeps_the_points_written() {
 fn sigint_stops_a_transient_with_a_complete_recording() {
     let dir = tempfile::tempdir().expect("tempdir");
     let out = dir.path().join("t.mcap");
-    let mut child = Command::new(BIN)
+    let child = Command::new(BIN)
         .args(["transient", "--ramp", "300:700", "--accel", "1", "-o"])
         .arg(&out)
         .stdout(Stdio::null())
