@@ -272,9 +272,15 @@ fn resolve_nodes(
         match (problem.model.dof(id, Dir::X), problem.model.dof(id, Dir::Y)) {
             (Some(x), Some(y)) => dynamic.push((x, y)),
             _ => {
+                let ids = problem.model.node_ids();
                 return Err(option_error(
-                    format!("dynamic node {id}"),
-                    "the model has no such node",
+                    format!("--nodes: dynamic node {id}"),
+                    format!(
+                        "the model has no such node (its nodes: {}); choose them with --nodes",
+                        crate::record::reader::index_ranges(
+                            &ids.iter().map(|&i| u64::from(i)).collect::<Vec<_>>()
+                        )
+                    ),
                 ));
             }
         }
@@ -286,8 +292,10 @@ fn resolve_nodes(
         for &id in &opts.thermal_nodes {
             if id == 0 || id as usize > n_therm {
                 return Err(option_error(
-                    format!("thermal node {id}"),
-                    format!("the thermal network has nodes 1–{n_therm}"),
+                    format!("--thermal-nodes: thermal node {id}"),
+                    format!(
+                        "the thermal network has nodes 1–{n_therm}; choose them with --thermal-nodes"
+                    ),
                 ));
             }
             thermal.push(id as usize - 1);

@@ -162,3 +162,25 @@ fn counts_of_zero_and_huge_grids_are_refused() {
         &["--speed", "-100"],
     );
 }
+
+#[test]
+fn linear_analyses_take_set_and_truncation_names_its_node_flags() {
+    let o = tmrotor(&[
+        "modes",
+        "--speed",
+        "500",
+        "--count",
+        "2",
+        "--set",
+        "bearings[0].initial_clearance_m=1e-5",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let f = root.join("examples/rotors/jeffcott_midspan_disk.toml");
+    refused(
+        &tmrotor(&["truncation", "--model", f.to_str().expect("path")]),
+        &["--nodes", "dynamic node 8", "its nodes: 1–5"],
+    );
+    // the tour's study file ships
+    assert!(root.join("examples/study.toml").is_file());
+}

@@ -15,6 +15,10 @@ pub struct CampbellArgs {
     /// Model file (default: the built-in dual rotor).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// Set a value of the model file by its path before it is checked (repeatable; as
+    /// `tmrotor sweep --set`, docs/model-reference.md "Setting values by path").
+    #[arg(long = "set", value_name = "PATH=VALUE", value_parser = crate::model::set::parse_assignment)]
+    pub set: Vec<(String, toml::Value)>,
     /// Reference-speed grid START:END:COUNT in rad/s (COUNT points, ends included).
     #[arg(long, allow_hyphen_values = true)]
     pub speeds: String,
@@ -67,7 +71,7 @@ pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
 /// Runs `tmrotor campbell`, writing the critical speeds to `out`.
 pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let speeds = parse_speeds(&args.speeds)?;
-    let model = super::model::load(args.model.as_ref())?;
+    let model = super::model::load_with(args.model.as_ref(), &args.set)?;
     let asm = Assembly::new(&model)?;
     let diagram = linear::campbell(&asm, &speeds, args.count)?;
     if let Some(path) = &args.csv {

@@ -61,10 +61,13 @@ fn thermal_table(model: &Model, spec: &ThermalSpec) -> anyhow::Result<String> {
 
 /// Loads the model named by an optional `--model` flag (built-in when absent).
 pub fn load(file: Option<&PathBuf>) -> anyhow::Result<Model> {
-    Ok(match file {
-        Some(f) => Model::from_file(f)?,
-        None => Model::builtin()?,
-    })
+    load_with(file, &[])
+}
+
+/// [`load`] with `--set` values applied (the built-in model when `file` is `None`).
+pub fn load_with(file: Option<&PathBuf>, set: &[(String, toml::Value)]) -> anyhow::Result<Model> {
+    let set: crate::model::ModelSet = set.iter().cloned().collect();
+    Ok(Model::load(file.map(|f| f.as_path()), &set)?)
 }
 
 /// Runs a model command, writing to `out`.

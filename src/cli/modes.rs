@@ -15,6 +15,10 @@ pub struct ModesArgs {
     /// Model file (default: the built-in dual rotor).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// Set a value of the model file by its path before it is checked (repeatable; as
+    /// `tmrotor sweep --set`, docs/model-reference.md "Setting values by path").
+    #[arg(long = "set", value_name = "PATH=VALUE", value_parser = crate::model::set::parse_assignment)]
+    pub set: Vec<(String, toml::Value)>,
     /// Reference (LP) speed ω in rad/s; each rotor spins at its speed ratio times ω.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub speed: f64,
@@ -44,7 +48,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             args.speed
         );
     }
-    let model = super::model::load(args.model.as_ref())?;
+    let model = super::model::load_with(args.model.as_ref(), &args.set)?;
     let asm = Assembly::new(&model)?;
     let modes = linear::modes(&asm, args.speed, args.count)?;
     if args.csv {

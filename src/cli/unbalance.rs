@@ -15,6 +15,10 @@ pub struct UnbalanceArgs {
     /// Model file (default: the built-in dual rotor).
     #[arg(long)]
     pub model: Option<PathBuf>,
+    /// Set a value of the model file by its path before it is checked (repeatable; as
+    /// `tmrotor sweep --set`, docs/model-reference.md "Setting values by path").
+    #[arg(long = "set", value_name = "PATH=VALUE", value_parser = crate::model::set::parse_assignment)]
+    pub set: Vec<(String, toml::Value)>,
     /// Reference-speed grid START:END:COUNT in rad/s (COUNT points, ends included).
     #[arg(long, allow_hyphen_values = true)]
     pub speeds: String,
@@ -36,7 +40,7 @@ pub struct UnbalanceArgs {
 /// Runs `tmrotor unbalance`, writing the peaks of the drawn nodes to `out`.
 pub fn run(args: &UnbalanceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let speeds = super::campbell::parse_speeds(&args.speeds)?;
-    let model = super::model::load(args.model.as_ref())?;
+    let model = super::model::load_with(args.model.as_ref(), &args.set)?;
     let asm = Assembly::new(&model)?;
     let resp = linear::unbalance_response(&asm, &speeds)
         .with_context(|| format!("unbalance response of {}", model.spec.name))?;
