@@ -159,7 +159,18 @@ impl TransientArgs {
                 "no speed: give --speed RAD_S, --ramp START:END, --profile CSV or --from REC --point I"
             );
         };
-        profile.check().map_err(|e| anyhow::anyhow!("{e}"))?;
+        let flag = if self.ramp.is_some() {
+            "--ramp/--accel"
+        } else if self.profile.is_some() {
+            "--profile"
+        } else if self.speed.is_some() {
+            "--speed"
+        } else {
+            "the recorded point's speed"
+        };
+        profile
+            .check()
+            .map_err(|e| anyhow::anyhow!("{flag}: {e}"))?;
         Ok(profile)
     }
 
