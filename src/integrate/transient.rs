@@ -46,6 +46,8 @@
 //! rebuilt whenever the speed has moved by [`TransientOptions::omega_refresh`] relative
 //! since they were built.
 
+use std::sync::Arc;
+
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 
@@ -350,7 +352,7 @@ pub struct Transient<'a> {
     linear: Linear,
     /// Factorizations of recent step sizes at the current speed (steps come from a
     /// ladder `h₀·2^(−k/4)`, so few distinct sizes recur).
-    factored: Vec<Factored>,
+    factored: Vec<Arc<Factored>>,
     /// The ladder's base step `h₀`.
     h_base: f64,
     heat: Option<HeatAverage>,
@@ -459,8 +461,8 @@ impl<'a> Transient<'a> {
     }
 
     /// Evaluates the nonlinear terms at `(t, x, v)` with the held temperatures into
-    /// `self.eval`, and the effective load `P f − F` into `load`.
-    fn evaluate(&mut self, t: f64, x: &[f64], v: &[f64], with_load: bool) {
+    /// `self.eval`.
+    fn evaluate(&mut self, t: f64, x: &[f64], v: &[f64]) {
         let (w, ts) = self.system_time(t);
         for (k, &i) in self.mech.iter().enumerate() {
             self.xp[k] = x[i];
@@ -471,21 +473,26 @@ impl<'a> Transient<'a> {
         }
         self.system
             .eval_nonlinear(w, ts, &self.xp, &self.vp, &self.tq, &mut self.eval);
-        if with_load {
-            self.system.forcing(w, ts, &mut self.force);
-            for (l, f) in self.load.iter_mut().zip(&self.force) {
-                *l = -f;
-            }
-            for (k, &i) in self.mech.iter().enumerate() {
-                self.load[i] += self.eval.f[k];
-            }
+    }
+
+    /// The effective load `P f − F` of the α-weighted old term from `self.eval` and
+    /// `self.force` (the load at the same time).
+    fn set_load(&mut self) {
+        for (l, f) in self.load.iter_mut().zip(&self.force) {
+            *l = -f;
+        }
+        for (k, &i) in self.mech.iter().enumerate() {
+            self.load[i] += self.eval.f[k];
         }
     }
 
     /// `a₀` from the equations of motion at the start state.
     fn initial_acceleration(&mut self) -> Result<(), IntegrateError> {
         let (x, v) = (self.x.clone(), self.v.clone());
-        self.evaluate(0.0, &x, &v, true);
+        self.evaluate(0.0, &x, &v);
+        let (w, ts) = self.system_time(0.0);
+        self.system.forcing(w, ts, &mut self.force);
+        self.set_load();
         let lin = &self.linear;
         let rhs = Mat::from_fn(self.n, 1, |i, _| {
             let mut r = -self.load[i];
@@ -541,13 +548,13 @@ impl<'a> Transient<'a> {
         if self.factored.len() >= 6 {
             self.factored.remove(0);
         }
-        self.factored.push(Factored {
+        self.factored.push(Arc::new(Factored {
             h,
             omega,
             a_inv,
             a_inv_p,
             s,
-        });
+        }));
         self.stats.factorizations += 1;
         Ok(self.factored.len() - 1)
     }
@@ -584,15 +591,13 @@ impl<'a> Transient<'a> {
             }
             b[i] = r;
         }
-        let fac = &self.factored[slot];
+        let fac = Arc::clone(&self.factored[slot]);
         let mut x0 = vec![0.0; n];
         for i in 0..n {
             let row = fac.a_inv.row(i);
             x0[i] = (0..n).map(|j| row[j] * b[j]).sum();
         }
-        let s = fac.s.clone();
-        let a_inv_p = fac.a_inv_p.clone();
-        let _ = &fac.h;
+        let (s, a_inv_p) = (&fac.s, &fac.a_inv_p);
         // Newton on z = x₁ at the nonlinear DoFs, from the predictor x̃.
         let c: Vec<f64> = self.mech.iter().map(|&i| x0[i]).collect();
         let mut z: Vec<f64> = self.mech.iter().map(|&i| xt[i]).collect();
@@ -608,7 +613,7 @@ impl<'a> Transient<'a> {
                 x1[i] = z[k];
                 v1[i] = vt[i] + cgb * (z[k] - xt[i]);
             }
-            self.evaluate(t1, &x1, &v1, false);
+            self.evaluate(t1, &x1, &v1);
             self.stats.newton_iterations += 1;
             // R = z − c + (1+α) S f(z);  J = I + (1+α) S (∂f/∂x + cgb ∂f/∂v)
             let mut jac = Mat::<f64>::identity(p, p);
@@ -652,7 +657,7 @@ impl<'a> Transient<'a> {
             x1[i] = z[k];
             v1[i] = vt[i] + cgb * (z[k] - xt[i]);
         }
-        self.evaluate(t1, &x1, &v1, false);
+        self.evaluate(t1, &x1, &v1);
         for i in 0..n {
             let mut xi = x0[i];
             for l in 0..p {
@@ -756,11 +761,10 @@ impl<'a> Transient<'a> {
             self.x = x1;
             self.v = v1;
             self.a = a1;
-            let (x, v) = (self.x.clone(), self.v.clone());
-            self.evaluate(self.t, &x, &v, true);
-            let g_old = std::mem::replace(&mut self.g_prev, self.eval.g.clone());
-            let dg_old = std::mem::replace(&mut self.dg_prev, self.eval.dg_dt.clone());
-            self.accumulate_heat(h, &g_old, &dg_old)?;
+            // `self.eval` holds the terms at the new state (the step's last evaluation, at
+            // the converged nonlinear DoFs) and `self.force` the load at its time
+            self.set_load();
+            self.accumulate_heat(h)?;
             // a step cut short by the end or the revolution cap does not shrink the
             // controller's step
             let proposed = h * fac;
@@ -797,12 +801,7 @@ impl<'a> Transient<'a> {
 
     /// Adds one mechanical step's heat to the macro step's average and advances the
     /// temperatures when the macro step is complete.
-    fn accumulate_heat(
-        &mut self,
-        h: f64,
-        g_old: &[f64],
-        dg_old: &[f64],
-    ) -> Result<(), IntegrateError> {
+    fn accumulate_heat(&mut self, h: f64) -> Result<(), IntegrateError> {
         if self.m == 0 {
             return Ok(());
         }
@@ -817,11 +816,13 @@ impl<'a> Transient<'a> {
         });
         heat.span += h;
         for k in 0..q {
-            heat.g[k] += 0.5 * h * (g_old[k] + self.eval.g[k]);
+            heat.g[k] += 0.5 * h * (self.g_prev[k] + self.eval.g[k]);
         }
         for k in 0..q * q {
-            heat.dg_dt[k] += 0.5 * h * (dg_old[k] + self.eval.dg_dt[k]);
+            heat.dg_dt[k] += 0.5 * h * (self.dg_prev[k] + self.eval.dg_dt[k]);
         }
+        self.g_prev.copy_from_slice(&self.eval.g);
+        self.dg_prev.copy_from_slice(&self.eval.dg_dt);
         let done = match self.opts.thermal {
             ThermalStepping::EveryStep => true,
             ThermalStepping::Averaged { .. } => {
