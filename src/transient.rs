@@ -161,11 +161,40 @@ struct RevolutionSums {
     span: f64,
     /// ∫x, ∫y, ∫x², ∫y² per node.
     sums: Vec<[f64; 4]>,
-    /// Largest |(x, y) − (x₀, y₀)| seen, with the window start's mean subtracted later:
-    /// kept as the extreme x and y per node.
+    /// Smallest and largest x, smallest and largest y per node (the peak excursion is taken
+    /// from them about the window's mean).
     extremes: Vec<[f64; 4]>,
     steps: u32,
+    /// Largest radial load per bearing at the revolution's samples.
     load_max: Vec<f64>,
+}
+
+/// No extremes yet: `[min x, max x, min y, max y]` before any sample.
+const NO_EXTREMES: [f64; 4] = [
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+];
+
+/// Widens the extremes `ext` to hold those of `other` (both `[min x, max x, min y, max y]`).
+fn widen(ext: &mut [f64; 4], other: &[f64; 4]) {
+    ext[0] = ext[0].min(other[0]);
+    ext[1] = ext[1].max(other[1]);
+    ext[2] = ext[2].min(other[2]);
+    ext[3] = ext[3].max(other[3]);
+}
+
+impl RevolutionSums {
+    /// Empty sums for `nodes` dynamic nodes and `bearings` bearings.
+    fn new(nodes: usize, bearings: usize) -> Self {
+        Self {
+            sums: vec![[0.0; 4]; nodes],
+            extremes: vec![NO_EXTREMES; nodes],
+            load_max: vec![0.0; bearings],
+            ..Self::default()
+        }
+    }
 }
 
 /// Runs the transient of `problem` from `start` into `sink`. `progress` sees each
@@ -261,20 +290,7 @@ fn drive(
     let tau = std::f64::consts::TAU;
     let samples_per_rev = settings.samples_per_revolution;
     let load_samples = samples_per_rev.max(16);
-    let mut current = RevolutionSums {
-        sums: vec![[0.0; 4]; n_nodes],
-        extremes: vec![
-            [
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY
-            ];
-            n_nodes
-        ],
-        load_max: vec![0.0; n_bear],
-        ..Default::default()
-    };
+    let mut current = RevolutionSums::new(n_nodes, n_bear);
     let mut history: std::collections::VecDeque<RevolutionSums> = Default::default();
     let mut revolution: u64 = 0;
     let mut last_t = 0.0;
@@ -308,11 +324,7 @@ fn drive(
             acc[1] += 0.5 * h * (y + y0);
             acc[2] += 0.5 * h * (x * x + x0 * x0);
             acc[3] += 0.5 * h * (y * y + y0 * y0);
-            let e = &mut current.extremes[k];
-            e[0] = e[0].min(x);
-            e[1] = e[1].max(x);
-            e[2] = e[2].min(y);
-            e[3] = e[3].max(y);
+            widen(&mut current.extremes[k], &[x, x, y, y]);
             last_xy[k] = (x, y);
         }
         let ts = s.phase / s.omega;
@@ -350,25 +362,8 @@ fn drive(
             return true;
         }
         revolution += 1;
-        let done = std::mem::replace(
-            &mut current,
-            RevolutionSums {
-                sums: vec![[0.0; 4]; n_nodes],
-                extremes: vec![
-                    [
-                        f64::INFINITY,
-                        f64::NEG_INFINITY,
-                        f64::INFINITY,
-                        f64::NEG_INFINITY
-                    ];
-                    n_nodes
-                ],
-                load_max: vec![0.0; n_bear],
-                ..Default::default()
-            },
-        );
+        let done = std::mem::replace(&mut current, RevolutionSums::new(n_nodes, n_bear));
         let steps = done.steps;
-        let load_max = done.load_max.clone();
         history.push_back(done);
         while history.len() > window as usize {
             history.pop_front();
@@ -378,20 +373,12 @@ fn drive(
         let mut peak = Vec::with_capacity(n_nodes);
         for k in 0..n_nodes {
             let mut acc = [0.0; 4];
-            let mut ext = [
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-                f64::INFINITY,
-                f64::NEG_INFINITY,
-            ];
+            let mut ext = NO_EXTREMES;
             for r in &history {
                 for (a, v) in acc.iter_mut().zip(&r.sums[k]) {
                     *a += v;
                 }
-                ext[0] = ext[0].min(r.extremes[k][0]);
-                ext[1] = ext[1].max(r.extremes[k][1]);
-                ext[2] = ext[2].min(r.extremes[k][2]);
-                ext[3] = ext[3].max(r.extremes[k][3]);
+                widen(&mut ext, &r.extremes[k]);
             }
             let (mx, my) = (acc[0] / span, acc[1] / span);
             let var = (acc[2] / span - mx * mx).max(0.0) + (acc[3] / span - my * my).max(0.0);
@@ -415,7 +402,9 @@ fn drive(
                 .map(|(b, c0)| c0 + b.delta_v_m)
                 .collect(),
             bearing_load_n: states.iter().map(|b| b.fb_n).collect(),
-            bearing_load_max_n: load_max
+            bearing_load_max_n: history
+                .back()
+                .map_or(&[][..], |r| &r.load_max)
                 .iter()
                 .zip(&states)
                 .map(|(m, b)| m.max(b.fb_n))

@@ -331,9 +331,6 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
         );
     }
     let mut last_line = Instant::now();
-    let biggest = |r: &crate::record::transient::Revolution| {
-        r.amplitude_rms_m.iter().fold(0.0f64, |m, v| m.max(*v))
-    };
     let report = run_transient(
         &problem,
         &start,
@@ -345,7 +342,7 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
                 "t {:.3} s  ω {:.2} rad/s  largest RMS amplitude {:.3} µm",
                 r.time_s,
                 r.omega_rad_s,
-                biggest(r) * 1e6
+                crate::record::transient::largest_amplitude(r).1 * 1e6
             );
             if log && last_line.elapsed() >= super::LOG_EVERY {
                 last_line = Instant::now();
@@ -370,14 +367,7 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
     )?;
     if let Some(last) = &report.last {
         let run = &problem.run;
-        let (k, a) =
-            last.amplitude_rms_m
-                .iter()
-                .enumerate()
-                .fold(
-                    (0, 0.0f64),
-                    |(bk, ba), (k, a)| if *a > ba { (k, *a) } else { (bk, ba) },
-                );
+        let (k, a) = crate::record::transient::largest_amplitude(last);
         let node = run.nodes.get(k).map_or("?", |n| n.name.as_str());
         writeln!(
             out,

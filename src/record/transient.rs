@@ -20,6 +20,19 @@ pub fn time_ns(t: f64) -> u64 {
     }
 }
 
+/// The dynamic node with the largest RMS amplitude at `revolution`: its index (in
+/// `RunInfo.nodes` order) and the amplitude (m); `(0, 0.0)` without nodes.
+pub fn largest_amplitude(revolution: &Revolution) -> (usize, f64) {
+    revolution
+        .amplitude_rms_m
+        .iter()
+        .enumerate()
+        .fold(
+            (0, 0.0),
+            |(bk, ba), (k, &a)| if a > ba { (k, a) } else { (bk, ba) },
+        )
+}
+
 /// Where a transient run goes. Call order: [`TransientSink::begin_transient`] once, then
 /// samples and revolutions in time order, then [`TransientSink::finish_transient`] exactly
 /// once (also when the run failed or was interrupted).

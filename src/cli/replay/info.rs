@@ -292,14 +292,7 @@ fn transient_info(
         t.samples.len()
     )?;
     if let Some(last) = t.revolutions.last() {
-        let (k, a) =
-            last.amplitude_rms_m
-                .iter()
-                .enumerate()
-                .fold(
-                    (0, 0.0f64),
-                    |(bk, ba), (k, a)| if *a > ba { (k, *a) } else { (bk, ba) },
-                );
+        let (k, a) = crate::record::transient::largest_amplitude(last);
         writeln!(
             out,
             "last:        t {:.4} s, ω {:.3} rad/s, largest RMS amplitude {:.4} µm at node index {k}",
