@@ -22,6 +22,23 @@ pub const LOG_EVERY: std::time::Duration = std::time::Duration::from_secs(15);
 
 /// The progress bars' style: `template` (indicatif's), drawn with `=>`; the default bar if
 /// the template does not parse.
+/// Starts the recording `path` and says on stderr where a killed earlier writer's file
+/// was moved.
+pub fn create_recording(
+    path: &std::path::Path,
+    options: crate::record::McapOptions,
+) -> anyhow::Result<crate::record::McapSink> {
+    let sink = crate::record::McapSink::create(path, options)?;
+    if let Some(kept) = sink.stale_partial() {
+        eprintln!(
+            "note: an earlier run writing {} was killed; what it recorded was moved to {}",
+            path.display(),
+            kept.display()
+        );
+    }
+    Ok(sink)
+}
+
 pub fn bar_style(template: &str) -> indicatif::ProgressStyle {
     indicatif::ProgressStyle::with_template(template)
         .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())

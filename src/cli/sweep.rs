@@ -9,7 +9,7 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use crate::derive::PERIOD_DOUBLED_SHARE;
-use crate::record::{McapOptions, McapSink, install_interrupt_flag};
+use crate::record::{McapOptions, install_interrupt_flag};
 use crate::sweep::{Progress, StudySettings, SweepProblem};
 
 /// The study flags shared by `tmrotor sweep` and `tmrotor truncation`: model, study file,
@@ -236,14 +236,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     } else {
         McapOptions::default()
     };
-    let mut sink = McapSink::create(&args.output, options)?;
-    if let Some(kept) = sink.stale_partial() {
-        eprintln!(
-            "note: an earlier run writing {} was killed; what it recorded was moved to {}",
-            args.output.display(),
-            kept.display()
-        );
-    }
+    let mut sink = super::create_recording(&args.output, options)?;
     let interrupt = install_interrupt_flag().ok();
     let bar = if args.quiet {
         ProgressBar::hidden()

@@ -14,7 +14,7 @@ use super::sweep::{StudyArgs, parse_range};
 use crate::derive::CoupledRederive;
 use crate::integrate::{SpeedProfile, ThermalStepping, TransientOptions};
 use crate::record::output::check_target;
-use crate::record::{McapOptions, McapSink, install_interrupt_flag, read_recording};
+use crate::record::{McapOptions, install_interrupt_flag, read_recording};
 use crate::study::SweepProblem;
 use crate::system::System;
 use crate::transient::{StartState, TransientSettings, describe_profile, run_transient};
@@ -305,14 +305,7 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
         options,
         samples_per_revolution: args.samples_per_rev,
     };
-    let mut sink = McapSink::create(&args.output, McapOptions::default())?;
-    if let Some(kept) = sink.stale_partial() {
-        eprintln!(
-            "note: an earlier run writing {} was killed; what it recorded was moved to {}",
-            args.output.display(),
-            kept.display()
-        );
-    }
+    let mut sink = super::create_recording(&args.output, McapOptions::default())?;
     let interrupt = install_interrupt_flag().ok();
     let bar = if args.quiet {
         ProgressBar::hidden()
