@@ -174,7 +174,7 @@ impl Default for SweepSettings {
 }
 
 /// Floquet stability ([`crate::stability`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct FloquetSettings {
     /// Compute Floquet multipliers at every point (and locate the Neimark–Sacker and
     /// period-doubling points; saddle-nodes, the folds of the branch, are located either
@@ -195,6 +195,33 @@ pub struct FloquetSettings {
     /// (interior modes of the rotor with its bearing DoFs held, up to this frequency);
     /// 0 computes on the full model. Default: [`ReductionSettings::default`].
     pub reduction_cutoff_rad_s: f64,
+    /// After the branch, re-solve each located bifurcation and each change of stability the
+    /// sweep could not locate at higher truncation orders and record whether it holds,
+    /// moves or vanishes (`/truncation`, the sweep's `verify` module). Default on; needs
+    /// `stability`.
+    pub verify: bool,
+    /// The orders of that check; empty (the default): the run's order + 1 and + 2, at
+    /// most 12.
+    pub verify_orders: Vec<u32>,
+    /// Wall-time budget of the check, s (default 120): windows not reached in it are
+    /// reported unchecked, so a sweep with many bifurcations still ends.
+    pub verify_max_seconds: f64,
+}
+
+/// Default of [`FloquetSettings::verify_max_seconds`]: two minutes, about twenty windows
+/// of the dual rotor at two orders.
+pub const DEFAULT_VERIFY_SECONDS: f64 = 120.0;
+
+impl FloquetSettings {
+    /// The orders the truncation check re-solves at for a run of order `order`:
+    /// [`Self::verify_orders`], or `order + 1` and `order + 2` up to 12.
+    pub fn verify_orders_for(&self, order: u32) -> Vec<u32> {
+        if self.verify_orders.is_empty() {
+            (order + 1..=order + 2).filter(|&k| k <= 12).collect()
+        } else {
+            self.verify_orders.clone()
+        }
+    }
 }
 
 impl Default for FloquetSettings {
@@ -205,6 +232,9 @@ impl Default for FloquetSettings {
             sip_intervals: DEFAULT_INTERVALS,
             interval_map: IntervalMap::Exponential,
             reduction_cutoff_rad_s: ReductionSettings::default().cutoff_rad_s,
+            verify: true,
+            verify_orders: Vec::new(),
+            verify_max_seconds: DEFAULT_VERIFY_SECONDS,
         }
     }
 }
@@ -233,6 +263,9 @@ pub struct FlatSettings {
     pub aft_samples: Option<usize>,
     pub half_orders: bool,
     pub combination_tones: bool,
+    pub verify: bool,
+    pub verify_orders: Vec<u32>,
+    pub verify_max_seconds: f64,
     #[serde(skip_serializing_if = "ModelSet::is_empty")]
     pub set: ModelSet,
 }
@@ -273,6 +306,9 @@ impl From<StudySettings> for FlatSettings {
             aft_samples: harmonic.aft_samples,
             half_orders: harmonic.half_orders,
             combination_tones: harmonic.combination_tones,
+            verify: floquet.verify,
+            verify_orders: floquet.verify_orders,
+            verify_max_seconds: floquet.verify_max_seconds,
             set,
         }
     }
@@ -307,6 +343,9 @@ impl From<FlatSettings> for StudySettings {
                 sip_intervals: f.sip_intervals,
                 interval_map: f.interval_map,
                 reduction_cutoff_rad_s: f.reduction_cutoff_rad_s,
+                verify: f.verify,
+                verify_orders: f.verify_orders,
+                verify_max_seconds: f.verify_max_seconds,
             },
             set: f.set,
         }
@@ -598,6 +637,16 @@ impl FloquetSettings {
                 "must be even for exp-sip (its product is extrapolated from N and N/2 intervals)",
             );
         }
+        if let Some(k) = self.verify_orders.iter().find(|&&k| k == 0 || k > 12) {
+            return bad("verify_orders", k, "must be truncation orders from 1 to 12");
+        }
+        if !(self.verify_max_seconds.is_finite() && self.verify_max_seconds > 0.0) {
+            return bad(
+                "verify_max_seconds",
+                self.verify_max_seconds,
+                "must be a positive number of seconds",
+            );
+        }
         Ok(())
     }
 }
@@ -800,6 +849,9 @@ mod tests {
             "aft_samples",
             "half_orders",
             "combination_tones",
+            "verify",
+            "verify_orders",
+            "verify_max_seconds",
             "model",
         ];
         expected.sort();

@@ -30,6 +30,8 @@ use crate::record::types::{
 };
 use crate::record::{RecordError, Sink};
 use crate::stability::{BifurcationKind, ExpSip, FloquetResult, StabilityError, StabilityMethod};
+
+pub mod verify;
 pub use crate::study::{
     DEFAULT_INTERVALS, FloquetSettings, HarmonicSettings, OperatingSettings, RECORD_SAMPLES,
     StabilityChoice, StudyError, StudySettings, SweepProblem, SweepSettings, stability_method,
@@ -105,6 +107,9 @@ pub struct Progress {
     /// While the start is reached by a lead-in continuation (see `SweepProblem::run`):
     /// `omega_rad_s` is the lead-in's current speed, and nothing is recorded yet.
     pub lead_in: bool,
+    /// While the branch's events are re-solved at higher truncation orders, after the
+    /// branch ([`verify`]).
+    pub verifying: bool,
 }
 
 /// What a finished sweep reports.
@@ -143,6 +148,12 @@ pub struct SweepReport {
     /// The period-doubled branches followed from the run's period doublings (see
     /// [`SweepSettings::switch_branches`]); their points are counted in `points`.
     pub branches: Vec<FollowedBranch>,
+    /// The run's branch's located bifurcations (in the order of `bifurcations`) and its
+    /// unlocated changes of stability re-solved at higher truncation orders
+    /// ([`verify`], study key `verify`); empty when not checked.
+    pub truncation: Vec<crate::record::TruncationCheck>,
+    /// Wall time of that check, s.
+    pub verify_seconds: f64,
 }
 
 /// What one step of the branch (from point `after_point` to the next) says beyond its
@@ -271,6 +282,17 @@ pub fn audit_step(
 }
 
 impl SweepReport {
+    /// The run's located bifurcations (ω, label) with their truncation check, when one
+    /// was made ([`Self::truncation`]), in order.
+    pub fn checked_bifurcations(
+        &self,
+    ) -> impl Iterator<Item = (f64, &str, Option<&crate::record::TruncationCheck>)> {
+        let mut checks = self.truncation.iter().filter(|c| c.kind.is_some());
+        self.bifurcations
+            .iter()
+            .map(move |(w, label)| (*w, label.as_str(), checks.next()))
+    }
+
     /// Where the sweep's time went, one line (`corrector … s (… steps, … ms each),
     /// stability …, bifurcation location …, recording … s`), each part summed over its
     /// calls (see [`Timings`]); the stability part names the instruction set of the
@@ -688,6 +710,52 @@ impl SweepProblem {
                 status
             })
         });
+        // the run's events re-solved at higher orders, recorded before the end status
+        let mut truncation = Vec::new();
+        let mut verify_seconds = 0.0;
+        let result = result.and_then(|status| {
+            if status != RunStatus::Completed
+                || !(s.floquet.verify && s.floquet.stability)
+                || rec.events.is_empty()
+            {
+                return Ok(status);
+            }
+            let t0 = std::time::Instant::now();
+            rec.prog.verifying = true;
+            progress(&rec.prog);
+            let points: Vec<verify::StartPoint> = rec
+                .starts
+                .iter()
+                .map(|(index, w, m, t)| verify::StartPoint {
+                    index: *index,
+                    omega_rad_s: *w,
+                    coeffs_mech: m,
+                    coeffs_therm: t,
+                })
+                .collect();
+            let options = verify::VerifyOptions::for_settings(s);
+            let checks = verify::verify_events(
+                s,
+                &self.model,
+                Some(&self.basis),
+                &points,
+                &rec.events,
+                &options,
+                |_| {},
+                &interrupted,
+            )?;
+            for c in &checks {
+                sink.write_truncation_check(c)?;
+            }
+            truncation = checks;
+            verify_seconds = t0.elapsed().as_secs_f64();
+            rec.prog.verifying = false;
+            Ok(if interrupted() {
+                RunStatus::Interrupted
+            } else {
+                status
+            })
+        });
         match result {
             Ok(status) => {
                 sink.finish(status.clone())?;
@@ -707,6 +775,8 @@ impl SweepProblem {
                     unstable_points: rec.unstable_points,
                     warnings: rec.warnings,
                     branches,
+                    truncation,
+                    verify_seconds,
                 })
             }
             Err(e) => {
@@ -956,6 +1026,12 @@ struct Recorder {
     stable_points: usize,
     unstable_points: usize,
     warnings: Vec<String>,
+    /// The run's branch's located bifurcations and unlocated changes of stability, for the
+    /// truncation check.
+    events: Vec<verify::Event>,
+    /// The run's branch's points (index, ω, mechanical and thermal coefficients), where
+    /// the truncation check's windows start.
+    starts: Vec<(u64, f64, Vec<f64>, Vec<f64>)>,
 }
 
 impl Recorder {
@@ -975,6 +1051,8 @@ impl Recorder {
             stable_points: 0,
             unstable_points: 0,
             warnings: Vec::new(),
+            events: Vec::new(),
+            starts: Vec::new(),
         }
     }
 
@@ -1065,6 +1143,14 @@ impl Recorder {
                 coeffs_therm: b.solution.therm.clone(),
             };
             sink.write_bifurcation(&rec)?;
+            if self.branch == 0 {
+                self.events.push(verify::Event {
+                    number: self.n_bif,
+                    kind: Some(kind),
+                    omega_rad_s: b.solution.omega,
+                    after_point,
+                });
+            }
             if self.branch == 0 && kind == BifurcationKind::PeriodDoubling {
                 self.period_doublings.push((self.n_bif, b.solution.clone()));
             }
@@ -1098,6 +1184,21 @@ impl Recorder {
             sink.write_note(after_point, &note)?;
             self.warnings.push(note);
         }
+        // a change of the stable flag with nothing located on the step: an end of an
+        // unstable stretch the truncation check re-solves too
+        if self.branch == 0
+            && kinds.is_empty()
+            && let Some((w, Some(before))) = &self.previous
+            && let Some(after) = &point.stability
+            && before.stable != after.stable
+        {
+            self.events.push(verify::Event {
+                number: 0,
+                kind: None,
+                omega_rad_s: 0.5 * (w + point.solution.omega),
+                after_point,
+            });
+        }
         self.previous = Some((point.solution.omega, point.stability.clone()));
         let recording = std::time::Instant::now();
         let mut rec = problem.point_record(&self.run, self.prog.points as u64, point)?;
@@ -1108,6 +1209,12 @@ impl Recorder {
             rec.bifurcation = kinds.first().copied();
         }
         if self.branch == 0 {
+            self.starts.push((
+                rec.index,
+                rec.omega_rad_s,
+                rec.coeffs_mech.clone(),
+                rec.coeffs_therm.clone(),
+            ));
             self.shares.push((
                 rec.index,
                 rec.omega_rad_s,
@@ -1158,6 +1265,8 @@ mod tests {
             unstable_points: 0,
             warnings: Vec::new(),
             branches: Vec::new(),
+            truncation: Vec::new(),
+            verify_seconds: 0.0,
         }
     }
 

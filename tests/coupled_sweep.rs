@@ -215,7 +215,7 @@ fn replay_recomputes_stability_with_recorded_or_finer_intervals() {
     let strang = StudySettings {
         floquet: FloquetSettings {
             interval_map: tmrotor::stability::IntervalMap::Strang,
-            ..settings.floquet
+            ..settings.floquet.clone()
         },
         ..settings.clone()
     };

@@ -1,7 +1,8 @@
 //! `replay verify`: a recording's located bifurcations re-solved at other truncation
 //! orders. At the recorded order the check must find every saddle-node where the sweep
 //! put it (the folds are located by the tangent, independent of the step); at higher
-//! orders each one gets a verdict.
+//! orders each one gets a verdict. The sweep itself checks at the order + 1 and + 2 by
+//! default and records the verdicts on `/truncation`.
 
 use std::process::Command;
 
@@ -45,26 +46,57 @@ fn the_recorded_order_finds_the_folds_again_and_higher_orders_give_a_verdict() {
             "{l}"
         );
     }
-    // the sweep's own summary, with --verify
+    // the sweep checks its own bifurcations by default: in the summary, on /truncation
+    // (read back by replay info), and not with --no-verify
+    let summary = String::from_utf8_lossy(&sweep.stdout).to_string();
+    assert!(
+        summary.contains("truncation check: orders 4, 5"),
+        "{summary}"
+    );
+    let checked = summary
+        .lines()
+        .filter(|l| {
+            l.contains("saddle-node at ω") && (l.contains("; holds") || l.contains("; moved"))
+        })
+        .count();
+    assert_eq!(checked, 2, "{summary}");
+    let rec = tmrotor::record::read_recording(&file).expect("reads");
+    assert_eq!(
+        rec.truncation.iter().filter(|c| c.kind.is_some()).count(),
+        rec.bifurcations.iter().filter(|b| b.branch == 0).count()
+    );
+    for c in &rec.truncation {
+        assert_eq!(c.recorded_order, 3);
+        let orders: Vec<u32> = c.orders.iter().map(|(k, _)| *k).collect();
+        assert_eq!(orders, [4, 5]);
+    }
+    let info = Command::new(env!("CARGO_BIN_EXE_replay"))
+        .arg("info")
+        .arg(&file)
+        .output()
+        .expect("replay runs");
+    let info = String::from_utf8_lossy(&info.stdout).to_string();
+    assert!(info.contains("at higher truncation orders: "), "{info}");
     let again = dir.path().join("v.mcap");
     let sweep = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
         .args([
-            "sweep", "--omega", "515:530", "-q", "--lean", "--verify", "-o",
+            "sweep",
+            "--omega",
+            "515:530",
+            "-q",
+            "--lean",
+            "--no-verify",
+            "-o",
         ])
         .arg(&again)
         .output()
         .expect("tmrotor runs");
     let summary = String::from_utf8_lossy(&sweep.stdout).to_string();
     assert!(sweep.status.success(), "{summary}");
-    assert!(summary.contains("at higher truncation orders"), "{summary}");
-    assert_eq!(
-        summary
-            .lines()
-            .filter(|l| l.contains("saddle-node at ω") && l.contains("order 4 "))
-            .count(),
-        2,
-        "{summary}"
-    );
+    assert!(!summary.contains("truncation check"), "{summary}");
+    let rec = tmrotor::record::read_recording(&again).expect("reads");
+    assert!(rec.truncation.is_empty());
+    assert!(!rec.topics.iter().any(|t| t.topic == "/truncation"));
     // bad input is refused by name
     let bad = Command::new(env!("CARGO_BIN_EXE_replay"))
         .args(["verify"])

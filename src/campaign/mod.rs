@@ -862,12 +862,16 @@ fn run_one(
             entry.status = match report.status {
                 crate::record::RunStatus::Completed => "completed".into(),
                 crate::record::RunStatus::Interrupted => "interrupted".into(),
-                other => format!("{other:?}").to_lowercase(),
+                ref other => format!("{other:?}").to_lowercase(),
             };
+            // those that vanished at a higher truncation order are not results
             entry.bifurcations = report
-                .bifurcations
-                .iter()
-                .map(|(w, k)| format!("{k} at {w:.3} rad/s"))
+                .checked_bifurcations()
+                .filter(|(_, _, c)| c.is_none_or(|c| !c.verdict().vanished()))
+                .map(|(w, k, c)| match c {
+                    Some(c) => format!("{k} at {w:.3} rad/s; {}", c.verdict_text()),
+                    None => format!("{k} at {w:.3} rad/s"),
+                })
                 .collect();
         }
         Err(e) => entry.status = format!("failed: {e}"),

@@ -23,9 +23,10 @@ pub struct ReportArgs {
     /// set) on the statements instead: the sensitivity table.
     #[arg(long)]
     pub sensitivity: bool,
-    /// Re-solve every run's located bifurcations at the recorded truncation order plus
-    /// one and plus two (`replay verify`) and add their verdicts as a table (about 10 s a
-    /// run with bifurcations on the dual rotor).
+    /// The table of the bifurcations at higher truncation orders comes from the checks the
+    /// sweeps recorded; with this, recordings without them (earlier versions, `verify =
+    /// false`) are re-solved now at the order plus one and plus two (`replay verify`; about
+    /// 10 s a run with bifurcations on the dual rotor).
     #[arg(long)]
     pub verify: bool,
 }
@@ -49,63 +50,86 @@ pub fn run(args: &ReportArgs, out: &mut impl std::io::Write) -> anyhow::Result<(
         &args.dir.display().to_string(),
         truncation.as_deref(),
     );
-    if args.verify {
-        text.push_str(&verdicts(&args.dir)?);
-    }
+    text.push_str(&verdicts(&args.dir, args.verify)?);
     emit(args, &text, out)
 }
 
-/// The campaign's bifurcations re-solved at higher truncation orders, as a markdown
-/// section (one row per bifurcation of a run's own branch).
-fn verdicts(dir: &std::path::Path) -> anyhow::Result<String> {
+/// The campaign's bifurcations at higher truncation orders, as a markdown section (one
+/// row per located bifurcation or unlocated change of stability of a run's own branch):
+/// the checks each sweep recorded (`/truncation`), or, with `resolve`, re-solved now for
+/// the recordings that have none (`replay verify`). Empty when there is nothing to show.
+fn verdicts(dir: &std::path::Path, resolve: bool) -> anyhow::Result<String> {
     use crate::truncation::verify::{VerifyOptions, verify_bifurcations};
     let mut rows = Vec::new();
-    let mut orders_seen = Vec::new();
+    let mut orders_seen: Vec<u32> = Vec::new();
     for (name, path) in campaign_runs(dir)? {
         let rec = crate::record::read_recording(&path)
             .with_context(|| format!("{}: cannot read the recording", path.display()))?;
-        if rec.bifurcations.iter().all(|b| b.branch != 0) {
+        let checks = if !rec.truncation.is_empty() {
+            rec.truncation.clone()
+        } else if resolve && rec.bifurcations.iter().any(|b| b.branch == 0) {
+            let order = crate::sweep::StudySettings::from_run(&rec.run)?
+                .harmonic
+                .order;
+            verify_bifurcations(&rec, &VerifyOptions::for_order(order), |_| {})?
+        } else {
             continue;
+        };
+        for c in &checks {
+            for (k, _) in &c.orders {
+                if !orders_seen.contains(k) {
+                    orders_seen.push(*k);
+                }
+            }
         }
-        let order = crate::sweep::StudySettings::from_run(&rec.run)?
-            .harmonic
-            .order;
-        let options = VerifyOptions::for_order(order);
-        orders_seen.clone_from(&options.orders);
-        for v in verify_bifurcations(&rec, &options, |_| {})? {
-            let cells: Vec<String> = v
-                .orders
-                .iter()
-                .map(|(_, o)| o.describe(4).replace('|', "/"))
-                .collect();
-            rows.push(format!(
-                "| {name} | {} | {:.4} | {} |",
-                v.kind.abbreviation(),
-                v.omega_rad_s,
-                cells.join(" | ")
-            ));
+        for c in checks {
+            rows.push((name.clone(), c));
         }
     }
-    let mut s = String::from("\n## The bifurcations at higher truncation orders\n\n");
     if rows.is_empty() {
-        s.push_str("No run has a located bifurcation.\n");
-        return Ok(s);
+        return Ok(if resolve {
+            "\n## The bifurcations at higher truncation orders\n\nNo run has a located bifurcation.\n"
+                .to_string()
+        } else {
+            String::new()
+        });
     }
+    orders_seen.sort_unstable();
+    let mut s = String::from("\n## The bifurcations at higher truncation orders\n\n");
     s.push_str(
-        "Each located bifurcation of a run's own branch re-solved on the basis of a higher \
-         order over a window of ±1 rad/s from the recorded point before it (`replay verify`): \
-         converged when the same kind lies within 0.05 rad/s, moved when farther in the \
-         window, vanished when none is there.\n\n",
+        "Each located bifurcation of a run's own branch, and each change of stability it \
+         could not locate, re-solved on the basis of a higher order over a window of \
+         ±1 rad/s from the recorded point before it (by the sweep after its branch, or \
+         `replay verify`): converged when the same kind lies within 0.05 rad/s, moved when \
+         farther in the window, vanished when none is there. A bifurcation that vanished at \
+         the highest order is not a result: the statements above leave it out.\n\n",
     );
     let heads: Vec<String> = orders_seen.iter().map(|k| format!("order {k}")).collect();
     s.push_str(&format!(
-        "| run | kind | ω (rad/s) | {} |\n",
+        "| run | kind | ω (rad/s) | {} | verdict |\n",
         heads.join(" | ")
     ));
-    s.push_str(&format!("|---|---|---|{}\n", "---|".repeat(heads.len())));
-    for r in rows {
-        s.push_str(&r);
-        s.push('\n');
+    s.push_str(&format!(
+        "|---|---|---|{}---|\n",
+        "---|".repeat(heads.len())
+    ));
+    for (name, c) in rows {
+        let cells: Vec<String> = orders_seen
+            .iter()
+            .map(|k| {
+                c.orders
+                    .iter()
+                    .find(|(o, _)| o == k)
+                    .map_or("".to_string(), |(_, o)| o.describe(4).replace('|', "/"))
+            })
+            .collect();
+        s.push_str(&format!(
+            "| {name} | {} | {:.4} | {} | {} |\n",
+            c.kind.map_or("change", |k| k.abbreviation()),
+            c.omega_rad_s,
+            cells.join(" | "),
+            c.verdict().label()
+        ));
     }
     Ok(s)
 }

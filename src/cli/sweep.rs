@@ -133,11 +133,17 @@ pub struct SweepArgs {
     /// More detail in the closing summary (the Floquet kernel's instruction set).
     #[arg(long, short)]
     pub verbose: bool,
-    /// After the sweep, re-solve its located bifurcations at the truncation order + 1 and
-    /// + 2 and say in the summary whether each converged, moved or vanished (`replay
-    /// verify` on the recording; a few seconds per group of bifurcations).
+    /// Do not re-solve the located bifurcations and unlocated changes of stability at
+    /// higher truncation orders after the branch (study key `verify = false`). By default
+    /// each is re-solved at the order + 1 and + 2 in a window of ±1 rad/s and the summary
+    /// and `/truncation` say whether it holds, moved or vanished; a vanished one is not a
+    /// result of the model. A few seconds per group of bifurcations.
     #[arg(long)]
-    pub verify: bool,
+    pub no_verify: bool,
+    /// The orders of that check, e.g. `4,5,7` (study key `verify_orders`; default the
+    /// order + 1 and + 2).
+    #[arg(long, value_name = "LIST", value_delimiter = ',')]
+    pub verify_orders: Vec<u32>,
 }
 
 impl SweepArgs {
@@ -155,6 +161,12 @@ impl SweepArgs {
         }
         if let Some(v) = self.max_points {
             s.sweep.max_points = v;
+        }
+        if self.no_verify {
+            s.floquet.verify = false;
+        }
+        if !self.verify_orders.is_empty() {
+            s.floquet.verify_orders = self.verify_orders.clone();
         }
         if self.no_thermal {
             s.operating.thermal = false;
@@ -326,9 +338,7 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     if let Some(note) = &report.stability_note {
         writeln!(out, "  stability not assessed: {note}")?;
     }
-    for (w, kind) in &report.bifurcations {
-        writeln!(out, "  {}", located_line(kind, *w))?;
-    }
+    truncation_summary(&report, out)?;
     for b in &report.branches {
         writeln!(
             out,
@@ -380,33 +390,6 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             )
         )?;
     }
-    if args.verify && report.status == crate::record::RunStatus::Completed {
-        let rec = crate::record::read_recording(&args.output)?;
-        if rec.bifurcations.iter().any(|b| b.branch == 0) {
-            let options =
-                crate::truncation::verify::VerifyOptions::for_order(settings.harmonic.order);
-            let verdicts = crate::truncation::verify::verify_bifurcations(&rec, &options, |msg| {
-                if log {
-                    eprintln!("verify: {msg}");
-                }
-            })?;
-            writeln!(out, "  at higher truncation orders (replay verify):")?;
-            for v in verdicts {
-                let cells: Vec<String> = v
-                    .orders
-                    .iter()
-                    .map(|(k, o)| format!("order {k} {}", o.describe(3)))
-                    .collect();
-                writeln!(
-                    out,
-                    "    {} at ω = {:.3} rad/s: {}",
-                    v.kind.label(),
-                    v.omega_rad_s,
-                    cells.join(", ")
-                )?;
-            }
-        }
-    }
     let file = args.output.display();
     writeln!(
         out,
@@ -437,6 +420,12 @@ pub fn progress_message(p: &Progress, omega: &str) -> String {
             "{omega}{:.1} rad/s: reaching the start by continuation (not recorded)",
             p.omega_rad_s
         )
+    } else if p.verifying {
+        format!(
+            "{}, {}: re-solving them at higher truncation orders",
+            plural(p.points, "point", "points"),
+            plural(p.bifurcations, "bifurcation", "bifurcations")
+        )
     } else {
         format!(
             "{omega}{:.1} rad/s, {}, {}",
@@ -445,6 +434,57 @@ pub fn progress_message(p: &Progress, omega: &str) -> String {
             plural(p.bifurcations, "bifurcation", "bifurcations")
         )
     }
+}
+
+/// The run's located bifurcations with their truncation verdicts (`/truncation`): those
+/// that hold or moved as results; those that vanished at a higher order, and the unlocated
+/// changes of stability with theirs, apart.
+fn truncation_summary(
+    report: &crate::sweep::SweepReport,
+    out: &mut dyn std::io::Write,
+) -> anyhow::Result<()> {
+    let mut vanished = Vec::new();
+    for (w, kind, check) in report.checked_bifurcations() {
+        let line = located_line(kind, w);
+        match check {
+            Some(c) if c.verdict().vanished() => {
+                vanished.push(format!("{line}: {}", c.verdict_text()))
+            }
+            Some(c) => writeln!(out, "  {line}; {}", c.verdict_text())?,
+            None => writeln!(out, "  {line}")?,
+        }
+    }
+    if let Some(first) = report.truncation.first() {
+        let orders: Vec<String> = first.orders.iter().map(|(k, _)| k.to_string()).collect();
+        writeln!(
+            out,
+            "  truncation check: orders {} within ±{} rad/s, {:.1} s (--no-verify skips it)",
+            orders.join(", "),
+            first.window_rad_s,
+            report.verify_seconds
+        )?;
+    }
+    if !vanished.is_empty() {
+        writeln!(
+            out,
+            "  not results of the model: located at order {} but gone at a higher order",
+            report.truncation[0].recorded_order
+        )?;
+        for v in vanished {
+            writeln!(out, "    {v}")?;
+        }
+    }
+    for c in report.truncation.iter().filter(|c| c.kind.is_none()) {
+        writeln!(
+            out,
+            "  change of stability between points {} and {} (ω ≈ {:.3} rad/s, not located): {}",
+            c.after_point,
+            c.after_point + 1,
+            c.omega_rad_s,
+            c.verdict_text()
+        )?;
+    }
+    Ok(())
 }
 
 /// A located bifurcation's line of the summary: its label (the kind, with the details of

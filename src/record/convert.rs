@@ -15,6 +15,7 @@ use super::pb::tmrotor::v1 as pb;
 use super::types::{
     BearingInfo, BearingLoad, BifurcationRecord, BranchRecord, ClearanceVariation, DynamicNode,
     FloquetCounts, NodeOrbit, PointRecord, RunInfo, TemperatureStats, ThermalForces, ThermalNode,
+    TruncationCheck, TruncationOutcome, TruncationVerdict,
 };
 use crate::hb::Ratio;
 use crate::stability::BifurcationKind;
@@ -829,6 +830,85 @@ pub fn scene_to_pb(
         deletions: Vec::new(),
         entities,
     }
+}
+
+/// The `/truncation` message.
+pub fn truncation_check_to_pb(c: &TruncationCheck) -> pb::TruncationCheck {
+    let orders = c
+        .orders
+        .iter()
+        .map(|(order, o)| pb::OrderCheck {
+            order: *order,
+            outcome: match o {
+                TruncationOutcome::Converged { .. } => pb::TruncationOutcome::Converged,
+                TruncationOutcome::Moved { .. } => pb::TruncationOutcome::Moved,
+                TruncationOutcome::Vanished => pb::TruncationOutcome::Vanished,
+                TruncationOutcome::Failed(_) => pb::TruncationOutcome::Failed,
+            } as i32,
+            omega_rad_s: o.omega().unwrap_or(0.0),
+            reason: match o {
+                TruncationOutcome::Failed(e) => e.clone(),
+                _ => String::new(),
+            },
+        })
+        .collect();
+    pb::TruncationCheck {
+        number: c.number,
+        located: c.kind.is_some(),
+        r#type: bifurcation_to_pb(c.kind) as i32,
+        omega_rad_s: c.omega_rad_s,
+        after_point: c.after_point,
+        recorded_order: c.recorded_order,
+        window_rad_s: c.window_rad_s,
+        tolerance_rad_s: c.tolerance_rad_s,
+        orders,
+        verdict: match c.verdict() {
+            TruncationVerdict::Holds => pb::TruncationVerdict::Holds,
+            TruncationVerdict::Moved { .. } => pb::TruncationVerdict::Moved,
+            TruncationVerdict::Vanished { .. } => pb::TruncationVerdict::Vanished,
+            TruncationVerdict::Unsettled { .. } => pb::TruncationVerdict::Unsettled,
+            TruncationVerdict::Unchecked => pb::TruncationVerdict::Unchecked,
+        } as i32,
+    }
+}
+
+/// Back from `/truncation` (the verdict is derived again from the orders).
+pub fn truncation_check_from_pb(m: &pb::TruncationCheck) -> Result<TruncationCheck, String> {
+    let kind = bifurcation_from_pb(m.r#type)?;
+    if m.located != kind.is_some() {
+        return Err(format!(
+            "truncation check {}: `located` {} disagrees with its type",
+            m.number, m.located
+        ));
+    }
+    let orders = m
+        .orders
+        .iter()
+        .map(|o| {
+            let outcome = match pb::TruncationOutcome::try_from(o.outcome) {
+                Ok(pb::TruncationOutcome::Converged) => TruncationOutcome::Converged {
+                    omega_rad_s: o.omega_rad_s,
+                },
+                Ok(pb::TruncationOutcome::Moved) => TruncationOutcome::Moved {
+                    omega_rad_s: o.omega_rad_s,
+                },
+                Ok(pb::TruncationOutcome::Vanished) => TruncationOutcome::Vanished,
+                Ok(pb::TruncationOutcome::Failed) => TruncationOutcome::Failed(o.reason.clone()),
+                _ => return Err(format!("unknown truncation outcome {}", o.outcome)),
+            };
+            Ok((o.order, outcome))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    Ok(TruncationCheck {
+        number: m.number,
+        kind,
+        omega_rad_s: m.omega_rad_s,
+        after_point: m.after_point,
+        recorded_order: m.recorded_order,
+        window_rad_s: m.window_rad_s,
+        tolerance_rad_s: m.tolerance_rad_s,
+        orders,
+    })
 }
 
 #[cfg(test)]

@@ -47,7 +47,9 @@ use super::pb::foxglove::log::Level;
 use super::schema::{self, Topic, names};
 use super::sink::{Sink, SinkChecks};
 use super::transient::{Revolution, Samples, TransientInfo, TransientSink, time_ns};
-use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
+use super::types::{
+    BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus, TruncationCheck,
+};
 
 /// One millisecond in nanoseconds: the step of the branch clock.
 pub const CLOCK_STEP_NS: u64 = 1_000_000;
@@ -493,6 +495,33 @@ impl Sink for McapSink {
         let log = named_log_to_pb(t, Level::Warning, text, AUDIT_LOG_NAME);
         self.publish(schema::TOPIC_LOG, t, &log)?;
         self.warnings += 1;
+        self.flush()
+    }
+
+    fn write_truncation_check(&mut self, c: &TruncationCheck) -> Result<(), RecordError> {
+        if self.checks.is_finished() {
+            return Err(RecordError::Finished);
+        }
+        let t = bifurcation_time_ns(c.after_point);
+        self.publish(
+            schema::TOPIC_TRUNCATION,
+            t,
+            &super::convert::truncation_check_to_pb(c),
+        )?;
+        let text = format!(
+            "{} at ω = {:.4} rad/s (between points {} and {}), at higher truncation orders: {}",
+            c.what(),
+            c.omega_rad_s,
+            c.after_point,
+            c.after_point.saturating_add(1),
+            c.verdict_text()
+        );
+        let level = if c.verdict().vanished() {
+            Level::Warning
+        } else {
+            Level::Info
+        };
+        self.publish(schema::TOPIC_LOG, t, &log_to_pb(t, level, &text))?;
         self.flush()
     }
 }

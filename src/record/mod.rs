@@ -53,7 +53,10 @@ pub use mcap_sink::{McapOptions, McapSink};
 pub use reader::{ReadError, ReadOptions, Recording, read_recording, read_recording_with};
 pub use sink::{MemorySink, Sink, install_interrupt_flag, record_run};
 pub use transient::{MemoryTransient, TransientSink};
-pub use types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
+pub use types::{
+    BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus, TruncationCheck,
+    TruncationOutcome, TruncationVerdict,
+};
 
 /// Errors writing a recording.
 #[derive(Debug, Error)]

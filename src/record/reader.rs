@@ -24,7 +24,9 @@ use super::pb::tmrotor::v1 as pb;
 use super::scan;
 use super::schema::{self, names};
 use super::transient::{Revolution, Samples, TransientInfo};
-use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
+use super::types::{
+    BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus, TruncationCheck,
+};
 
 /// Errors reading a recording. Every variant names the file.
 #[derive(Debug, Error)]
@@ -81,6 +83,10 @@ pub struct Recording {
     pub attachments: Vec<String>,
     /// The records of a transient run (`tmrotor transient`); `None` for a sweep.
     pub transient: Option<TransientRecords>,
+    /// The run's events re-solved at higher truncation orders (`/truncation`), in order;
+    /// empty when the sweep did not check them (recordings of earlier versions, checks
+    /// turned off, nothing located).
+    pub truncation: Vec<TruncationCheck>,
 }
 
 /// The records of a transient run read back, in time order.
@@ -119,13 +125,35 @@ impl Recording {
         }
     }
 
+    /// The truncation check of located bifurcation `b` of the run's branch
+    /// (`/truncation`), if the sweep made one.
+    pub fn truncation_of(&self, b: &BifurcationRecord) -> Option<&TruncationCheck> {
+        if b.branch != 0 {
+            return None;
+        }
+        self.truncation
+            .iter()
+            .find(|c| c.kind == Some(b.kind) && c.number == b.number)
+    }
+
+    /// Whether located bifurcation `b` vanished at a higher truncation order: an artefact
+    /// of the truncation, not a result of the model.
+    pub fn vanished(&self, b: &BifurcationRecord) -> bool {
+        self.truncation_of(b)
+            .is_some_and(|c| c.verdict().vanished())
+    }
+
     /// The recording with the run's own branch only (branch 0): the points and located
-    /// bifurcations of switched branches left out. The campaign's figures, maps and the
-    /// reproduction report read runs this way: their statements are about the branch the
-    /// sweep followed in ω.
+    /// bifurcations of switched branches left out, and the bifurcations that vanished at a
+    /// higher truncation order ([`Self::vanished`]). The campaign's figures, maps and the
+    /// reproduction report read runs this way: their statements are about the results on
+    /// the branch the sweep followed in ω.
     pub fn own_branch(mut self) -> Self {
         self.points.retain(|p| p.branch == 0);
-        self.bifurcations.retain(|b| b.branch == 0);
+        let vanished: Vec<bool> = self.bifurcations.iter().map(|b| self.vanished(b)).collect();
+        let mut keep = vanished.iter().map(|v| !v);
+        self.bifurcations
+            .retain(|b| keep.next().unwrap_or(true) && b.branch == 0);
         self.branches.clear();
         self
     }
@@ -221,6 +249,7 @@ struct Collected {
     parts: BTreeMap<u64, PointParts>,
     bifs: Vec<pb::Bifurcation>,
     branches: Vec<pb::BranchInfo>,
+    truncation: Vec<pb::TruncationCheck>,
     warnings: Vec<String>,
     /// Messages that did not decode: topic and reason.
     undecodable: Vec<String>,
@@ -254,6 +283,13 @@ impl Collected {
         if topic.starts_with("/transient/") {
             if let Err(reason) = self.transient_message(&topic, data) {
                 self.undecodable.push(format!("{topic}: {reason}"));
+            }
+            return;
+        }
+        if topic == schema::TOPIC_TRUNCATION.name {
+            match decode(data) {
+                Ok(m) => self.truncation.push(m),
+                Err(reason) => self.undecodable.push(format!("{topic}: {reason}")),
             }
             return;
         }
@@ -536,6 +572,13 @@ fn read_from<R: std::io::Read + std::io::Seek>(
             Err(reason) => notes.push(format!("a /bifurcations message is unreadable: {reason}")),
         }
     }
+    let mut truncation = Vec::with_capacity(c.truncation.len());
+    for m in &c.truncation {
+        match super::convert::truncation_check_from_pb(m) {
+            Ok(t) => truncation.push(t),
+            Err(reason) => notes.push(format!("a /truncation message is unreadable: {reason}")),
+        }
+    }
 
     // Points are numbered 0, 1, … along the branch: a gap is a lost point.
     let present: std::collections::BTreeSet<u64> = points.iter().map(|p| p.index).collect();
@@ -635,6 +678,7 @@ fn read_from<R: std::io::Read + std::io::Seek>(
         metadata: c.metadata,
         attachments: c.attachments.into_iter().map(|(n, _)| n).collect(),
         transient,
+        truncation,
     })
 }
 

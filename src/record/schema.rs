@@ -51,6 +51,10 @@ pub const THERMAL_FORCES: SchemaEntry = schema!(
 pub const FLOQUET: SchemaEntry = schema!("tmrotor.v1.Floquet", "tmrotor/v1/floquet.proto");
 pub const BIFURCATION: SchemaEntry =
     schema!("tmrotor.v1.Bifurcation", "tmrotor/v1/bifurcation.proto");
+pub const TRUNCATION_CHECK: SchemaEntry = schema!(
+    "tmrotor.v1.TruncationCheck",
+    "tmrotor/v1/truncation_check.proto"
+);
 pub const BRANCH_INFO: SchemaEntry =
     schema!("tmrotor.v1.BranchInfo", "tmrotor/v1/branch_info.proto");
 pub const MAP_INFO: SchemaEntry = schema!("tmrotor.v1.MapInfo", "tmrotor/v1/operating_map.proto");
@@ -67,7 +71,7 @@ pub const SCENE_UPDATE: SchemaEntry = schema!("foxglove.SceneUpdate", "foxglove/
 pub const LOG: SchemaEntry = schema!("foxglove.Log", "foxglove/Log.proto");
 
 /// Every schema a recording or an operating map may contain.
-pub const ALL_SCHEMAS: [SchemaEntry; 20] = [
+pub const ALL_SCHEMAS: [SchemaEntry; 21] = [
     RUN_INFO,
     POINT_SUMMARY,
     HARMONICS,
@@ -88,6 +92,7 @@ pub const ALL_SCHEMAS: [SchemaEntry; 20] = [
     TRANSIENT_INFO,
     REVOLUTION,
     SAMPLES,
+    TRUNCATION_CHECK,
 ];
 
 /// A topic of a recording: name, message type, meaning (see `schemas/README.md`).
@@ -148,6 +153,11 @@ pub const TOPIC_BIFURCATIONS: Topic = Topic {
     schema: BIFURCATION,
     meaning: "located bifurcation points",
 };
+pub const TOPIC_TRUNCATION: Topic = Topic {
+    name: "/truncation",
+    schema: TRUNCATION_CHECK,
+    meaning: "each located bifurcation and unlocated change of stability re-solved at higher truncation orders: converged, moved or vanished",
+};
 pub const TOPIC_BRANCHES: Topic = Topic {
     name: "/branches",
     schema: BRANCH_INFO,
@@ -165,7 +175,7 @@ pub const TOPIC_LOG: Topic = Topic {
 };
 
 /// All topics, in the order they are registered.
-pub const ALL_TOPICS: [Topic; 13] = [
+pub const ALL_TOPICS: [Topic; 14] = [
     TOPIC_RUN_INFO,
     TOPIC_SUMMARY,
     TOPIC_HARMONICS,
@@ -176,6 +186,7 @@ pub const ALL_TOPICS: [Topic; 13] = [
     TOPIC_THERMAL_FORCES,
     TOPIC_FLOQUET,
     TOPIC_BIFURCATIONS,
+    TOPIC_TRUNCATION,
     TOPIC_BRANCHES,
     TOPIC_SCENE,
     TOPIC_LOG,

@@ -7,7 +7,9 @@ use std::sync::{Arc, OnceLock};
 
 use super::RecordError;
 use super::convert::{validate_point, validate_run};
-use super::types::{BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus};
+use super::types::{
+    BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus, TruncationCheck,
+};
 
 /// Where the points of a continuation run go.
 ///
@@ -33,6 +35,12 @@ pub trait Sink {
         let _ = (after_point, text);
         Ok(())
     }
+    /// Writes the check of one event of the run's branch at higher truncation orders
+    /// (after the branch, before [`Sink::finish`]). Default: dropped.
+    fn write_truncation_check(&mut self, check: &TruncationCheck) -> Result<(), RecordError> {
+        let _ = check;
+        Ok(())
+    }
 }
 
 macro_rules! forward_sink {
@@ -55,6 +63,9 @@ macro_rules! forward_sink {
             }
             fn write_note(&mut self, after_point: u64, text: &str) -> Result<(), RecordError> {
                 (**self).write_note(after_point, text)
+            }
+            fn write_truncation_check(&mut self, c: &TruncationCheck) -> Result<(), RecordError> {
+                (**self).write_truncation_check(c)
             }
         }
     )*};
@@ -214,6 +225,8 @@ pub struct MemorySink {
     pub status: Option<RunStatus>,
     /// Warnings written with [`Sink::write_note`]: (after point, text).
     pub notes: Vec<(u64, String)>,
+    /// Checks written with [`Sink::write_truncation_check`].
+    pub truncation: Vec<TruncationCheck>,
 }
 
 impl MemorySink {
@@ -255,6 +268,14 @@ impl Sink for MemorySink {
 
     fn write_note(&mut self, after_point: u64, text: &str) -> Result<(), RecordError> {
         self.notes.push((after_point, text.to_string()));
+        Ok(())
+    }
+
+    fn write_truncation_check(&mut self, check: &TruncationCheck) -> Result<(), RecordError> {
+        if self.checks.is_finished() {
+            return Err(RecordError::Finished);
+        }
+        self.truncation.push(check.clone());
         Ok(())
     }
 }

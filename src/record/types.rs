@@ -343,3 +343,261 @@ impl RunStatus {
         }
     }
 }
+
+/// What became of an event (a located bifurcation or an unlocated change of stability) at
+/// one higher truncation order ([`TruncationCheck`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum TruncationOutcome {
+    /// Found again within the tolerance, at this ω (rad/s).
+    Converged { omega_rad_s: f64 },
+    /// Found in the window, farther than the tolerance, at this ω (rad/s).
+    Moved { omega_rad_s: f64 },
+    /// Nothing of that kind in the window.
+    Vanished,
+    /// The window could not be followed at that order, or was not reached (why).
+    Failed(String),
+}
+
+impl TruncationOutcome {
+    /// Short label: `converged`, `moved`, `vanished`, `failed`.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Self::Converged { .. } => "converged",
+            Self::Moved { .. } => "moved",
+            Self::Vanished => "vanished",
+            Self::Failed(_) => "failed",
+        }
+    }
+
+    /// The label with where it was found (ω to `decimals` places) or why it failed:
+    /// `converged (521.7483)`, `vanished`, `failed: …`.
+    pub fn describe(&self, decimals: usize) -> String {
+        match self {
+            Self::Converged { omega_rad_s } | Self::Moved { omega_rad_s } => {
+                format!("{} ({omega_rad_s:.decimals$})", self.label())
+            }
+            Self::Vanished => self.label().to_string(),
+            Self::Failed(e) => format!("failed: {e}"),
+        }
+    }
+
+    /// ω where it was found, if it was.
+    pub fn omega(&self) -> Option<f64> {
+        match self {
+            Self::Converged { omega_rad_s } | Self::Moved { omega_rad_s } => Some(*omega_rad_s),
+            _ => None,
+        }
+    }
+}
+
+/// The verdict over all orders checked ([`TruncationCheck::verdict`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TruncationVerdict {
+    /// Converged at every order that could be followed.
+    Holds,
+    /// Found at the highest order followed (`order`, at `omega_rad_s`), farther than the
+    /// tolerance at one order or more.
+    Moved { order: u32, omega_rad_s: f64 },
+    /// Found at no order followed (the lowest of them `order`): an artefact of the
+    /// truncation, not a result of the model.
+    Vanished { order: u32 },
+    /// Found at some orders and not at others, the highest followed (`order`) among the
+    /// latter: the check cannot tell (a fold pair or a crossing narrower than the
+    /// window's step is passed over unseen); presented as a result, flagged.
+    Unsettled { order: u32 },
+    /// No order could be followed.
+    Unchecked,
+}
+
+impl TruncationVerdict {
+    /// Short label: `holds`, `moved`, `vanished`, `unchecked`.
+    pub fn label(&self) -> &'static str {
+        match self {
+            Self::Holds => "holds",
+            Self::Moved { .. } => "moved",
+            Self::Vanished { .. } => "vanished",
+            Self::Unsettled { .. } => "unsettled",
+            Self::Unchecked => "unchecked",
+        }
+    }
+
+    /// True for [`Self::Vanished`]: the event is not presented as a result.
+    pub fn vanished(&self) -> bool {
+        matches!(self, Self::Vanished { .. })
+    }
+}
+
+/// A located bifurcation of the run's branch (`kind` set), or a change of stability the
+/// sweep could not locate (`kind` `None`), re-solved at higher truncation orders
+/// (topic `/truncation`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct TruncationCheck {
+    /// Its number on `/bifurcations` (meaningless for an unlocated change).
+    pub number: u32,
+    /// The bifurcation's kind; `None` for an unlocated change of stability.
+    pub kind: Option<BifurcationKind>,
+    /// Where the sweep put it (the middle of the step for an unlocated change), rad/s.
+    pub omega_rad_s: f64,
+    /// The branch point just before it.
+    pub after_point: u64,
+    /// The run's truncation order.
+    pub recorded_order: u32,
+    /// Half-width of the window re-solved at each order, rad/s.
+    pub window_rad_s: f64,
+    /// Found again within this distance: converged, rad/s.
+    pub tolerance_rad_s: f64,
+    /// `(order, outcome)` per order checked.
+    pub orders: Vec<(u32, TruncationOutcome)>,
+}
+
+impl TruncationCheck {
+    /// The verdict over the orders that could be followed: vanished when found at none,
+    /// unsettled when found at some but not at the highest, holds when converged at every
+    /// one, moved otherwise; unchecked when none could be followed.
+    pub fn verdict(&self) -> TruncationVerdict {
+        let followed: Vec<&(u32, TruncationOutcome)> = self
+            .orders
+            .iter()
+            .filter(|(_, o)| !matches!(o, TruncationOutcome::Failed(_)))
+            .collect();
+        let Some(&&(order, ref last)) = followed.iter().max_by_key(|(k, _)| *k) else {
+            return TruncationVerdict::Unchecked;
+        };
+        let gone = |o: &TruncationOutcome| matches!(o, TruncationOutcome::Vanished);
+        match last {
+            _ if followed.iter().all(|(_, o)| gone(o)) => TruncationVerdict::Vanished {
+                order: followed.iter().map(|(k, _)| *k).min().unwrap_or(order),
+            },
+            TruncationOutcome::Vanished => TruncationVerdict::Unsettled { order },
+            _ if followed
+                .iter()
+                .all(|(_, o)| matches!(o, TruncationOutcome::Converged { .. })) =>
+            {
+                TruncationVerdict::Holds
+            }
+            o => TruncationVerdict::Moved {
+                order,
+                omega_rad_s: o.omega().unwrap_or(self.omega_rad_s),
+            },
+        }
+    }
+
+    /// What it is, for people: `saddle-node`, …, or `change of stability`.
+    pub fn what(&self) -> &'static str {
+        self.kind.map_or("change of stability", |k| k.label())
+    }
+
+    /// One line on the verdict: `holds at orders 4, 5`, `moved to 521.6737 rad/s at order
+    /// 5`, `vanished at order 5 (an artefact of the truncation)`, `unchecked (…)`.
+    pub fn verdict_text(&self) -> String {
+        let orders: Vec<String> = self.orders.iter().map(|(k, _)| k.to_string()).collect();
+        match self.verdict() {
+            TruncationVerdict::Holds => format!(
+                "holds at order{} {}",
+                if orders.len() == 1 { "" } else { "s" },
+                orders.join(", ")
+            ),
+            TruncationVerdict::Moved { order, omega_rad_s } => {
+                format!("moved to {omega_rad_s:.4} rad/s at order {order}")
+            }
+            TruncationVerdict::Vanished { .. } => {
+                let at: Vec<String> = self
+                    .orders
+                    .iter()
+                    .filter(|(_, o)| matches!(o, TruncationOutcome::Vanished))
+                    .map(|(k, _)| k.to_string())
+                    .collect();
+                format!(
+                    "vanished at order{} {} (an artefact of the truncation)",
+                    if at.len() == 1 { "" } else { "s" },
+                    at.join(", ")
+                )
+            }
+            TruncationVerdict::Unsettled { order } => {
+                let found: Vec<String> = self
+                    .orders
+                    .iter()
+                    .filter(|(_, o)| o.omega().is_some())
+                    .map(|(k, _)| k.to_string())
+                    .collect();
+                format!(
+                    "unsettled: found at order {}, not at order {order} (a narrower step or \
+                     `replay verify --orders` decides)",
+                    found.join(", ")
+                )
+            }
+            TruncationVerdict::Unchecked => {
+                let why: Vec<String> = self
+                    .orders
+                    .iter()
+                    .filter_map(|(k, o)| match o {
+                        TruncationOutcome::Failed(e) => Some(format!("order {k}: {e}")),
+                        _ => None,
+                    })
+                    .collect();
+                format!("unchecked ({})", why.join("; "))
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(orders: Vec<(u32, TruncationOutcome)>) -> TruncationCheck {
+        TruncationCheck {
+            number: 0,
+            kind: Some(BifurcationKind::SaddleNode),
+            omega_rad_s: 500.0,
+            after_point: 3,
+            recorded_order: 3,
+            window_rad_s: 1.0,
+            tolerance_rad_s: 0.05,
+            orders,
+        }
+    }
+
+    #[test]
+    fn the_verdict_weighs_every_order_followed() {
+        use TruncationOutcome::*;
+        let at = |w| Converged { omega_rad_s: w };
+        let moved = |w| Moved { omega_rad_s: w };
+        let fail = || Failed("no start".into());
+        assert_eq!(
+            check(vec![(4, at(500.01)), (5, at(500.02))]).verdict(),
+            TruncationVerdict::Holds
+        );
+        assert_eq!(
+            check(vec![(4, at(500.01)), (5, moved(500.3))]).verdict(),
+            TruncationVerdict::Moved {
+                order: 5,
+                omega_rad_s: 500.3
+            }
+        );
+        assert_eq!(
+            check(vec![(4, Vanished), (5, Vanished)]).verdict(),
+            TruncationVerdict::Vanished { order: 4 }
+        );
+        // found at one order and not at the highest: the check cannot tell
+        assert_eq!(
+            check(vec![(4, at(500.0)), (5, Vanished)]).verdict(),
+            TruncationVerdict::Unsettled { order: 5 }
+        );
+        // an order that could not be followed does not count
+        assert_eq!(
+            check(vec![(4, Vanished), (5, fail())]).verdict(),
+            TruncationVerdict::Vanished { order: 4 }
+        );
+        assert_eq!(
+            check(vec![(4, fail()), (5, fail())]).verdict(),
+            TruncationVerdict::Unchecked
+        );
+        assert!(check(vec![(4, Vanished)]).verdict().vanished());
+        assert!(
+            check(vec![(4, Vanished), (5, Vanished)])
+                .verdict_text()
+                .contains("vanished at orders 4, 5")
+        );
+    }
+}

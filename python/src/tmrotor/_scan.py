@@ -32,6 +32,7 @@ TOPIC_RUN_INFO = "/run_info"
 TOPIC_SUMMARY = "/summary"
 TOPIC_BIFURCATIONS = "/bifurcations"
 TOPIC_BRANCHES = "/branches"
+TOPIC_TRUNCATION = "/truncation"
 TOPIC_LOG = "/log"
 TOPIC_TRANSIENT_INFO = "/transient/info"
 TOPIC_REVOLUTIONS = "/transient/revolution"
@@ -117,6 +118,8 @@ class Scan:
     #: point index -> topic -> decoded message
     points: dict[int, dict[str, Any]] = field(default_factory=dict)
     bifurcations: list[Any] = field(default_factory=list)
+    #: /truncation messages: the run's events re-solved at higher truncation orders
+    truncation: list[Any] = field(default_factory=list)
     #: /branches messages: the branches beside the run's own, in order
     branches: list[Any] = field(default_factory=list)
     log: list[LogEntry] = field(default_factory=list)
@@ -248,6 +251,8 @@ def _file_message(out: Scan, topic: str, msg: Any, log_time: int, file: str) -> 
         out.points.setdefault(int(msg.index), {})[topic] = msg
     elif topic == TOPIC_BIFURCATIONS:
         out.bifurcations.append(msg)
+    elif topic == TOPIC_TRUNCATION:
+        out.truncation.append(msg)
     elif topic == TOPIC_TRANSIENT_INFO:
         out.transient_info = msg
     elif topic == TOPIC_REVOLUTIONS:

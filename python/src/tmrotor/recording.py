@@ -54,6 +54,8 @@ TABLES = (
 
 _BIFURCATION_KEYS = {1: "saddle_node", 2: "period_doubling", 3: "neimark_sacker"}
 _STABILITY = {1: True, 2: False}  # 0 = not assessed
+_TRUNCATION_OUTCOMES = {1: "converged", 2: "moved", 3: "vanished", 4: "failed"}
+_TRUNCATION_VERDICTS = {1: "holds", 2: "moved", 3: "vanished", 4: "unchecked", 5: "unsettled"}
 
 
 def node_key(node_id: int) -> str:
@@ -617,6 +619,45 @@ class Recording:
         """Long form, one row per slow (thermal) Floquet exponent: ``index``,
         ``omega_rad_s``, ``k``, ``re_per_s``, ``im_per_s``."""
         return self._long("slow_exponents", ("re_per_s", "im_per_s"), modulus=False)
+
+    @cached_property
+    def truncation(self) -> pd.DataFrame:
+        """The run's located bifurcations and unlocated changes of stability re-solved at
+        higher truncation orders after the sweep (``/truncation``): one row per event and
+        order checked, columns ``number`` (as in :attr:`bifurcations`), ``located``
+        (False for a change of stability the sweep did not locate), ``type`` (None for
+        those), ``omega_rad_s`` (where the sweep put it), ``after_point``,
+        ``recorded_order``, ``order``, ``outcome`` (``converged``, ``moved``,
+        ``vanished``, ``failed``), ``found_omega_rad_s`` (NaN unless found), ``reason``
+        (why it failed) and ``verdict`` over all orders (``holds``, ``moved``,
+        ``vanished``: found at no higher order, an artefact of the truncation, not a result;
+        ``unsettled``: found at some orders, not at the highest; ``unchecked``). Empty
+        when the sweep made no check."""
+        rows: list[dict[str, Any]] = []
+        for c in self._scan.truncation:
+            for o in c.orders:
+                rows.append(
+                    {
+                        "number": int(c.number),
+                        "located": bool(c.located),
+                        "type": _BIFURCATION_KEYS.get(int(c.type)),
+                        "omega_rad_s": float(c.omega_rad_s),
+                        "after_point": int(c.after_point),
+                        "recorded_order": int(c.recorded_order),
+                        "order": int(o.order),
+                        "outcome": _TRUNCATION_OUTCOMES.get(int(o.outcome), "unknown"),
+                        "found_omega_rad_s": float(o.omega_rad_s)
+                        if int(o.outcome) in (1, 2)
+                        else np.nan,
+                        "reason": str(o.reason),
+                        "verdict": _TRUNCATION_VERDICTS.get(int(c.verdict), "unknown"),
+                    }
+                )
+        columns = [
+            "number", "located", "type", "omega_rad_s", "after_point", "recorded_order",
+            "order", "outcome", "found_omega_rad_s", "reason", "verdict",
+        ]
+        return pd.DataFrame(rows, columns=columns)
 
     @cached_property
     def bifurcations(self) -> pd.DataFrame:

@@ -173,6 +173,23 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
                     .unwrap_or_default()
             )?;
         }
+        if let Some(c) = rec.truncation_of(b) {
+            writeln!(out, "     at higher truncation orders: {}", order_cells(c))?;
+        }
+    }
+    let unlocated: Vec<_> = rec.truncation.iter().filter(|c| c.kind.is_none()).collect();
+    if !unlocated.is_empty() {
+        writeln!(out, "unlocated changes of stability: {}", unlocated.len())?;
+        for c in unlocated {
+            writeln!(
+                out,
+                "  between points {} and {} (ω ≈ {:.4} rad/s), at higher truncation orders: {}",
+                c.after_point,
+                c.after_point + 1,
+                c.omega_rad_s,
+                order_cells(c)
+            )?;
+        }
     }
     if !rec.warnings.is_empty() {
         writeln!(out, "warnings:    {}", rec.warnings.len())?;
@@ -302,4 +319,14 @@ fn transient_info(
         )?;
     }
     Ok(())
+}
+
+/// `holds at orders 4, 5 (order 4 converged (521.7483), order 5 …)`.
+fn order_cells(c: &crate::record::TruncationCheck) -> String {
+    let cells: Vec<String> = c
+        .orders
+        .iter()
+        .map(|(k, o)| format!("order {k} {}", o.describe(4)))
+        .collect();
+    format!("{} ({})", c.verdict_text(), cells.join(", "))
 }

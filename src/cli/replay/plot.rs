@@ -158,8 +158,14 @@ fn branch_figure(
         BranchStyle::Colours,
     );
     series.extend(period_doubled_dots(rec, &y));
-    let markers = rec
+    // bifurcations that vanished at a higher truncation order are not results
+    let results: Vec<BifurcationRecord> = rec
         .bifurcations
+        .iter()
+        .filter(|b| !rec.vanished(b))
+        .cloned()
+        .collect();
+    let markers = results
         .iter()
         .filter_map(|b| {
             Some(Marker {
@@ -178,7 +184,7 @@ fn branch_figure(
     };
     let mut legend = Figure::legend_from_series(std::slice::from_ref(&chart));
     if !markers.is_empty() {
-        legend.extend(bifurcation_entry(&rec.bifurcations));
+        legend.extend(bifurcation_entry(&results));
     }
     Figure {
         title,
@@ -468,10 +474,15 @@ impl Plotter<'_> {
         };
         for b in &rec.bifurcations {
             let title = format!(
-                "{} at {}{}{}",
+                "{} at {}{}{}{}",
                 bifurcation_label(b),
                 omega_at(b.omega_rad_s),
                 if b.confirmed { "" } else { " (not confirmed)" },
+                if rec.vanished(b) {
+                    " (vanished at a higher order)"
+                } else {
+                    ""
+                },
                 b.modulation
                     .map(|m| format!(
                         ", {}{:.0} s",

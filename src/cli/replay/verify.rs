@@ -60,7 +60,7 @@ pub fn run(
             out,
             "  #{} {} at ω = {:.4} rad/s: {}",
             u64::from(v.number) + 1,
-            v.kind.label(),
+            v.what(),
             v.omega_rad_s,
             cells.join("; ")
         )?;
