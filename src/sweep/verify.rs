@@ -127,23 +127,32 @@ impl Window<'_> {
             )
             .map_err(|e| e.to_string())
             .and_then(|mut c| c.run(|_| {}).map_err(|e| e.to_string()))?;
-        // the folds also from the branch's shape: where ω turns back between points (a
-        // fold the location did not report still turns the branch)
-        let turns = branch.points.windows(3).filter_map(|q| {
-            let (a, b, c) = (
-                q[0].solution.omega,
-                q[1].solution.omega,
-                q[2].solution.omega,
-            );
-            ((b - a) * (c - b) < 0.0).then_some((BifurcationKind::SaddleNode, b))
-        });
+        // the folds also from the branch's shape: where ω turns back between points with
+        // no fold located on those steps (a fold the location did not report still turns
+        // the branch)
+        let located: Vec<(BifurcationKind, f64)> = branch
+            .bifurcations
+            .iter()
+            .filter_map(|b| b.bifurcation.map(|k| (k, b.solution.omega)))
+            .collect();
+        let turns: Vec<(BifurcationKind, f64)> = branch
+            .points
+            .windows(3)
+            .filter_map(|q| {
+                let (a, b, c) = (
+                    q[0].solution.omega,
+                    q[1].solution.omega,
+                    q[2].solution.omega,
+                );
+                let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+                let seen = located
+                    .iter()
+                    .any(|&(k, w)| k == BifurcationKind::SaddleNode && w >= lo && w <= hi);
+                ((b - a) * (c - b) < 0.0 && !seen).then_some((BifurcationKind::SaddleNode, b))
+            })
+            .collect();
         Ok(Found {
-            bifurcations: branch
-                .bifurcations
-                .iter()
-                .filter_map(|b| b.bifurcation.map(|k| (k, b.solution.omega)))
-                .chain(turns)
-                .collect(),
+            bifurcations: located.into_iter().chain(turns).collect(),
             changes: branch
                 .points
                 .windows(2)
