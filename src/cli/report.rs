@@ -102,7 +102,7 @@ fn verdicts(dir: &std::path::Path, resolve: bool) -> anyhow::Result<String> {
          ±1 rad/s from the recorded point before it (by the sweep after its branch, or \
          `replay verify`): converged when the same kind lies within 0.05 rad/s, moved when \
          farther in the window, vanished when none is there. A bifurcation that vanished at \
-         the highest order is not a result: the statements above leave it out.\n\n",
+         every higher order is not a result: the statements above leave it out.\n\n",
     );
     let heads: Vec<String> = orders_seen.iter().map(|k| format!("order {k}")).collect();
     s.push_str(&format!(
