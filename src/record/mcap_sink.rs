@@ -499,9 +499,7 @@ impl Sink for McapSink {
     }
 
     fn write_truncation_check(&mut self, c: &TruncationCheck) -> Result<(), RecordError> {
-        if self.checks.is_finished() {
-            return Err(RecordError::Finished);
-        }
+        self.checks.truncation_check()?;
         let t = bifurcation_time_ns(c.after_point);
         self.publish(
             schema::TOPIC_TRUNCATION,

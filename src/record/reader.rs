@@ -150,10 +150,11 @@ impl Recording {
     /// the branch the sweep followed in ω.
     pub fn own_branch(mut self) -> Self {
         self.points.retain(|p| p.branch == 0);
-        let vanished: Vec<bool> = self.bifurcations.iter().map(|b| self.vanished(b)).collect();
-        let mut keep = vanished.iter().map(|v| !v);
-        self.bifurcations
-            .retain(|b| keep.next().unwrap_or(true) && b.branch == 0);
+        let bifurcations = std::mem::take(&mut self.bifurcations);
+        self.bifurcations = bifurcations
+            .into_iter()
+            .filter(|b| b.branch == 0 && !self.vanished(b))
+            .collect();
         self.branches.clear();
         self
     }

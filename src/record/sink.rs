@@ -198,6 +198,18 @@ impl SinkChecks {
         Ok(())
     }
 
+    /// Checks a truncation check's place in the call order: after `begin`, before
+    /// `finish`.
+    pub fn truncation_check(&self) -> Result<(), RecordError> {
+        if self.finished {
+            return Err(RecordError::Finished);
+        }
+        self.run
+            .as_ref()
+            .map(|_| ())
+            .ok_or(RecordError::NotStarted("write_truncation_check"))
+    }
+
     /// Whether `finish` was called.
     pub fn is_finished(&self) -> bool {
         self.finished
@@ -272,9 +284,7 @@ impl Sink for MemorySink {
     }
 
     fn write_truncation_check(&mut self, check: &TruncationCheck) -> Result<(), RecordError> {
-        if self.checks.is_finished() {
-            return Err(RecordError::Finished);
-        }
+        self.checks.truncation_check()?;
         self.truncation.push(check.clone());
         Ok(())
     }

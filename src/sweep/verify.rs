@@ -280,24 +280,25 @@ pub fn verify_events(
                 recorded_basis,
                 max_points: options.max_points,
             };
-            let mut found: Result<Found, String> = match start {
-                _ if interrupted() => Err("not reached: the sweep was interrupted".to_string()),
-                _ if started.elapsed().as_secs_f64() > options.max_seconds => Err(format!(
+            let mut found: Result<Found, String> = if interrupted() {
+                Err("not reached: the sweep was interrupted".to_string())
+            } else if started.elapsed().as_secs_f64() > options.max_seconds {
+                Err(format!(
                     "not reached within the check's budget of {} s (verify_max_seconds)",
                     options.max_seconds
-                )),
-                None => Err("no recorded point before the group".to_string()),
-                Some(p) => {
+                ))
+            } else {
+                if let Some(p) = start {
                     progress(&format!(
                         "order {order}: ω {:.3} → {:.3} rad/s from point {}",
                         p.omega_rad_s, end, p.index
                     ));
-                    window.follow(&problem, method.as_ref())
                 }
+                window.follow(&problem, method.as_ref())
             };
             // A fold pair or a crossing narrower than a step is passed over unseen: before
-            // an event is called vanished, the window is followed again with a quarter of
-            // the step.
+            // an event is called vanished, the window is followed again with
+            // 1/FINE_STEP_DIVISOR of the step.
             if let Ok(f) = &found
                 && match_events(g, events, f, options).contains(&TruncationOutcome::Vanished)
                 && !interrupted()
