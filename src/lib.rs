@@ -4,7 +4,17 @@
 //! harmonic balance with continuation in rotor speed and Floquet stability, recorded as
 //! protobuf messages in MCAP files.
 //!
-//! ## The pipeline
+//! This crate holds the applications: the `tmrotor` and `replay` command lines ([`cli`]),
+//! campaigns of sweeps ([`campaign`]), the truncation study ([`truncation`]), the
+//! reproduction report ([`report`]) and the figures ([`figure`]). They stand on two
+//! library crates, re-exported here under their module names:
+//!
+//! - `tmrotor-engine` (`crates/engine`): [`system`], [`hb`], [`continuation`],
+//!   [`stability`], [`integrate`], [`systems`] — harmonic balance, continuation and
+//!   Floquet stability for any periodically forced ODE system;
+//! - `tmrotor-rotor` (`crates/rotor`): [`model`], [`bearing`], [`thermal`], [`coupled`],
+//!   [`linear`], [`study`], [`sweep`], [`transient`], [`record`], [`derive`], [`input`] —
+//!   the rotor models, their sweeps and their recordings.
 //!
 //! ```text
 //! model file (TOML) ─► model: FE rotor + bearings + thermal network      [model], [bearing], [thermal], [coupled]
@@ -19,39 +29,17 @@
 //!                  sink ─► MCAP file (protobuf messages on topics)                  [record]
 //! ```
 //!
-//! The driver that runs one sweep from study settings into a sink is [`sweep`]; several
-//! sweeps in parallel with a manifest are a [`campaign`], whose runs
-//! [`campaign::figures`] overlays in PNG figures drawn with the helpers of [`figure`]
-//! (shared with `replay plot`); the comparison of truncation orders with the residual of
-//! the governing equations (Eq. 36) is [`truncation`], and the paper's findings against a
-//! campaign are the [`report`]. The binaries (`tmrotor`, see [`cli`], and `replay`) are
-//! thin layers over these.
-//!
-//! Linear analyses of the assembled rotor (modes, Campbell diagram) live in [`linear`];
-//! reference problems with known answers (Duffing, absorber, Jeffcott) in [`systems`];
-//! the time integrator used as an independent reference in [`integrate`].
+//! ARCHITECTURE.md in the repository maps the crates and the data's path.
 
-pub mod bearing;
+pub use tmrotor_rotor::{
+    bearing, continuation, coupled, derive, hb, input, integrate, linear, model, record, stability,
+    study, sweep, system, systems, thermal, transient,
+};
+
 pub mod campaign;
 pub mod cli;
-pub mod continuation;
-pub mod coupled;
-pub mod derive;
 pub mod figure;
-pub mod hb;
-pub mod input;
-pub mod integrate;
-pub mod linear;
-pub mod model;
-pub mod record;
 pub mod report;
-pub mod stability;
-pub mod study;
-pub mod sweep;
-pub mod system;
-pub mod systems;
-pub mod thermal;
-pub mod transient;
 pub mod truncation;
 
 /// Runs faer's dense kernels (LU, eigenvalues, matrix products through operators) on the

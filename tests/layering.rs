@@ -1,22 +1,26 @@
-//! The crate's layering (`ARCHITECTURE.md`): every `crate::module` path in a source file,
+//! The layering inside each crate (`ARCHITECTURE.md`). Between crates the compiler
+//! enforces it (the engine cannot name the rotor library, the rotor library cannot name
+//! the applications); inside a crate, every `crate::module` path in a source file,
 //! imports and doc links alike, names a module of a lower layer or of the file's own
 //! module. Unit-test modules (`#[cfg(test)]` to the end of the file) are exempt: a test may
-//! use a reference problem from anywhere.
+//! use a reference problem from anywhere. What cargo does not check either is checked
+//! here too: the library crates depend on no command-line, terminal, figure or allocator
+//! crate, and never print or exit the process.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Rank of each top-level module: a file may only name modules of a lower rank.
 const RANKS: &[(&str, u32)] = &[
-    // engine
+    // engine (crates/engine)
     ("system", 0),
     ("hb", 1),
     ("integrate", 1),
-    ("input", 0),
     ("stability", 2),
     ("systems", 3),
     ("continuation", 3),
-    // physics
+    // rotor library (crates/rotor): physics
+    ("input", 0),
     ("bearing", 10),
     ("model", 11),
     ("linear", 12),
@@ -28,7 +32,7 @@ const RANKS: &[(&str, u32)] = &[
     ("derive", 40),
     ("sweep", 50),
     ("transient", 50),
-    // applications
+    // applications (the root crate)
     ("figure", 60),
     ("campaign", 61),
     ("truncation", 61),
@@ -36,6 +40,17 @@ const RANKS: &[(&str, u32)] = &[
     // command line
     ("cli", 70),
 ];
+
+/// The `src` folders of the workspace's crates: the applications, the rotor library and
+/// the engine.
+fn crate_sources() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    vec![
+        root.join("src"),
+        root.join("crates/rotor/src"),
+        root.join("crates/engine/src"),
+    ]
+}
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     for entry in std::fs::read_dir(dir).expect("read src") {
@@ -87,37 +102,38 @@ fn crate_paths(text: &str) -> Vec<(usize, String)> {
 
 #[test]
 fn no_module_names_a_higher_layer() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
     let ranks: BTreeMap<&str, u32> = RANKS.iter().copied().collect();
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
     let mut violations = Vec::new();
-    for file in &files {
-        let Some(module) = module_of(&src, file) else {
-            continue;
-        };
-        let Some(&own) = ranks.get(module.as_str()) else {
-            violations.push(format!(
-                "{}: module `{module}` has no layer in tests/layering.rs (and ARCHITECTURE.md)",
-                file.display()
-            ));
-            continue;
-        };
-        let text = std::fs::read_to_string(file).expect("read source");
-        for (line, target) in crate_paths(&text) {
-            if target == module {
-                continue;
-            }
-            // crate-root items (functions in lib.rs) are not modules
-            let Some(&theirs) = ranks.get(target.as_str()) else {
+    for src in crate_sources() {
+        let mut files = Vec::new();
+        rust_files(&src, &mut files);
+        files.sort();
+        for file in &files {
+            let Some(module) = module_of(&src, file) else {
                 continue;
             };
-            if theirs >= own {
+            let Some(&own) = ranks.get(module.as_str()) else {
                 violations.push(format!(
+                    "{}: module `{module}` has no layer in tests/layering.rs (and ARCHITECTURE.md)",
+                    file.display()
+                ));
+                continue;
+            };
+            let text = std::fs::read_to_string(file).expect("read source");
+            for (line, target) in crate_paths(&text) {
+                if target == module {
+                    continue;
+                }
+                // crate-root items (functions in lib.rs) are not modules
+                let Some(&theirs) = ranks.get(target.as_str()) else {
+                    continue;
+                };
+                if theirs >= own {
+                    violations.push(format!(
                     "{}:{line}: `{module}` (layer {own}) names `crate::{target}` (layer {theirs})",
                     file.display()
                 ));
+                }
             }
         }
     }
@@ -130,18 +146,87 @@ fn no_module_names_a_higher_layer() {
 
 #[test]
 fn every_top_level_module_has_a_layer() {
-    let lib = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/lib.rs"))
-        .expect("read lib.rs");
     let ranks: BTreeMap<&str, u32> = RANKS.iter().copied().collect();
-    let mods: Vec<&str> = lib
-        .lines()
-        .filter_map(|l| l.strip_prefix("pub mod "))
-        .map(|l| l.trim_end_matches(';'))
-        .collect();
-    assert!(mods.len() >= 15, "found only {mods:?} in lib.rs");
-    for m in mods {
-        assert!(ranks.contains_key(m), "module {m} has no layer");
+    let mut all = Vec::new();
+    for src in crate_sources() {
+        let lib = std::fs::read_to_string(src.join("lib.rs")).expect("read lib.rs");
+        let mods: Vec<String> = lib
+            .lines()
+            .filter_map(|l| l.strip_prefix("pub mod "))
+            .map(|l| l.trim_end_matches(';').to_string())
+            .collect();
+        assert!(mods.len() >= 5, "found only {mods:?} in {}", src.display());
+        all.extend(mods);
     }
+    assert!(all.len() >= 20, "found only {all:?}");
+    for m in all {
+        assert!(ranks.contains_key(m.as_str()), "module {m} has no layer");
+    }
+}
+
+/// Crates the libraries must not depend on: command line, terminal, signals, figures,
+/// the allocator choice and error-reporting glue are the applications' business.
+const APPLICATION_CRATES: &[&str] = &[
+    "clap",
+    "indicatif",
+    "ctrlc",
+    "plotters",
+    "plotters-backend",
+    "png",
+    "mimalloc",
+    "libmimalloc-sys",
+    "anyhow",
+];
+
+#[test]
+fn the_libraries_have_no_application_dependencies() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for krate in ["crates/engine", "crates/rotor"] {
+        let manifest =
+            std::fs::read_to_string(root.join(krate).join("Cargo.toml")).expect("read manifest");
+        let doc: toml::Table = manifest.parse().expect("manifest is TOML");
+        for section in ["dependencies", "build-dependencies"] {
+            let Some(deps) = doc.get(section).and_then(|d| d.as_table()) else {
+                continue;
+            };
+            for name in deps.keys() {
+                assert!(
+                    !APPLICATION_CRATES.contains(&name.as_str()),
+                    "{krate}/Cargo.toml [{section}] names `{name}`, an application dependency"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_libraries_neither_print_nor_exit() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut found = Vec::new();
+    for krate in ["crates/engine/src", "crates/rotor/src"] {
+        let mut files = Vec::new();
+        rust_files(&root.join(krate), &mut files);
+        for file in files {
+            let text = std::fs::read_to_string(&file).expect("read source");
+            let body = match text.find("#[cfg(test)]\nmod tests") {
+                Some(i) => &text[..i],
+                None => &text,
+            };
+            for (n, line) in body.lines().enumerate() {
+                let code = line.split("//").next().unwrap_or("");
+                for bad in ["println!", "print!(", "process::exit", "ctrlc::"] {
+                    if code.contains(bad) {
+                        found.push(format!("{}:{}: {bad}", file.display(), n + 1));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "library code prints or exits:\n{}",
+        found.join("\n")
+    );
 }
 
 #[test]

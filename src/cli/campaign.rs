@@ -11,8 +11,8 @@ use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use crate::campaign;
 use crate::campaign::figures::{CampaignFigures, FigureOptions, plot_campaign};
+use crate::cli::interrupt::install_interrupt_flag;
 use crate::cli::sweep::progress_message;
-use crate::record::install_interrupt_flag;
 
 #[derive(Debug, Clone, Args)]
 pub struct CampaignArgs {

@@ -3,6 +3,7 @@
 
 pub mod campaign;
 pub mod campbell;
+pub mod interrupt;
 pub mod linear_figures;
 pub mod model;
 pub mod modes;

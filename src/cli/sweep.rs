@@ -8,8 +8,9 @@ use anyhow::Context;
 use clap::Args;
 use indicatif::ProgressBar;
 
+use crate::cli::interrupt::install_interrupt_flag;
 use crate::derive::PERIOD_DOUBLED_SHARE;
-use crate::record::{McapOptions, install_interrupt_flag};
+use crate::record::McapOptions;
 use crate::sweep::{Progress, StudySettings, SweepProblem};
 
 /// The study flags shared by `tmrotor sweep` and `tmrotor truncation`: model, study file,

@@ -11,10 +11,11 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use super::sweep::{StudyArgs, parse_range};
+use crate::cli::interrupt::install_interrupt_flag;
 use crate::derive::CoupledRederive;
 use crate::integrate::{SpeedProfile, ThermalStepping, TransientOptions};
 use crate::record::output::check_target;
-use crate::record::{McapOptions, install_interrupt_flag, read_recording};
+use crate::record::{McapOptions, read_recording};
 use crate::study::SweepProblem;
 use crate::system::System;
 use crate::transient::{StartState, TransientSettings, describe_profile, run_transient};

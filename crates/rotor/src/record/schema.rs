@@ -26,7 +26,7 @@ macro_rules! schema {
             proto_file: $file,
             descriptor_set: include_bytes!(concat!(
                 env!("CARGO_MANIFEST_DIR"),
-                "/schemas/",
+                "/../../schemas/",
                 $name,
                 ".binpb"
             )),

@@ -1,9 +1,7 @@
 //! The [`Sink`] trait the continuation writes to, an in-memory sink for tests, the
-//! checks every sink applies, and the helpers that make sure a run is always finished
-//! (on errors too) and that Ctrl-C can stop a sweep cleanly.
-
-use std::sync::atomic::AtomicBool;
-use std::sync::{Arc, OnceLock};
+//! checks every sink applies, and the helper that makes sure a run is always finished
+//! (on errors too). A run is stopped cleanly through the flag its driver polls; the
+//! applications set that flag from their Ctrl-C handler.
 
 use super::RecordError;
 use super::convert::{validate_point, validate_run};
@@ -313,44 +311,9 @@ where
     }
 }
 
-static INTERRUPT: OnceLock<Arc<AtomicBool>> = OnceLock::new();
-
-/// Installs (once per process) a Ctrl-C handler that sets the returned flag instead of
-/// killing the process. A sweep loop polls it (`flag.load(Ordering::Relaxed)`) between
-/// points, stops, and finishes its sink with [`RunStatus::Interrupted`]. A second Ctrl-C
-/// while the flag is already set exits the process at once (status 130).
-pub fn install_interrupt_flag() -> Result<Arc<AtomicBool>, RecordError> {
-    if let Some(flag) = INTERRUPT.get() {
-        return Ok(flag.clone());
-    }
-    let flag = Arc::new(AtomicBool::new(false));
-    let handler_flag = flag.clone();
-    ctrlc::set_handler(move || {
-        if handler_flag.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            // deliberate: a second interrupt stops at once, without waiting for the step
-            eprintln!(
-                "\nsecond interrupt: stopping at once; every point already written stays in \
-                 the in-progress recording (OUT.partial, without its closing status; replay \
-                 reads it, and the next sweep to the same output moves it aside)"
-            );
-            std::process::exit(130);
-        }
-    })
-    .map_err(|e| RecordError::CtrlC(e.to_string()))?;
-    Ok(INTERRUPT.get_or_init(|| flag).clone())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn interrupt_flag_is_installed_once_and_shared() {
-        let a = install_interrupt_flag().expect("handler");
-        let b = install_interrupt_flag().expect("same handler");
-        assert!(Arc::ptr_eq(&a, &b));
-        assert!(!a.load(std::sync::atomic::Ordering::Relaxed));
-    }
 
     #[test]
     fn status_labels_round_trip() {

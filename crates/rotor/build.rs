@@ -1,8 +1,8 @@
 //! Generates the protobuf message types of the recording layer from `proto/` with
 //! protox (a pure-Rust protobuf compiler, so no system `protoc` is needed) and
 //! prost-build. The generated code lands in `OUT_DIR` and is included by
-//! `src/record/pb.rs`. The compiled descriptor sets embedded in recordings live in
-//! `schemas/` and are checked against `proto/` by `tests/record_schemas.rs`.
+//! `src/record/pb.rs`. The compiled descriptor sets embedded in recordings live in the
+//! repository's `schemas/` and are checked against `proto/` by `tests/record_schemas.rs`.
 
 use std::path::{Path, PathBuf};
 
@@ -21,10 +21,11 @@ fn proto_files(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
-    println!("cargo:rerun-if-changed=proto");
+    let proto = Path::new("../../proto");
+    println!("cargo:rerun-if-changed=../../proto");
     let mut files = Vec::new();
-    proto_files(Path::new("proto"), &mut files)?;
-    let fds = protox::compile(&files, ["proto"])?;
+    proto_files(proto, &mut files)?;
+    let fds = protox::compile(&files, [proto])?;
     prost_build::Config::new().compile_fds(fds)?;
     Ok(())
 }

@@ -14,8 +14,8 @@
 //! Only this module uses `mcap` and `prost`.
 //!
 //! ```
-//! use tmrotor::record::synthetic::{self, SyntheticOptions};
-//! use tmrotor::record::{McapOptions, McapSink, RunStatus, Sink, read_recording};
+//! use tmrotor_rotor::record::synthetic::{self, SyntheticOptions};
+//! use tmrotor_rotor::record::{McapOptions, McapSink, RunStatus, Sink, read_recording};
 //!
 //! let data = synthetic::generate(&SyntheticOptions::default());
 //! let dir = tempfile::tempdir()?;
@@ -51,7 +51,7 @@ use thiserror::Error;
 
 pub use mcap_sink::{McapOptions, McapSink};
 pub use reader::{ReadError, ReadOptions, Recording, read_recording, read_recording_with};
-pub use sink::{MemorySink, Sink, install_interrupt_flag, record_run};
+pub use sink::{MemorySink, Sink, record_run};
 pub use transient::{MemoryTransient, TransientSink};
 pub use types::{
     BifurcationRecord, BranchRecord, PointRecord, RunInfo, RunStatus, TruncationCheck,
@@ -93,8 +93,6 @@ pub enum RecordError {
     AlreadyStarted,
     #[error("the recording is already finished")]
     Finished,
-    #[error("cannot install the Ctrl-C handler: {0}")]
-    CtrlC(String),
     /// Another process writes the same output.
     #[error(
         "{what} is being written by {holder}: its lock {lock} is held; wait for it to end, or \

@@ -39,8 +39,8 @@
 //! [`crate::system::LinearPart`] the nonlinear engine uses.
 //!
 //! ```
-//! let model = tmrotor::model::Model::builtin().unwrap();
-//! let asm = tmrotor::model::Assembly::new(&model).unwrap();
+//! let model = tmrotor_rotor::model::Model::builtin().unwrap();
+//! let asm = tmrotor_rotor::model::Assembly::new(&model).unwrap();
 //! assert_eq!(asm.n_dof, 72);
 //! ```
 

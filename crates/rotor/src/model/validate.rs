@@ -15,13 +15,13 @@ use crate::hb::Ratio;
 pub const MAX_RATIO_DEN: u32 = 100;
 
 /// The built-in dual-rotor model file (paper Tables A.1–A.5, node layout of the spec).
-pub const BUILTIN_TOML: &str = include_str!("../../models/dual_rotor.toml");
+pub const BUILTIN_TOML: &str = include_str!("../../../../models/dual_rotor.toml");
 
 /// Name under which the built-in model reports errors.
 pub const BUILTIN_NAME: &str = "<built-in dual_rotor.toml>";
 /// The same dual rotor with every value the paper leaves open at its literature default,
 /// uncalibrated (`models/dual_rotor_literature.toml`; docs/calibration.md).
-pub const LITERATURE_TOML: &str = include_str!("../../models/dual_rotor_literature.toml");
+pub const LITERATURE_TOML: &str = include_str!("../../../../models/dual_rotor_literature.toml");
 /// Name of [`LITERATURE_TOML`] in messages.
 pub const LITERATURE_NAME: &str = "<built-in dual_rotor_literature.toml>";
 
