@@ -1,8 +1,9 @@
 //! The cluster path for real: `examples/slurm_campaign.sh` submitted as a job array to a
 //! private single-node Slurm (Debian's `slurm-wlm`, started by `tools/slurm-single-node.sh`
 //! in a temporary directory), merged, and compared with the same campaign run locally.
-//! Skipped, with the reason, where Slurm is not installed or the test does not run as root
-//! (slurmd starts the jobs); `.ci/run` installs Slurm where it can.
+//! Ignored (skipped, with the reason; `build.rs`) where Slurm is not installed or the
+//! build does not run as root (slurmd starts the jobs); `.ci/run` installs Slurm where it
+//! can.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -55,6 +56,10 @@ fn write_campaign(dir: &Path) -> PathBuf {
 }
 
 #[test]
+#[cfg_attr(
+    not(tmrotor_slurm),
+    ignore = "needs root and Slurm (Debian: apt-get install slurm-wlm; .ci/run installs it)"
+)]
 fn slurm_job_array_merges_to_the_local_campaign() {
     if let Some(why) = missing_slurm() {
         eprintln!("skipped: {why}");

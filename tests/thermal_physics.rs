@@ -3,6 +3,7 @@
 //! contact geometry and resistances (Eqs. 15–17), Table 1 correlations and derivatives.
 
 use std::f64::consts::PI;
+use tmrotor::bearing::ContactLaw;
 use tmrotor::thermal::contact::{
     ContactGeometry, ContactResistance, Raceway, agm, elliptic_k, f_rec, parallel_conductance,
 };
@@ -184,13 +185,16 @@ fn roller_resistance_matches_numerical_isoflux_rectangle() {
 
 #[test]
 fn contact_resistance_derivatives_match_finite_differences() {
-    for (g, ball) in [(ball_inner(), true), (roller_outer(), false)] {
+    for (g, ball) in [
+        (ball_inner(), ContactLaw::Ball),
+        (roller_outer(), ContactLaw::Roller),
+    ] {
         let w = 150.0;
         let (_, d) = g.resistance(ball, w);
         // Relative step 1e-4: f_rec at ε ≈ 300 carries ~1e-13 rounding, too much for 1e-6.
         let fd = (g.resistance(ball, w * (1.0 + 1e-4)).0 - g.resistance(ball, w * (1.0 - 1e-4)).0)
             / (2e-4 * w);
-        assert!(rel(d, fd) < 1e-6, "ball {ball}: {d} vs {fd}");
+        assert!(rel(d, fd) < 1e-6, "{ball:?}: {d} vs {fd}");
         let (fb, nb) = (1200.0, 7.0);
         let (gc, dgf, dgn) = parallel_conductance(&g, ball, fb, nb, 1.0);
         let (hf, hn) = (1e-4 * fb, 1e-4 * nb);
@@ -202,16 +206,16 @@ fn contact_resistance_derivatives_match_finite_differences() {
             / (2.0 * hn);
         assert!(
             rel(dgf, fdf) < 1e-6 && rel(dgn, fdn) < 1e-6,
-            "ball {ball}: {dgf} {fdf} {dgn} {fdn}"
+            "{ball:?}: {dgf} {fdf} {dgn} {fdn}"
         );
         // More elements sharing the same load conduct better (Eq. 17).
         assert!(
             gc > 0.0 && dgn > 0.0 && dgf > 0.0,
-            "ball {ball}: {gc} {dgf} {dgn}"
+            "{ball:?}: {gc} {dgf} {dgn}"
         );
     }
     // Unloaded bearing: floor load, one element, no derivatives.
-    let (g0, a, b) = parallel_conductance(&ball_inner(), true, 0.0, 0.0, 1.0);
+    let (g0, a, b) = parallel_conductance(&ball_inner(), ContactLaw::Ball, 0.0, 0.0, 1.0);
     assert!(g0 > 0.0 && a == 0.0 && b == 0.0);
 }
 
@@ -333,18 +337,21 @@ fn hamrock_brewe_axes_agree_with_exact_hertz_ellipse() {
 fn the_precomputed_contact_law_equals_the_full_evaluation() {
     // A ball contact's R(W) = R(1 N)·W^(−1/3) (fixed ellipticity) against the full
     // Hamrock–Brewe semi-axes and elliptic integral at every load; a roller's in full.
-    for (g, ball) in [(ball_inner(), true), (roller_outer(), false)] {
+    for (g, ball) in [
+        (ball_inner(), ContactLaw::Ball),
+        (roller_outer(), ContactLaw::Roller),
+    ] {
         let law = ContactResistance::new(g, ball);
         for w in [0.01, 1.0, 3.7, 150.0, 2.5e3, 8e4] {
             let (r, d) = law.eval(w);
             let (r_full, d_full) = g.resistance(ball, w);
             assert!(
                 rel(r, r_full) < 1e-12,
-                "ball {ball}, W {w}: {r} vs {r_full}"
+                "{ball:?}, W {w}: {r} vs {r_full}"
             );
             assert!(
                 rel(d, d_full) < 1e-12,
-                "ball {ball}, W {w}: {d} vs {d_full}"
+                "{ball:?}, W {w}: {d} vs {d_full}"
             );
         }
     }

@@ -11,6 +11,8 @@ use indicatif::ProgressBar;
 use crate::cli::interrupt::install_interrupt_flag;
 use crate::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::McapOptions;
+use crate::stability::IntervalMap;
+use crate::study::{StabilityChoice, parse_name};
 use crate::sweep::{Progress, StudySettings, SweepProblem};
 
 /// The study flags shared by `tmrotor sweep` and `tmrotor truncation`: model, study file,
@@ -105,8 +107,8 @@ pub struct SweepArgs {
     pub no_stability: bool,
     /// Floquet method: exp-sip (exponential-split SIP, default) or sip (the paper's
     /// explicit product, Eq. 33; refuses stiff models).
-    #[arg(long, value_name = "METHOD", value_parser = ["exp-sip", "sip"])]
-    pub stability_method: Option<String>,
+    #[arg(long, value_name = "METHOD", value_parser = parse_name::<StabilityChoice>)]
+    pub stability_method: Option<StabilityChoice>,
     /// SIP intervals per period (exp-sip: the start, extrapolated with half as many and
     /// doubled up to 4096 where a multiplier is close to the unit circle) [default: 512].
     #[arg(long, value_name = "N")]
@@ -114,8 +116,8 @@ pub struct SweepArgs {
     /// Interval map of the exp-sip product: exponential (default; exact for the
     /// quasi-static response of stiff modes) or strang (the midpoint split of earlier
     /// versions).
-    #[arg(long, value_name = "MAP", value_parser = ["exponential", "strang"])]
-    pub interval_map: Option<String>,
+    #[arg(long, value_name = "MAP", value_parser = parse_name::<IntervalMap>)]
+    pub interval_map: Option<IntervalMap>,
     /// Cut-off (rad/s) of the Craig–Bampton reduction used for stability; 0 = full model
     /// [default: 20000].
     #[arg(long, value_name = "RAD_S")]
@@ -184,20 +186,14 @@ impl SweepArgs {
         if self.no_stability {
             s.floquet.stability = false;
         }
-        if let Some(m) = &self.stability_method {
-            s.floquet.stability_method = match m.as_str() {
-                "sip" => crate::sweep::StabilityChoice::Sip,
-                _ => crate::sweep::StabilityChoice::ExpSip,
-            };
+        if let Some(m) = self.stability_method {
+            s.floquet.stability_method = m;
         }
         if let Some(v) = self.sip_intervals {
             s.floquet.sip_intervals = v;
         }
-        if let Some(m) = &self.interval_map {
-            s.floquet.interval_map = match m.as_str() {
-                "strang" => crate::stability::IntervalMap::Strang,
-                _ => crate::stability::IntervalMap::Exponential,
-            };
+        if let Some(m) = self.interval_map {
+            s.floquet.interval_map = m;
         }
         if let Some(v) = self.reduction_cutoff {
             s.floquet.reduction_cutoff_rad_s = v;

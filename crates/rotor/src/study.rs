@@ -432,6 +432,14 @@ fn value_text(value: &toml::Value) -> String {
 /// Largest `sip_intervals` a study accepts (the explicit product's own automatic limit).
 pub const MAX_SIP_INTERVALS: usize = 200_000;
 
+/// A setting's value from its name in settings files (its serde name), so that the
+/// command line accepts exactly the names the files do, from one list: the enum's
+/// variants. The error lists the accepted names.
+pub fn parse_name<T: serde::de::DeserializeOwned>(name: &str) -> Result<T, String> {
+    use serde::de::value::{Error, StrDeserializer};
+    T::deserialize(StrDeserializer::<Error>::new(name)).map_err(|e| e.to_string())
+}
+
 /// Which Floquet method a sweep uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -782,6 +790,24 @@ fn run_info(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn setting_names_parse_as_in_files_and_unknown_ones_are_listed() {
+        assert_eq!(
+            parse_name::<StabilityChoice>("sip"),
+            Ok(StabilityChoice::Sip)
+        );
+        assert_eq!(
+            parse_name::<StabilityChoice>("exp-sip"),
+            Ok(StabilityChoice::ExpSip)
+        );
+        assert_eq!(
+            parse_name::<crate::stability::IntervalMap>("strang"),
+            Ok(crate::stability::IntervalMap::Strang)
+        );
+        let err = parse_name::<StabilityChoice>("exp_sip").expect_err("not a name");
+        assert!(err.contains("exp-sip") && err.contains("sip"), "{err}");
+    }
 
     #[test]
     fn primary_basis_keeps_the_harmonics_the_speeds_make() {

@@ -58,6 +58,27 @@ impl ContactLaw {
         }
     }
 
+    /// Volume (m³) of one rolling element of diameter `d` (m): a sphere, or a cylinder of
+    /// length `roller_length` (m; ignored for balls). The thermal network's element
+    /// capacity and the generated network's cage mass both use it.
+    pub fn element_volume(self, d: f64, roller_length: f64) -> f64 {
+        match self {
+            ContactLaw::Ball => std::f64::consts::PI / 6.0 * d * d * d,
+            ContactLaw::Roller => std::f64::consts::PI / 4.0 * d * d * roller_length,
+        }
+    }
+
+    /// Surface (m²) of one rolling element of diameter `d` (m): a sphere, or a cylinder of
+    /// length `roller_length` (m) with its two end faces.
+    pub fn element_area(self, d: f64, roller_length: f64) -> f64 {
+        match self {
+            ContactLaw::Ball => std::f64::consts::PI * d * d,
+            ContactLaw::Roller => {
+                std::f64::consts::PI * d * roller_length + 0.5 * std::f64::consts::PI * d * d
+            }
+        }
+    }
+
     /// Load `p = k δⁿ` (N) of one rolling element with contact stiffness `k` (N/m^n) at
     /// deflection `δ` (m), and its exact slope `dp/dδ = n k δⁿ⁻¹`; both 0 for `δ ≤ 0`
     /// (Heaviside contact, Eq. 4).

@@ -119,7 +119,7 @@ fn cell(text: &str) -> String {
 pub fn markdown() -> String {
     let mut out = String::from(
         "# Model-file reference\n\n\
-         Generated from the code (`src/model/reference_keys.rs`) by `tmrotor model reference`;\n\
+         Generated from the code (`crates/rotor/src/model/reference_keys.rs`) by `tmrotor model reference`;\n\
          a test fails when this file, the table in the code and the loader's keys disagree.\n\n\
          A model file is TOML. Units are SI and appear in the key names (`length_m`,\n\
          `mass_kg`); every table rejects keys it does not know. Start from the built-in dual\n\

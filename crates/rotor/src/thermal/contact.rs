@@ -49,6 +49,8 @@
 
 use std::f64::consts::PI;
 
+use crate::bearing::ContactLaw;
+
 /// Arithmetic–geometric mean of two positive numbers.
 pub fn agm(mut a: f64, mut b: f64) -> f64 {
     for _ in 0..64 {
@@ -170,12 +172,11 @@ impl ContactGeometry {
         (r, dr_db * b / (2.0 * w_n))
     }
 
-    /// Resistance of one contact of either kind.
-    pub fn resistance(&self, ball: bool, w_n: f64) -> (f64, f64) {
-        if ball {
-            self.ball_resistance(w_n)
-        } else {
-            self.roller_resistance(w_n)
+    /// Resistance of one contact of a bearing whose elements follow `law`.
+    pub fn resistance(&self, law: ContactLaw, w_n: f64) -> (f64, f64) {
+        match law {
+            ContactLaw::Ball => self.ball_resistance(w_n),
+            ContactLaw::Roller => self.roller_resistance(w_n),
         }
     }
 }
@@ -191,22 +192,21 @@ impl ContactGeometry {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ContactResistance {
     geom: ContactGeometry,
-    ball: bool,
+    law: ContactLaw,
     /// `R` of a ball contact at 1 N.
     ball_unit: f64,
 }
 
 impl ContactResistance {
-    /// The law of a contact of `geom`, a ball contact if `ball`.
-    pub fn new(geom: ContactGeometry, ball: bool) -> Self {
-        let ball_unit = if ball {
-            geom.ball_resistance(1.0).0
-        } else {
-            0.0
+    /// The resistance law of a contact of `geom` in a bearing whose elements follow `law`.
+    pub fn new(geom: ContactGeometry, law: ContactLaw) -> Self {
+        let ball_unit = match law {
+            ContactLaw::Ball => geom.ball_resistance(1.0).0,
+            ContactLaw::Roller => 0.0,
         };
         Self {
             geom,
-            ball,
+            law,
             ball_unit,
         }
     }
@@ -214,11 +214,12 @@ impl ContactResistance {
     /// `(R, dR/dW)` of one contact under load `w_n` (N), as
     /// [`ContactGeometry::resistance`].
     pub fn eval(&self, w_n: f64) -> (f64, f64) {
-        if self.ball {
-            let r = self.ball_unit / w_n.cbrt();
-            (r, -r / (3.0 * w_n))
-        } else {
-            self.geom.roller_resistance(w_n)
+        match self.law {
+            ContactLaw::Ball => {
+                let r = self.ball_unit / w_n.cbrt();
+                (r, -r / (3.0 * w_n))
+            }
+            ContactLaw::Roller => self.geom.roller_resistance(w_n),
         }
     }
 }
@@ -227,12 +228,12 @@ impl ContactResistance {
 /// `(G, ∂G/∂F_b, ∂G/∂n_b)`. `n_b` is clamped below at 1 and `F_b` at `min_load_n`.
 pub fn parallel_conductance(
     geom: &ContactGeometry,
-    ball: bool,
+    law: ContactLaw,
     fb_n: f64,
     n_loaded: f64,
     min_load_n: f64,
 ) -> (f64, f64, f64) {
-    parallel_conductance_of(|w| geom.resistance(ball, w), fb_n, n_loaded, min_load_n)
+    parallel_conductance_of(|w| geom.resistance(law, w), fb_n, n_loaded, min_load_n)
 }
 
 /// [`parallel_conductance`] for any one-contact resistance law `W ↦ (R, dR/dW)`.

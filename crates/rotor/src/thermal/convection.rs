@@ -57,6 +57,23 @@ pub struct Fluid {
     pub diffusivity: f64,
 }
 
+/// Lubricant–element coefficient of a bearing whose elements follow `law`:
+/// [`ball_lubricant`] or [`roller_lubricant`].
+pub fn element_lubricant(
+    law: crate::bearing::ContactLaw,
+    fluid: &Fluid,
+    speed_m_s: f64,
+    diameter_m: f64,
+    nu_m2_s: f64,
+) -> Coefficient {
+    match law {
+        crate::bearing::ContactLaw::Ball => ball_lubricant(fluid, speed_m_s, diameter_m, nu_m2_s),
+        crate::bearing::ContactLaw::Roller => {
+            roller_lubricant(fluid, speed_m_s, diameter_m, nu_m2_s)
+        }
+    }
+}
+
 /// Lubricant–ball coefficient: `Nu = 0.33 Re^0.5 Pr^0.4` (so `h ∝ ν^−0.1`).
 pub fn ball_lubricant(fluid: &Fluid, speed_m_s: f64, diameter_m: f64, nu_m2_s: f64) -> Coefficient {
     if speed_m_s <= 0.0 {

@@ -40,7 +40,6 @@
 //! `[thermal]` table, a starting point for a network edited node by node.
 
 use std::collections::BTreeMap;
-use std::f64::consts::PI;
 
 use serde::Deserialize;
 
@@ -655,10 +654,9 @@ pub fn generate(model: &Model, g: &GeneratedThermal) -> Result<ThermalSpec, Ther
             ContactLaw::Roller => &g.roller_bearings,
         };
         let own = g.bearings.iter().find(|s| s.name == b.id);
-        let element_volume = match b.kind {
-            ContactLaw::Ball => PI / 6.0 * element_d.powi(3),
-            ContactLaw::Roller => PI / 4.0 * element_d.powi(2) * b.roller_length_m.unwrap_or(0.0),
-        };
+        let element_volume = b
+            .kind
+            .element_volume(element_d, b.roller_length_m.unwrap_or(0.0));
         let cage =
             CAGE_MASS_SHARE * f64::from(b.element_count) * element_volume * bearing.density_kg_m3;
         let (inner_node, outer_node, element_node, lubricant_node) =

@@ -45,8 +45,8 @@
 use super::ThermalError;
 use super::contact::{ContactGeometry, ContactResistance, Raceway, parallel_conductance_of};
 use super::convection::{
-    Coefficient, Fluid, ball_lubricant, cylinder_conduction, flat_conduction, housing_lubricant,
-    ring_lubricant, roller_lubricant, shaft_ambient,
+    Coefficient, Fluid, cylinder_conduction, element_lubricant, flat_conduction, housing_lubricant,
+    ring_lubricant, shaft_ambient,
 };
 use super::friction::{Palmgren, Viscosity, lubricant_conductance_w_k};
 use super::spec::ThermalSpec;
@@ -136,7 +136,7 @@ struct RotatingSurface {
 #[derive(Clone, Debug)]
 struct BearingNet {
     name: String,
-    ball: bool,
+    kind: ContactLaw,
     /// Global 0-based indices.
     b: usize,
     i: usize,
@@ -309,7 +309,6 @@ impl ThermalNetwork {
         let e_prime = bm.modulus_pa / (1.0 - bm.poisson * bm.poisson);
         let mut bearings = Vec::new();
         for b in &spec.bearings {
-            let ball = b.kind == ContactLaw::Ball;
             let (pb, pi_, po, pl) = (
                 idx(b.element_node),
                 idx(b.inner_node),
@@ -318,11 +317,7 @@ impl ThermalNetwork {
             );
             let d = b.element_diameter_m;
             let roller_len = b.roller_length_m.unwrap_or(0.0);
-            let v_elem = if ball {
-                PI / 6.0 * d * d * d
-            } else {
-                PI / 4.0 * d * d * roller_len
-            };
+            let v_elem = b.kind.element_volume(d, roller_len);
             let nel = b.n_elements as f64;
             names[pb] = format!("{} rolling elements", b.name);
             names[pi_] = format!("{} inner ring", b.name);
@@ -411,14 +406,10 @@ impl ThermalNetwork {
                 k_element: kb,
                 k_ring: kb,
             };
-            let area_elements = if ball {
-                nel * PI * d * d
-            } else {
-                nel * (PI * d * roller_len + 0.5 * PI * d * d)
-            };
+            let area_elements = nel * b.kind.element_area(d, roller_len);
             bearings.push(BearingNet {
                 name: b.name.clone(),
-                ball,
+                kind: b.kind,
                 b: pb,
                 i: pi_,
                 o: po,
@@ -433,11 +424,11 @@ impl ThermalNetwork {
                 lflanks: Vec::new(),
                 inner_contact: ContactResistance::new(
                     contact(Raceway::Inner, b.inner_raceway_m),
-                    ball,
+                    b.kind,
                 ),
                 outer_contact: ContactResistance::new(
                     contact(Raceway::Outer, b.outer_raceway_m),
-                    ball,
+                    b.kind,
                 ),
                 palmgren: Palmgren {
                     f_l: b.f_l,
@@ -798,11 +789,7 @@ impl ThermalNetwork {
 
         // Lubricant convection, G(ν(T_L)).
         let u_elem = (w_c - w_o).abs() * 0.5 * b.pitch_m;
-        let c_elem = if b.ball {
-            ball_lubricant(&self.fluid, u_elem, b.element_diameter_m, nu)
-        } else {
-            roller_lubricant(&self.fluid, u_elem, b.element_diameter_m, nu)
-        };
+        let c_elem = element_lubricant(b.kind, &self.fluid, u_elem, b.element_diameter_m, nu);
         let gap = 0.5 * (b.outer_raceway_m - b.inner_raceway_m);
         let c_ring = ring_lubricant(&self.fluid, rel, 0.5 * b.inner_raceway_m, gap, nu);
         let u_s = w_c.abs() * b.pitch_m / 6.0;
@@ -870,11 +857,7 @@ impl ThermalNetwork {
                 self.min_load_n,
             );
             let u_elem = (w_c - w_o).abs() * 0.5 * b.pitch_m;
-            let c_elem = if b.ball {
-                ball_lubricant(&self.fluid, u_elem, b.element_diameter_m, nu)
-            } else {
-                roller_lubricant(&self.fluid, u_elem, b.element_diameter_m, nu)
-            };
+            let c_elem = element_lubricant(b.kind, &self.fluid, u_elem, b.element_diameter_m, nu);
             let gap = 0.5 * (b.outer_raceway_m - b.inner_raceway_m);
             let c_ring = ring_lubricant(&self.fluid, rel, 0.5 * b.inner_raceway_m, gap, nu);
             let c_house = housing_lubricant(
