@@ -345,14 +345,8 @@ fn the_precomputed_contact_law_equals_the_full_evaluation() {
         for w in [0.01, 1.0, 3.7, 150.0, 2.5e3, 8e4] {
             let (r, d) = law.eval(w);
             let (r_full, d_full) = g.resistance(ball, w);
-            assert!(
-                rel(r, r_full) < 1e-12,
-                "{ball:?}, W {w}: {r} vs {r_full}"
-            );
-            assert!(
-                rel(d, d_full) < 1e-12,
-                "{ball:?}, W {w}: {d} vs {d_full}"
-            );
+            assert!(rel(r, r_full) < 1e-12, "{ball:?}, W {w}: {r} vs {r_full}");
+            assert!(rel(d, d_full) < 1e-12, "{ball:?}, W {w}: {d} vs {d_full}");
         }
     }
 }

@@ -11,6 +11,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::campaign::Manifest;
+use crate::derive::peaks::resonant_peaks;
 use crate::record::reader::{Recording, read_recording};
 use crate::record::types::PointRecord;
 use crate::stability::BifurcationKind;
@@ -41,7 +42,7 @@ pub struct RunFindings {
     /// Two largest local maxima of node 8's RMS amplitude: (ω rad/s, µm), by ω.
     pub peaks: Vec<(f64, f64)>,
     /// Every resonant peak of node 8's RMS amplitude along the branch (ω rad/s, µm), in
-    /// branch order: local maxima with a prominence of at least [`PEAK_PROMINENCE`] of
+    /// branch order: local maxima with a prominence of at least [`PEAK_PROMINENCE`](crate::derive::peaks::PEAK_PROMINENCE) of
     /// their height, at least 30 rad/s apart (the higher kept).
     pub resonances: Vec<(f64, f64)>,
     /// Points where ω turns (folds of the branch).
@@ -111,32 +112,6 @@ fn mean_temp(rec: &Recording, p: &PointRecord, id: u32) -> Option<f64> {
     p.temperatures.get(idx).map(|t| t.mean_c)
 }
 
-/// Smallest prominence of a resonant peak, as a share of its height: the amplitude falls by
-/// at least this much on both sides before it rises above the peak again (a shoulder on a
-/// flank is not a resonance).
-pub const PEAK_PROMINENCE: f64 = 0.1;
-
-/// Prominence of the local maximum `i` of `amps`: its height above the higher of the two
-/// lowest points between it and the nearest higher amplitude on either side (or the branch's
-/// end). Points without an amplitude end the search.
-fn prominence(amps: &[Option<f64>], i: usize) -> f64 {
-    let Some(top) = amps[i] else { return 0.0 };
-    let base = |range: &mut dyn Iterator<Item = usize>| {
-        let mut low = top;
-        for j in range {
-            match amps[j] {
-                Some(a) if a > top => break,
-                Some(a) => low = low.min(a),
-                None => break,
-            }
-        }
-        low
-    };
-    let left = base(&mut (0..i).rev());
-    let right = base(&mut (i + 1..amps.len()));
-    top - left.max(right)
-}
-
 /// Findings of one recording.
 pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
     let study = crate::study::StudySettings::from_run(&rec.run).ok();
@@ -145,19 +120,17 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
     let amp = |p: &PointRecord| node.and_then(|i| p.amplitude_rms_m.get(i)).copied();
     let amps: Vec<Option<f64>> = pts.iter().map(amp).collect();
     let mut maxima: Vec<(f64, f64)> = Vec::new();
-    let mut resonances: Vec<(f64, f64)> = Vec::new();
     for i in 1..pts.len().saturating_sub(1) {
         if let (Some(a0), Some(a1), Some(a2)) = (amps[i - 1], amps[i], amps[i + 1])
             && a1 > a0
             && a1 >= a2
         {
-            let m = (pts[i].omega_rad_s, a1 * 1e6);
-            maxima.push(m);
-            if prominence(&amps, i) >= PEAK_PROMINENCE * a1 {
-                resonances.push(m);
-            }
+            maxima.push((pts[i].omega_rad_s, a1 * 1e6));
         }
     }
+    let resonances = resonant_peaks(&amps)
+        .into_iter()
+        .filter_map(|i| amps[i].map(|a| (pts[i].omega_rad_s, a * 1e6)));
     // distinct resonances: at least 30 rad/s apart, the higher kept
     let mut kept: Vec<(f64, f64)> = Vec::new();
     for m in resonances {
@@ -641,27 +614,4 @@ pub fn truncation_table(rows: &[TruncationRow]) -> String {
         targets.len()
     );
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::prominence;
-
-    #[test]
-    fn prominence_is_the_drop_to_the_higher_base() {
-        // a resonance, a shoulder on its flank, a higher resonance, the end
-        let a: Vec<Option<f64>> = [1.0, 5.0, 2.0, 3.0, 2.9, 8.0, 4.0]
-            .iter()
-            .map(|&x| Some(x))
-            .collect();
-        // 5.0: down to 1.0 on the left, to 2.0 before the higher 8.0 on the right
-        assert_eq!(prominence(&a, 1), 3.0);
-        // 3.0: left base 2.0 (before 5.0), right base 2.9 (before 8.0)
-        assert!((prominence(&a, 3) - 0.1).abs() < 1e-12);
-        // the highest: down to 1.0 on the left, 4.0 at the right end
-        assert_eq!(prominence(&a, 5), 4.0);
-        // a missing amplitude ends the search: no drop seen on that side, no prominence
-        let b = vec![Some(1.0), None, Some(3.0), Some(2.0)];
-        assert_eq!(prominence(&b, 2), 0.0);
-    }
 }

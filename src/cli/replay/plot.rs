@@ -238,49 +238,15 @@ fn chosen_node(run: &RunInfo, wanted: Option<u32>) -> anyhow::Result<Option<usiz
     }
 }
 
-/// Indices of the resonant peaks of `y` along the branch: local maxima that stand out by at
-/// least 5 % of the range of `y` from the lowest value between them and a higher peak (their
-/// topographic prominence), the `most` highest, in branch order.
+/// Indices of the `most` highest resonant peaks of `y` along the branch
+/// ([`crate::derive::peaks::resonant_peaks`], the report's rule), in branch order.
 pub fn resonant_peaks(y: &[f64], most: usize) -> Vec<usize> {
-    let finite: Vec<f64> = y.iter().copied().filter(|v| v.is_finite()).collect();
-    let (lo, hi) = finite
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-            (a.min(v), b.max(v))
-        });
-    if finite.len() < 3 || hi <= lo {
-        return Vec::new();
-    }
-    let threshold = 0.05 * (hi - lo);
-    let mut peaks: Vec<(usize, f64)> = Vec::new();
-    for i in 0..y.len() {
-        let v = y[i];
-        let left = if i == 0 { f64::NEG_INFINITY } else { y[i - 1] };
-        let right = y.get(i + 1).copied().unwrap_or(f64::NEG_INFINITY);
-        if !(v.is_finite() && v > left && v >= right) {
-            continue;
-        }
-        // prominence: the deeper of the two minima towards the next higher value
-        let side = |range: &mut dyn Iterator<Item = usize>| {
-            let mut low = v;
-            for j in range {
-                if y[j] > v {
-                    return low;
-                }
-                low = low.min(y[j]);
-            }
-            low
-        };
-        let (l, r) = (side(&mut (0..i).rev()), side(&mut (i + 1..y.len())));
-        if v - l.max(r) >= threshold {
-            peaks.push((i, v));
-        }
-    }
-    peaks.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let values: Vec<Option<f64>> = y.iter().map(|v| v.is_finite().then_some(*v)).collect();
+    let mut peaks = crate::derive::peaks::resonant_peaks(&values);
+    peaks.sort_by(|&a, &b| y[b].total_cmp(&y[a]));
     peaks.truncate(most);
-    let mut out: Vec<usize> = peaks.into_iter().map(|p| p.0).collect();
-    out.sort_unstable();
-    out
+    peaks.sort_unstable();
+    peaks
 }
 
 /// The unit circle with multipliers: `sets` of (legend text, colour, multipliers).
@@ -1030,8 +996,8 @@ mod tests {
     #[test]
     fn peaks_are_prominent_local_maxima() {
         let y = [1.0, 3.0, 2.0, 2.05, 2.0, 8.0, 4.0, 5.0, 1.0];
-        // 3.0 stands out by 1.0 (range 7: threshold 0.35), 2.05 by 0.05 (no), 8.0 is the
-        // highest, 5.0 stands out by 1.0
+        // 3.0 stands out by 1.0 (≥ 10 % of 3.0), 2.05 by 0.05 (no), 8.0 is the highest,
+        // 5.0 stands out by 1.0
         assert_eq!(resonant_peaks(&y, 4), vec![1, 5, 7]);
         assert_eq!(resonant_peaks(&y, 2), vec![5, 7]);
         assert!(resonant_peaks(&[1.0, 1.0, 1.0], 3).is_empty());

@@ -18,6 +18,7 @@
 //! [`rederivers_for`].
 
 pub mod coupled;
+pub mod peaks;
 pub mod table;
 
 use num_complex::Complex64;
