@@ -33,6 +33,7 @@ use plotters::style::RGBColor;
 use super::CampaignError;
 use super::figures::read_manifest_file;
 use crate::figure::{self, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Series};
+use crate::record::map::{MapRecord, MapRun};
 use crate::record::read_recording;
 use crate::stability::BifurcationKind;
 
@@ -91,38 +92,7 @@ pub struct MapSlice {
     pub branch: Vec<(f64, Option<bool>)>,
 }
 
-/// A curve of one kind of bifurcation through the slices, as (p, ω) in order of `p`.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MapCurve {
-    pub id: usize,
-    pub kind: BifurcationKind,
-    pub points: Vec<(f64, f64)>,
-}
-
-/// A fold pair present at one grid value and gone at the next: a cusp lies between.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PairEnd {
-    /// The grid value where the pair exists.
-    pub p_with: f64,
-    /// The neighbouring grid value where it does not.
-    pub p_without: f64,
-    /// The pair's mean ω where it exists (rad/s).
-    pub omega: f64,
-    /// The run (slice) where it exists.
-    pub run: String,
-    /// Bisection sweeps that narrowed the bracket ([`refine_pair_ends`]); 0: the grid's.
-    pub refined: usize,
-}
-
-/// A run of ω cells at one `p` with the same numbers of stable and unstable responses.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Region {
-    pub p: f64,
-    pub omega_from: f64,
-    pub omega_to: f64,
-    pub stable: usize,
-    pub unstable: usize,
-}
+pub use crate::record::map::{MapCurve, PairEnd, Region};
 
 /// The map built from the slices.
 #[derive(Clone, Debug)]
@@ -636,209 +606,63 @@ fn param_column(param: &str) -> String {
         .collect()
 }
 
+impl OperatingMap {
+    /// What the map's recording holds: the map with each slice's run, value and recording.
+    pub fn record(&self) -> MapRecord {
+        MapRecord {
+            param: self.param.clone(),
+            omega_tolerance: self.omega_tolerance,
+            runs: self
+                .slices
+                .iter()
+                .map(|s| MapRun {
+                    name: s.run.clone(),
+                    value: s.p,
+                    recording: s.recording.clone(),
+                })
+                .collect(),
+            curves: self.curves.clone(),
+            pair_ends: self.pair_ends.clone(),
+            regions: self.regions.clone(),
+        }
+    }
+}
+
+impl From<MapRecord> for OperatingMap {
+    /// The map of a recording: slices with their run, value and recording name only.
+    fn from(m: MapRecord) -> Self {
+        Self {
+            param: m.param,
+            omega_tolerance: m.omega_tolerance,
+            slices: m
+                .runs
+                .into_iter()
+                .map(|r| MapSlice {
+                    run: r.name,
+                    p: r.value,
+                    recording: r.recording,
+                    settings: toml::Table::new(),
+                    bifurcations: Vec::new(),
+                    branch: Vec::new(),
+                })
+                .collect(),
+            curves: m.curves,
+            pair_ends: m.pair_ends,
+            regions: m.regions,
+        }
+    }
+}
+
 /// Writes `map` as an MCAP file (topics [`crate::record::schema::MAP_TOPICS`], see
-/// `schemas/README.md`), through a temporary file renamed into place.
+/// `schemas/README.md`) through the record layer ([`crate::record::map::write_map`]).
 pub fn write_map_mcap(map: &OperatingMap, path: &Path) -> Result<(), CampaignError> {
-    use crate::record::convert::bifurcation_to_pb;
-    use crate::record::pb::tmrotor::v1 as pb;
-    use crate::record::schema::{
-        TOPIC_MAP_CURVES, TOPIC_MAP_INFO, TOPIC_MAP_PAIR_ENDS, TOPIC_MAP_REGIONS, Topic,
-    };
-    use prost::Message;
-    let io = |e: std::io::Error| CampaignError::Io {
-        path: path.display().to_string(),
-        source: e,
-    };
-    let mcap_err = |e: mcap::McapError| CampaignError::File {
-        file: path.display().to_string(),
-        reason: e.to_string(),
-    };
-    let mut writer = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
-        .library(format!(
-            "tmrotor/{}; {}",
-            env!("CARGO_PKG_VERSION"),
-            mcap::LIBRARY_IDENTIFIER
-        ))
-        .create(std::io::Cursor::new(Vec::new()))
-        .map_err(mcap_err)?;
-    // each topic's schema and channel registered once, at its first message
-    let mut channels: std::collections::BTreeMap<&str, u16> = std::collections::BTreeMap::new();
-    let mut publish = |topic: Topic, seq: u32, data: &[u8]| -> Result<(), CampaignError> {
-        let channel_id = match channels.get(topic.name) {
-            Some(&id) => id,
-            None => {
-                let schema = writer
-                    .add_schema(topic.schema.name, "protobuf", topic.schema.descriptor_set)
-                    .map_err(mcap_err)?;
-                let id = writer
-                    .add_channel(
-                        schema,
-                        topic.name,
-                        "protobuf",
-                        &std::collections::BTreeMap::new(),
-                    )
-                    .map_err(mcap_err)?;
-                channels.insert(topic.name, id);
-                id
-            }
-        };
-        let header = mcap::records::MessageHeader {
-            channel_id,
-            sequence: seq,
-            log_time: u64::from(seq),
-            publish_time: u64::from(seq),
-        };
-        writer
-            .write_to_known_channel(&header, data)
-            .map_err(mcap_err)
-    };
-    let info = pb::MapInfo {
-        tool_name: "tmrotor".into(),
-        tool_version: env!("CARGO_PKG_VERSION").into(),
-        parameter: map.param.clone(),
-        omega_tolerance_rad_s: map.omega_tolerance,
-        runs: map
-            .slices
-            .iter()
-            .map(|s| pb::MapRun {
-                name: s.run.clone(),
-                value: s.p,
-                recording: s.recording.clone(),
-            })
-            .collect(),
-    };
-    publish(TOPIC_MAP_INFO, 0, &info.encode_to_vec())?;
-    for (k, c) in map.curves.iter().enumerate() {
-        let msg = pb::MapCurve {
-            curve: c.id as u32,
-            r#type: bifurcation_to_pb(Some(c.kind)) as i32,
-            value: c.points.iter().map(|q| q.0).collect(),
-            omega_rad_s: c.points.iter().map(|q| q.1).collect(),
-        };
-        publish(TOPIC_MAP_CURVES, k as u32, &msg.encode_to_vec())?;
-    }
-    for (k, e) in map.pair_ends.iter().enumerate() {
-        let msg = pb::MapPairEnd {
-            value_with_pair: e.p_with,
-            value_without_pair: e.p_without,
-            omega_rad_s: e.omega,
-            run: e.run.clone(),
-            bisections: e.refined as u32,
-        };
-        publish(TOPIC_MAP_PAIR_ENDS, k as u32, &msg.encode_to_vec())?;
-    }
-    for (k, r) in map.regions.iter().enumerate() {
-        let msg = pb::MapRegion {
-            value: r.p,
-            omega_from_rad_s: r.omega_from,
-            omega_to_rad_s: r.omega_to,
-            stable_responses: r.stable as u32,
-            unstable_responses: r.unstable as u32,
-        };
-        publish(TOPIC_MAP_REGIONS, k as u32, &msg.encode_to_vec())?;
-    }
-    writer.finish().map_err(mcap_err)?;
-    let bytes = writer.into_inner().into_inner();
-    crate::record::output::write_atomic(path, &bytes).map_err(io)
+    Ok(crate::record::map::write_map(&map.record(), path)?)
 }
 
 /// An operating map read back from its MCAP file: the map without the branches (the
 /// slices carry their run, value and recording name only).
 pub fn read_map_mcap(path: &Path) -> Result<OperatingMap, CampaignError> {
-    use crate::record::convert::bifurcation_from_pb;
-    use crate::record::pb::tmrotor::v1 as pb;
-    use prost::Message;
-    let bad = |reason: String| CampaignError::File {
-        file: path.display().to_string(),
-        reason,
-    };
-    let bytes = std::fs::read(path).map_err(|source| CampaignError::Io {
-        path: path.display().to_string(),
-        source,
-    })?;
-    let mut map = OperatingMap {
-        param: String::new(),
-        omega_tolerance: 0.0,
-        slices: Vec::new(),
-        curves: Vec::new(),
-        pair_ends: Vec::new(),
-        regions: Vec::new(),
-    };
-    let mut seen_info = false;
-    for message in mcap::MessageStream::new(&bytes).map_err(|e| bad(e.to_string()))? {
-        let message = message.map_err(|e| bad(e.to_string()))?;
-        let data = &message.data[..];
-        let decode_err = |e: prost::DecodeError| bad(format!("{}: {e}", message.channel.topic));
-        match message.channel.topic.as_str() {
-            "/map/info" => {
-                let m = pb::MapInfo::decode(data).map_err(decode_err)?;
-                map.param = m.parameter;
-                map.omega_tolerance = m.omega_tolerance_rad_s;
-                map.slices = m
-                    .runs
-                    .into_iter()
-                    .map(|r| MapSlice {
-                        run: r.name,
-                        p: r.value,
-                        recording: r.recording,
-                        settings: toml::Table::new(),
-                        bifurcations: Vec::new(),
-                        branch: Vec::new(),
-                    })
-                    .collect();
-                seen_info = true;
-            }
-            "/map/curves" => {
-                let m = pb::MapCurve::decode(data).map_err(decode_err)?;
-                let kind = bifurcation_from_pb(m.r#type)
-                    .map_err(|e| bad(format!("/map/curves: {e}")))?
-                    .ok_or_else(|| bad("/map/curves: a curve without a kind".into()))?;
-                if m.value.len() != m.omega_rad_s.len() {
-                    return Err(bad(format!(
-                        "/map/curves: curve {} has {} values and {} speeds",
-                        m.curve,
-                        m.value.len(),
-                        m.omega_rad_s.len()
-                    )));
-                }
-                map.curves.push(MapCurve {
-                    id: m.curve as usize,
-                    kind,
-                    points: m.value.into_iter().zip(m.omega_rad_s).collect(),
-                });
-            }
-            "/map/pair_ends" => {
-                let m = pb::MapPairEnd::decode(data).map_err(decode_err)?;
-                map.pair_ends.push(PairEnd {
-                    p_with: m.value_with_pair,
-                    p_without: m.value_without_pair,
-                    omega: m.omega_rad_s,
-                    run: m.run,
-                    refined: m.bisections as usize,
-                });
-            }
-            "/map/regions" => {
-                let m = pb::MapRegion::decode(data).map_err(decode_err)?;
-                map.regions.push(Region {
-                    p: m.value,
-                    omega_from: m.omega_from_rad_s,
-                    omega_to: m.omega_to_rad_s,
-                    stable: m.stable_responses as usize,
-                    unstable: m.unstable_responses as usize,
-                });
-            }
-            other => {
-                return Err(bad(format!(
-                    "topic {other} does not belong to an operating map"
-                )));
-            }
-        }
-    }
-    if !seen_info {
-        return Err(bad("no /map/info: not an operating map".into()));
-    }
-    Ok(map)
+    Ok(crate::record::map::read_map(path)?.into())
 }
 
 /// Writes `map_curves.csv`, `map_pair_ends.csv` and `map_regions.csv` of `map` into `out`

@@ -147,6 +147,12 @@ pub enum CampaignError {
     },
     #[error(transparent)]
     Figure(#[from] FigureError),
+    /// A recording the record layer refused (its message names the file).
+    #[error(transparent)]
+    Record(#[from] crate::record::RecordError),
+    /// A file the record layer could not read (its message names the file).
+    #[error(transparent)]
+    Read(#[from] ReadError),
 }
 
 /// One line of the manifest.

@@ -911,6 +911,128 @@ pub fn truncation_check_from_pb(m: &pb::TruncationCheck) -> Result<TruncationChe
     })
 }
 
+/// The messages of an operating map's recording: `/map/info`, then one message per curve,
+/// fold-pair end and region.
+pub struct MapMessages {
+    pub info: pb::MapInfo,
+    pub curves: Vec<pb::MapCurve>,
+    pub pair_ends: Vec<pb::MapPairEnd>,
+    pub regions: Vec<pb::MapRegion>,
+}
+
+/// An operating map as its messages.
+pub fn map_to_pb(map: &super::map::MapRecord) -> MapMessages {
+    MapMessages {
+        info: pb::MapInfo {
+            tool_name: "tmrotor".into(),
+            tool_version: env!("CARGO_PKG_VERSION").into(),
+            parameter: map.param.clone(),
+            omega_tolerance_rad_s: map.omega_tolerance,
+            runs: map
+                .runs
+                .iter()
+                .map(|r| pb::MapRun {
+                    name: r.name.clone(),
+                    value: r.value,
+                    recording: r.recording.clone(),
+                })
+                .collect(),
+        },
+        curves: map
+            .curves
+            .iter()
+            .map(|c| pb::MapCurve {
+                curve: c.id as u32,
+                r#type: bifurcation_to_pb(Some(c.kind)) as i32,
+                value: c.points.iter().map(|q| q.0).collect(),
+                omega_rad_s: c.points.iter().map(|q| q.1).collect(),
+            })
+            .collect(),
+        pair_ends: map
+            .pair_ends
+            .iter()
+            .map(|e| pb::MapPairEnd {
+                value_with_pair: e.p_with,
+                value_without_pair: e.p_without,
+                omega_rad_s: e.omega,
+                run: e.run.clone(),
+                bisections: e.refined as u32,
+            })
+            .collect(),
+        regions: map
+            .regions
+            .iter()
+            .map(|r| pb::MapRegion {
+                value: r.p,
+                omega_from_rad_s: r.omega_from,
+                omega_to_rad_s: r.omega_to,
+                stable_responses: r.stable as u32,
+                unstable_responses: r.unstable as u32,
+            })
+            .collect(),
+    }
+}
+
+/// `/map/info` into a map without curves, pair ends and regions.
+pub fn map_info_from_pb(m: pb::MapInfo) -> super::map::MapRecord {
+    super::map::MapRecord {
+        param: m.parameter,
+        omega_tolerance: m.omega_tolerance_rad_s,
+        runs: m
+            .runs
+            .into_iter()
+            .map(|r| super::map::MapRun {
+                name: r.name,
+                value: r.value,
+                recording: r.recording,
+            })
+            .collect(),
+        curves: Vec::new(),
+        pair_ends: Vec::new(),
+        regions: Vec::new(),
+    }
+}
+
+/// One `/map/curves` message; an error names what is wrong.
+pub fn map_curve_from_pb(m: pb::MapCurve) -> Result<super::map::MapCurve, String> {
+    let kind = bifurcation_from_pb(m.r#type)?.ok_or("a curve without a kind")?;
+    if m.value.len() != m.omega_rad_s.len() {
+        return Err(format!(
+            "curve {} has {} values and {} speeds",
+            m.curve,
+            m.value.len(),
+            m.omega_rad_s.len()
+        ));
+    }
+    Ok(super::map::MapCurve {
+        id: m.curve as usize,
+        kind,
+        points: m.value.into_iter().zip(m.omega_rad_s).collect(),
+    })
+}
+
+/// One `/map/pair_ends` message.
+pub fn map_pair_end_from_pb(m: pb::MapPairEnd) -> super::map::PairEnd {
+    super::map::PairEnd {
+        p_with: m.value_with_pair,
+        p_without: m.value_without_pair,
+        omega: m.omega_rad_s,
+        run: m.run,
+        refined: m.bisections as usize,
+    }
+}
+
+/// One `/map/regions` message.
+pub fn map_region_from_pb(m: pb::MapRegion) -> super::map::Region {
+    super::map::Region {
+        p: m.value,
+        omega_from: m.omega_from_rad_s,
+        omega_to: m.omega_to_rad_s,
+        stable: m.stable_responses as usize,
+        unstable: m.unstable_responses as usize,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

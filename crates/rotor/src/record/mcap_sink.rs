@@ -110,6 +110,42 @@ impl McapOptions {
     }
 }
 
+/// The MCAP writer settings every tmrotor file shares: zstd chunks and the library string
+/// naming the tool's version.
+pub fn writer_options() -> WriteOptions {
+    WriteOptions::new()
+        .compression(Some(mcap::Compression::Zstd))
+        .library(format!(
+            "tmrotor/{}; {}",
+            env!("CARGO_PKG_VERSION"),
+            mcap::LIBRARY_IDENTIFIER
+        ))
+}
+
+/// The channels of one MCAP file: each topic's schema and channel registered at its first
+/// message, its id reused after.
+#[derive(Debug, Default)]
+pub struct Channels(BTreeMap<&'static str, u16>);
+
+impl Channels {
+    /// The channel id of `topic` in `writer`, registering its schema and channel first
+    /// if this is its first message.
+    pub fn id<W: std::io::Write + std::io::Seek>(
+        &mut self,
+        writer: &mut Writer<W>,
+        topic: Topic,
+    ) -> Result<u16, mcap::McapError> {
+        if let Some(&id) = self.0.get(topic.name) {
+            return Ok(id);
+        }
+        let schema =
+            writer.add_schema(topic.schema.name, "protobuf", topic.schema.descriptor_set)?;
+        let id = writer.add_channel(schema, topic.name, "protobuf", &BTreeMap::new())?;
+        self.0.insert(topic.name, id);
+        Ok(id)
+    }
+}
+
 /// Writes a run into an MCAP file. See the module docs for the layout, and
 /// [`super::output`] for the lock and the temporary name the file is written under.
 pub struct McapSink {
@@ -129,7 +165,7 @@ pub struct McapSink {
     checks: SinkChecks,
     /// The run, shared so that writing a point does not copy it.
     run: Option<std::sync::Arc<RunInfo>>,
-    channels: BTreeMap<&'static str, u16>,
+    channels: Channels,
     sequence: u32,
     since_flush: u32,
     last_time_ns: u64,
@@ -156,16 +192,10 @@ impl McapSink {
             path: path.clone(),
             source,
         })?;
-        let writer = WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
+        let writer = writer_options()
             .compression_level(options.compression_level)
             .compression_threads(0)
             .chunk_size(Some(options.chunk_size))
-            .library(format!(
-                "tmrotor/{}; {}",
-                env!("CARGO_PKG_VERSION"),
-                mcap::LIBRARY_IDENTIFIER
-            ))
             .create(BufWriter::new(file))
             .map_err(|source| RecordError::Mcap {
                 path: path.clone(),
@@ -181,7 +211,7 @@ impl McapSink {
             options,
             checks: SinkChecks::default(),
             run: None,
-            channels: BTreeMap::new(),
+            channels: Channels::default(),
             sequence: 0,
             since_flush: 0,
             warnings: 0,
@@ -235,18 +265,11 @@ impl McapSink {
     }
 
     fn channel(&mut self, topic: Topic) -> Result<u16, RecordError> {
-        if let Some(&id) = self.channels.get(topic.name) {
-            return Ok(id);
-        }
-        let w = self.writer()?;
-        let added = w
-            .add_schema(topic.schema.name, "protobuf", topic.schema.descriptor_set)
-            .and_then(|schema_id| {
-                w.add_channel(schema_id, topic.name, "protobuf", &BTreeMap::new())
-            });
-        let id = added.map_err(|e| self.err(e))?;
-        self.channels.insert(topic.name, id);
-        Ok(id)
+        let Some(w) = self.writer.as_mut() else {
+            return Err(RecordError::Finished);
+        };
+        let added = self.channels.id(w, topic);
+        added.map_err(|e| self.err(e))
     }
 
     fn publish(

@@ -34,6 +34,7 @@
 //! ```
 
 pub mod convert;
+pub mod map;
 pub mod mcap_sink;
 pub mod output;
 pub mod pb;
