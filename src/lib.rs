@@ -49,10 +49,9 @@ pub mod truncation;
 /// Why: the work is already parallel at a coarser grain (a point's stability beside the
 /// next point's corrector, the Floquet product's column blocks, a campaign's runs), and
 /// the matrices are small (the 612-unknown condensed Newton system, 138-state monodromy
-/// matrices): faer's own fork–join on them cost more than it gained. Measured on the
-/// default sweep (2 cores, alternating): without stability 6.8 / 7.5 s against 7.9 /
-/// 8.1 s (system time 0.6 against 2 s), with stability 12.3 s against 12.6 s on average
-/// of five pairs; the recordings' branch and multipliers are identical either way.
+/// matrices): faer's own fork–join on them cost more than it gained (measured in
+/// docs/speed-history.md); the recordings' branch and multipliers are identical either
+/// way.
 pub fn sequential_dense_kernels() {
     faer::set_global_parallelism(faer::Par::Seq);
 }
@@ -66,10 +65,9 @@ const MI_OPTION_PURGE_DELAY: libmimalloc_sys::mi_option_t = 15;
 /// before any thread starts (the option is not thread safe).
 ///
 /// Why: a point's matrices are freed and allocated again at every point, and memory given
-/// back between points comes back as fresh pages to be faulted in and zeroed. Measured on
-/// the default sweep (2 cores): 59 000 and 48 000 minor page faults and 0.97 / 0.74 s of
-/// system time by default, 730 faults and 0.45–0.52 s with purging off; the peak resident
-/// memory stayed at 130–160 MB either way.
+/// back between points comes back as fresh pages to be faulted in and zeroed (page faults
+/// and system time measured in docs/speed-history.md; the peak resident memory does not
+/// change).
 pub fn keep_freed_memory() {
     // SAFETY: a plain store into mimalloc's option table, made before other threads exist.
     #[allow(unsafe_code)]

@@ -64,15 +64,13 @@
 //! `modal`, the default): there `e^{ΔB̄}` is a set of scalings and plane rotations and the
 //! fluctuation a thin gather and spread, so an interval costs `(2p+q)·d + (p+q)·(2p+q) +
 //! d·(p+q)`-ish multiply–adds per column instead of the dense block product's `(2n)² + m²`
-//! (on the reduced dual rotor about 7.5 k against 13 k; measured on one evaluation at
-//! 500 rad/s, one thread: 114 → 95 ms including the orbit sampling and the
-//! eigenvalues). The dense exponentials remain the fallback for a block without a
+//! (on the reduced dual rotor about 7.5 k against 13 k). The dense exponentials remain the fallback for a block without a
 //! well-conditioned eigenvector basis. The columns are split over the rayon threads.
 //!
 //! With the exponential map the intervals run on panels of eight columns stored by rows,
 //! through the crate's own multiply–add loops (`panel`, [`ExpSip::panels`]) instead of
-//! one general matrix product per operation and interval: the same arithmetic, about
-//! 1.6 times as many multiply–adds per second on the dual rotor.
+//! one general matrix product per operation and interval: the same arithmetic at a higher
+//! rate (measurements in docs/speed-history.md).
 //!
 //! ## The kicks' own directions
 //!
@@ -110,7 +108,7 @@
 //! within 2e-11; on the default sweep's points at 495–520 rad/s the multipliers above
 //! 1/2 within 5e-9, the size of the rounding differences between two builds. An
 //! interval's thermal cost falls from `2qm` to `2q²` multiply–adds per column plus
-//! `5qm/B` per update; measured on one thread, a product took 24 instead of 28.5 ms.
+//! `5qm/B` per update.
 //! Fields whose `B·max|N|` exceeds 0.02 are updated every interval.
 
 use faer::linalg::matmul::matmul;

@@ -31,31 +31,9 @@
 //!
 //! The built-in network for the paper's dual rotor is the `[thermal]` section of `models/dual_rotor.toml`
 //! ([`ThermalSpec::dual_rotor`]).
-
-//! ## Steady temperatures of the built-in network (ω = 620 rad/s)
 //!
-//! With gravity-share loads (1# 500 N, 2# 1200 N, 3# 1500 N, 4# 800 N; test
-//! `steady_temperatures_at_620_rad_s`) and the defaults (ball `f_v = 2`, `f_l = 0.0007`;
-//! roller `f_v = 2.2`, `f_l = 0.0003`; `ν0 = 39 mm²/s`), in °C:
-//!
-//! | case | T52 | T55 | T58 | T61 | T63 | T64 | T65 | T66 | max |
-//! |---|---|---|---|---|---|---|---|---|---|
-//! | q_l = 20 L/min, 25 °C | 56.1 | 58.6 | 27.8 | 49.3 | 29.0 | 30.2 | 25.2 | 28.3 | 58.6 |
-//! | q_l = 1 L/min, 25 °C | 80.7 | 87.7 | 31.9 | 72.5 | 66.7 | 74.3 | 29.4 | 62.0 | 87.7 |
-//! | q_l = 2 L/min, 50 °C | 83.0 | 87.9 | 52.3 | 76.5 | 69.7 | 74.5 | 50.8 | 67.1 | 87.9 |
-//!
-//! Against the paper (section 5.3, Fig. 14): 3# is the coolest bearing and its lubricant
-//! (node 65) the coolest lubricant (match); at 20 L/min the rolling-element order
-//! 2# > 1# > 4# > 3# matches; `T_b` is the hottest node of the ball bearings (match) but the
-//! rings sit within about 1 K of each other and of the lubricant, so `T_i > T_o` holds for
-//! 1# only; the 4# position is not the hottest (2# is); with 2 L/min and 50 °C cooling the
-//! maximum is about 88 °C at 620 rad/s (93 °C at 700 rad/s) against the paper's ≈72 °C. The
-//! viscous Palmgren heat dominates (≈1–2.7 kW per ball bearing), so `f_v` (linear) and `ν0`
-//! (`Q_gv ∝ ν0^(2/3)`) move the temperatures most: ball `f_v = 1` (Harris' oil-mist value)
-//! gives 80 °C at 700 rad/s and makes the 4# lubricant the hottest at 1 L/min, as in the
-//! paper, but leaves SPEC's 2–4 range; `ν0 = 25 mm²/s` gives 85 °C. The dynamic loads of the
-//! coupled solution (larger than gravity near resonance) raise `Q_gl` and the contact
-//! conductances; a calibration is best made on the coupled sweep.
+//! What the network gives on the built-in model, against the paper's temperatures, and
+//! how its open values were chosen: docs/calibration.md and docs/results.md.
 
 pub mod contact;
 pub mod convection;
