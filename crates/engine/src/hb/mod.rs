@@ -23,6 +23,6 @@ pub use aft::{Aft, AftError, Signal};
 pub use basis::{Basis, BasisError, Ratio};
 pub use condense::{Border, Factorization, LinearSolver, SolveError};
 pub use newton::{NewtonError, NewtonOptions, NewtonStats};
-pub use residual::{HarmonicBalance, HbError, JacobianParts, ResidualNorms};
+pub use residual::{HarmonicBalance, HbError, JacobianParts, ResidualNorms, SparseLinear};
 pub use solution::HbSolution;
 pub use time_residual::{ResidualStats, TimeResidual, time_domain_residual};

@@ -158,6 +158,49 @@ pub(crate) fn fields(lin: &LinearPart, n_mech: usize, n_therm: usize) -> [Field<
     ]
 }
 
+/// One nonzero `(row, column)` of a [`LinearPart`] in the harmonic-balance layout: the
+/// first coefficient of the row's and the column's DoF, and the stiffness, velocity and
+/// mass entries there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct LinearEntry {
+    ri: usize,
+    cj: usize,
+    k: f64,
+    c: f64,
+    m: f64,
+}
+
+/// A [`LinearPart`]'s nonzero entries ([`HarmonicBalance::sparse_linear`]): its product
+/// with coefficient vectors in the cost of its nonzeros.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SparseLinear {
+    entries: Vec<LinearEntry>,
+}
+
+impl SparseLinear {
+    /// Adds the linear terms' coefficients `L(ω) coeffs` to `out`, as
+    /// [`HarmonicBalance::add_linear`] (the same sums in the same order) for the
+    /// harmonic balance `hb` this was built for.
+    pub fn apply(&self, hb: &HarmonicBalance<'_>, omega: f64, coeffs: &[f64], out: &mut [f64]) {
+        let basis = hb.aft.basis();
+        let nh = basis.n_harmonics();
+        let w: Vec<f64> = basis
+            .harmonics()
+            .iter()
+            .map(|r| r.value() * omega)
+            .collect();
+        for &LinearEntry { ri, cj, k, c, m } in &self.entries {
+            out[ri] += k * coeffs[cj];
+            for (h, &w) in w.iter().enumerate() {
+                let a = k - w * w * m;
+                let (xa, xb) = (coeffs[cj + 1 + h], coeffs[cj + 1 + nh + h]);
+                out[ri + 1 + h] += a * xa + w * c * xb;
+                out[ri + 1 + nh + h] += -w * c * xa + a * xb;
+            }
+        }
+    }
+}
+
 fn check_dofs(field: &'static str, idx: &[usize], n: usize) -> Result<(), HbError> {
     if let Some(&bad) = idx.iter().find(|&&i| i >= n) {
         return Err(HbError::NonlinearDofOutOfRange {
@@ -318,9 +361,15 @@ impl<'a> HarmonicBalance<'a> {
 
     /// Adds `Z(ω) A` to `out`.
     pub fn add_linear(&self, lin: &LinearPart, omega: f64, coeffs: &[f64], out: &mut [f64]) {
+        self.sparse_linear(lin).apply(self, omega, coeffs, out);
+    }
+
+    /// The nonzero entries of `lin` in the order [`Self::add_linear`] visits them, for
+    /// applying the same linear part to many vectors ([`SparseLinear::apply`]) without
+    /// scanning its zeros each time.
+    pub fn sparse_linear(&self, lin: &LinearPart) -> SparseLinear {
         let nc = self.n_coeffs();
-        let basis = self.aft.basis();
-        let nh = basis.n_harmonics();
+        let mut entries = Vec::new();
         for fld in fields(lin, self.n_mech, self.n_therm) {
             for i in 0..fld.n {
                 let ri = (fld.offset + i) * nc;
@@ -332,17 +381,11 @@ impl<'a> HarmonicBalance<'a> {
                     if k == 0.0 && c == 0.0 && m == 0.0 {
                         continue;
                     }
-                    out[ri] += k * coeffs[cj];
-                    for (h, r) in basis.harmonics().iter().enumerate() {
-                        let w = r.value() * omega;
-                        let a = k - w * w * m;
-                        let (xa, xb) = (coeffs[cj + 1 + h], coeffs[cj + 1 + nh + h]);
-                        out[ri + 1 + h] += a * xa + w * c * xb;
-                        out[ri + 1 + nh + h] += -w * c * xa + a * xb;
-                    }
+                    entries.push(LinearEntry { ri, cj, k, c, m });
                 }
             }
         }
+        SparseLinear { entries }
     }
 
     /// Time samples of the nonlinear DoFs: `x`, `v` (p series each) and `T` (q series),

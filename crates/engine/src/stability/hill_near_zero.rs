@@ -286,6 +286,8 @@ impl<'a, 'h> HillPencil<'a, 'h> {
                 thermal_capacity: DenseMatrix::zeros(lin.thermal_capacity.n),
                 thermal_conductance: DenseMatrix::zeros(lin.thermal_capacity.n),
             };
+            // their nonzeros once: the operator applies them at every Arnoldi step
+            let (a1, a2) = (self.hb.sparse_linear(&a1), self.hb.sparse_linear(&a2));
             // u = [x; y] with y = λ x_m on the mechanical unknowns only (the thermal
             // equations are of first order): r = A1 x + A2 (y + σ x_m),
             // z = −T(σ)⁻¹ r, out = [z; x_m + σ z_m]
@@ -296,8 +298,8 @@ impl<'a, 'h> HillPencil<'a, 'h> {
                     w[i] = y[i] + shift * x[i];
                 }
                 let mut r = vec![0.0; nu];
-                self.hb.add_linear(&a2, omega, &w, &mut r);
-                self.hb.add_linear(&a1, omega, x, &mut r);
+                a2.apply(self.hb, omega, &w, &mut r);
+                a1.apply(self.hb, omega, x, &mut r);
                 self.add_velocity(x, &mut r);
                 let (z, _) = fact.solve(&r, 0.0).map_err(|e| e.to_string())?;
                 for i in 0..nu {
@@ -363,7 +365,11 @@ fn arnoldi_nearest(
     let max_dim = options.max_dim.max(2 * want + 40).min(dim);
     // the Krylov basis as columns, orthogonalised by two passes of classical
     // Gram–Schmidt in matrix–vector form (the cost of the method besides the solves)
-    let mut basis = Mat::<f64>::zeros(dim, max_dim + 1);
+    // allocated for the first look and grown as the iteration goes on: most points
+    // converge in a quarter of `max_dim`, and a basis allocated in full is megabytes of
+    // fresh pages zeroed at every point
+    let mut next_check = (want + want / 3 + 4).min(96).min(max_dim);
+    let mut basis = Mat::<f64>::zeros(dim, (next_check + 1).min(max_dim + 1));
     // Hessenberg columns: h[j] has j + 2 entries
     let mut h: Vec<Vec<f64>> = Vec::new();
     let v = start_vector(dim);
@@ -374,9 +380,9 @@ fn arnoldi_nearest(
     let mut w = Mat::<f64>::zeros(dim, 1);
     let mut u = vec![0.0; dim];
     let mut out = vec![0.0; dim];
-    // the first look after about half the wanted count, then every eight steps
-    // (early enough for a large network whose disk holds fewer than the wanted count)
-    let mut next_check = (want + want / 3 + 4).min(96).min(max_dim);
+    // the first look after about half the wanted count (`next_check` above), then every
+    // twelve steps (early enough for a large network whose disk holds fewer than the
+    // wanted count)
     loop {
         let j = h.len();
         for (i, x) in u.iter_mut().enumerate() {
@@ -421,6 +427,10 @@ fn arnoldi_nearest(
                 ));
             }
             next_check = (m + 12).min(max_dim);
+        }
+        if basis.ncols() < j + 2 {
+            let cols = (next_check + 1).min(max_dim + 1).max(j + 2);
+            basis.resize_with(dim, cols, |_, _| 0.0);
         }
         for i in 0..dim {
             basis[(i, j + 1)] = w[(i, 0)] / beta;
