@@ -5,7 +5,9 @@
 //! For each group of events (those closer than two windows to each other) and each order,
 //! the branch is followed again on that order's basis from the recorded point a window
 //! before the group (its coefficients carried over to the larger basis, the new harmonics
-//! zero) to a window past it, with the run's stability method. A located bifurcation is
+//! zero) to a window past it, with the run's stability method (without stability for a
+//! group of saddle-nodes alone: the folds are located from the branch, and stability
+//! there would be most of the window's cost). A located bifurcation is
 //! matched to the nearest one of its kind found there; an unlocated change of stability to
 //! the nearest change of the stable flag between two points, or any bifurcation located
 //! there. The sweep runs this by default after its branch ([`super::SweepProblem::run`],
@@ -100,12 +102,12 @@ struct Window<'a> {
 }
 
 impl Window<'_> {
-    /// Follows the window on `problem`'s basis with `method`; what it located and where
-    /// the stable flag changed.
+    /// Follows the window on `problem`'s basis with `method` (`None`: without stability,
+    /// which locates the folds alone); what it located and where the stable flag changed.
     fn follow(
         &self,
         problem: &SweepProblem,
-        method: &dyn crate::stability::StabilityMethod,
+        method: Option<&dyn crate::stability::StabilityMethod>,
     ) -> Result<Found, String> {
         let p = self
             .start
@@ -122,7 +124,7 @@ impl Window<'_> {
                 self.end,
                 self.bounds,
                 Some(guess),
-                Some(method),
+                method,
                 self.max_points,
             )
             .map_err(|e| e.to_string())
@@ -272,6 +274,12 @@ pub fn verify_events(
                 }
                 None => hi + sign * w,
             };
+            // a group of saddle-nodes alone is matched by the folds of the window's branch,
+            // which its corrector locates without multipliers: no stability there
+            let folds_only = g
+                .iter()
+                .all(|&i| events[i].kind == Some(BifurcationKind::SaddleNode));
+            let method = (!folds_only).then_some(method.as_ref());
             let t0 = Instant::now();
             let window = Window {
                 start,
@@ -294,7 +302,7 @@ pub fn verify_events(
                         p.omega_rad_s, end, p.index
                     ));
                 }
-                window.follow(&problem, method.as_ref())
+                window.follow(&problem, method)
             };
             // A fold pair or a crossing narrower than a step is passed over unseen: before
             // an event is called vanished, the window is followed again with
@@ -314,7 +322,7 @@ pub fn verify_events(
                     max_points: options.max_points * FINE_STEP_DIVISOR as usize,
                     ..window
                 }
-                .follow(&fine_problem, method.as_ref());
+                .follow(&fine_problem, method);
                 if again.is_ok() {
                     found = again;
                 }
