@@ -36,16 +36,61 @@ pub fn read_text(path: &Path, limit: u64) -> std::io::Result<String> {
             ),
         ));
     }
-    let mut text = String::new();
+    let mut bytes = Vec::new();
     // (bounded again while reading: the file may grow after the check)
     std::fs::File::open(path)?
         .take(limit + 1)
-        .read_to_string(&mut text)?;
-    if text.len() as u64 > limit {
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
         return Err(std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             format!("it grew above the limit of {limit} bytes while being read"),
         ));
     }
-    Ok(text)
+    String::from_utf8(bytes).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            not_utf8(e.as_bytes(), e.utf8_error().valid_up_to()),
+        )
+    })
+}
+
+/// Where text stops being UTF-8: line, column and byte offset of the first bad byte.
+fn not_utf8(bytes: &[u8], at: usize) -> String {
+    let before = &bytes[..at];
+    let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+    let line_start = before
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map_or(0, |i| i + 1);
+    // the column in characters of the valid text before it on its line
+    let column = String::from_utf8_lossy(&before[line_start..])
+        .chars()
+        .count()
+        + 1;
+    format!(
+        "line {line}, column {column} (byte {at}, 0x{:02x}): not UTF-8 text; save the file \
+         as UTF-8",
+        bytes[at]
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_that_is_not_utf8_is_refused_with_its_position() {
+        let dir = tempfile::tempdir().expect("tempdir");
+        let path = dir.path().join("m.toml");
+        std::fs::write(&path, b"a = 1\nname = \"\xc3\xa9x\xff\"\n").expect("write");
+        let err = read_text(&path, MAX_INPUT_BYTES).expect_err("not UTF-8");
+        let msg = err.to_string();
+        assert!(msg.contains("line 2, column 11 (byte 17, 0xff)"), "{msg}");
+        std::fs::write(&path, "a = \"é\"\n").expect("write");
+        assert_eq!(
+            read_text(&path, MAX_INPUT_BYTES).expect("UTF-8"),
+            "a = \"é\"\n"
+        );
+    }
 }

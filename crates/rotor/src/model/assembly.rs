@@ -502,6 +502,8 @@ impl Assembly {
             let mut ksec: Vec<f64> = vec![1e8; spec.bearings.len()];
             let rhs = Mat::from_fn(n, 1, |i, _| self.gravity[i]);
             let mut converged = false;
+            // the bearing whose secant stiffness still changed most: (index, load, change)
+            let mut worst: Option<(usize, f64, f64)> = None;
             for _ in 0..500 {
                 let mut k = base.clone();
                 for &b in &free {
@@ -517,6 +519,7 @@ impl Assembly {
                     ));
                 }
                 let mut change: f64 = 0.0;
+                worst = None;
                 for &b in &free {
                     let (ix, ox) = dofs[b];
                     let ox_v = |d: usize| ox.map(|o| x[(o + d, 0)]).unwrap_or(0.0);
@@ -527,7 +530,11 @@ impl Assembly {
                     let mag = load[0].hypot(load[1]);
                     let knew = laws[b].secant_stiffness(mag).max(1.0);
                     let kup = (ksec[b] * knew).sqrt();
-                    change = change.max((kup / ksec[b] - 1.0).abs());
+                    let rel = (kup / ksec[b] - 1.0).abs();
+                    if rel > change {
+                        worst = Some((b, mag, rel));
+                    }
+                    change = change.max(rel);
                     ksec[b] = kup;
                 }
                 if change < 1e-10 {
@@ -536,10 +543,19 @@ impl Assembly {
                 }
             }
             if !converged {
-                return Err(numerical(
-                    "static gravity equilibrium of the bearings did not converge in 500 iterations"
-                        .into(),
-                ));
+                let which = worst.map_or(String::new(), |(b, load, rel)| {
+                    format!(
+                        ": bearings[{b}] (\"{}\") still changes its secant stiffness by {rel:.1e} \
+                         a step at a load of {load:.4e} N; check its hertz_stiffness and \
+                         initial_clearance_m against the rotor's weight, or give it \
+                         linearization_load_n or linear_stiffness_n_m",
+                        spec.bearings[b].id
+                    )
+                });
+                return Err(numerical(format!(
+                    "static gravity equilibrium of the bearings did not converge in 500 \
+                     iterations{which}"
+                )));
             }
         }
         let mut bearings = Vec::new();
