@@ -1,7 +1,8 @@
 //! The transient integrator past a thermo-mechanical Neimark–Sacker point of the
 //! self-heated Duffing oscillator (`systems::thermo_duffing`): the temperature leaves the
 //! orbit in a slow oscillation whose period is the one the tool's crossing pair of
-//! exponents (Hill's eigenproblem at the located point) predicts.
+//! exponents (Hill's eigenproblem at the located point) predicts; and where no stable
+//! orbit exists, the oscillator hunts between the sheets of its frozen response.
 
 use num_complex::Complex64;
 use tmrotor::continuation::{Continuation, ContinuationOptions};
@@ -165,5 +166,143 @@ fn past_a_neimark_sacker_point_the_temperature_modulates_at_the_predicted_period
     assert!(
         (measured / predicted - 1.0).abs() < 0.01,
         "{measured} against {predicted}"
+    );
+}
+
+/// Thermal hunting: with stronger heating (`α = 3`) the coupled branch of the
+/// self-heated oscillator does not fold, and between its two Neimark–Sacker points its
+/// orbit, the only periodic orbit there, is unstable (the variational equations'
+/// multipliers). In time the oscillator then relaxes back and forth between the two sheets
+/// of the frozen-temperature response: it heats on the upper sheet until it falls off,
+/// cools on the lower one until it jumps back up, over thermal time constants, and never
+/// settles.
+#[test]
+fn where_no_stable_orbit_exists_the_oscillator_hunts_between_the_sheets() {
+    let tau = 100.0 * TAU;
+    let mut system = ThermoDuffing::new(tau);
+    system.heating = 3.0;
+    let basis = Basis::integer(9).expect("basis");
+    let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.8, 1.6);
+    opts.ds_max = 0.05;
+    opts.scale_mech = Some(1.0);
+    opts.scale_therm = Some(1.0);
+    opts.scale_omega = Some(1.0);
+    let method = Variational::default();
+    let mut cont = Continuation::new(hb, opts, Some(&method as _)).expect("continuation");
+    let branch = cont.run(|_| {}).expect("branch");
+    let kinds = |k| {
+        branch
+            .bifurcations
+            .iter()
+            .filter(|p| p.bifurcation == Some(k))
+            .map(|p| p.solution.omega)
+            .collect::<Vec<f64>>()
+    };
+    let (ns, folds) = (
+        kinds(BifurcationKind::NeimarkSacker),
+        kinds(BifurcationKind::SaddleNode),
+    );
+    println!("Neimark–Sacker points at {ns:.5?}, folds at {folds:.5?}");
+    assert!(folds.is_empty(), "the coupled branch folds at {folds:?}");
+    assert_eq!(ns.len(), 2, "{ns:?}");
+    // midway between the points: the branch passes once, unstable
+    let w = 0.5 * (ns[0] + ns[1]);
+    let crossing: Vec<_> = branch
+        .points
+        .windows(2)
+        .filter(|q| (q[0].solution.omega - w) * (q[1].solution.omega - w) <= 0.0)
+        .collect();
+    assert_eq!(crossing.len(), 1, "the branch passes {w} once");
+    assert_eq!(crossing[0][0].stable(), Some(false));
+    assert_eq!(crossing[0][1].stable(), Some(false));
+    let orbit = &crossing[0][0].solution;
+    let (mut x, mut v, mut th) = ([0.0], [0.0], [0.0]);
+    orbit.state_at(0.0, &mut x, &mut v, &mut th);
+    let hunt = |steps: u32| -> (f64, f64, usize, f64) {
+        let mut tr = Transient::new(
+            &system,
+            SpeedProfile::Constant(w),
+            &x,
+            &v,
+            &th,
+            TransientOptions {
+                min_steps_per_revolution: steps,
+                ..fixed_steps()
+            },
+        )
+        .expect("transient");
+        // per forcing period: the largest |x| and the temperature at its end
+        let period = TAU / w;
+        let periods = 4000; // about 40 thermal time constants
+        let mut amp = Vec::with_capacity(periods);
+        let mut theta = Vec::with_capacity(periods);
+        for p in 1..=periods {
+            let mut peak: f64 = 0.0;
+            tr.advance(p as f64 * period, &mut |s| {
+                peak = peak.max(s.x[0].abs());
+                true
+            })
+            .expect("advance");
+            amp.push(peak);
+            theta.push(tr.state().2[0]);
+        }
+        // after the first 10 τ: the amplitude keeps swinging between the sheets
+        let late = &amp[1000..];
+        // the sheets' levels: the 10th and 90th percentiles of the amplitude (the extremes
+        // fall inside the jumps, where a period's peak depends on where it was sampled)
+        let mut sorted = late.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let (lo, hi) = (sorted[sorted.len() / 10], sorted[sorted.len() * 9 / 10]);
+        let (t_lo, t_hi) = theta[1000..]
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
+        // jumps up: from within a quarter of the gap of the lower level to within a
+        // quarter of the upper one (with that hysteresis, the ringing after a jump is not
+        // counted as another)
+        let (to_high, to_low) = (lo + 0.75 * (hi - lo), lo + 0.25 * (hi - lo));
+        let mut high = late[0] > 0.5 * (lo + hi);
+        let mut ups = Vec::new();
+        for (i, &a) in late.iter().enumerate() {
+            if !high && a > to_high {
+                high = true;
+                ups.push(i);
+            } else if high && a < to_low {
+                high = false;
+            }
+        }
+        let cycle = if ups.len() >= 2 {
+            (ups[ups.len() - 1] - ups[0]) as f64 / (ups.len() - 1) as f64
+        } else {
+            f64::NAN
+        };
+        println!(
+            "{steps} steps a period, Ω = {w:.5}: amplitude levels {lo:.3} and {hi:.3}, temperature \
+             {t_lo:.3} … {t_hi:.3}, {} jumps up, a cycle of {cycle:.1} periods ({:.2} τ); \
+             the orbit's amplitude {:.3}",
+            ups.len(),
+            cycle * period / tau,
+            orbit.max_abs(0)
+        );
+        (lo, hi, ups.len(), cycle * period / tau)
+    };
+    let (lo, hi, jumps, tau_cycles) = hunt(200);
+    assert!(hi > 1.5 * lo, "no jump between the sheets: {lo} … {hi}");
+    assert!(jumps >= 3, "{jumps} jumps up in 30 τ");
+    // the cycle is thermal: of the order of the thermal time constant, not of the
+    // vibration's period
+    assert!(
+        (0.1..20.0).contains(&tau_cycles),
+        "a cycle of {tau_cycles} τ"
+    );
+    // and a property of the equations, not of the steps: twice as many give the same
+    let (lo2, hi2, _, tau_cycles2) = hunt(400);
+    assert!(
+        (tau_cycles2 / tau_cycles - 1.0).abs() < 0.02
+            && (hi2 / hi - 1.0).abs() < 0.02
+            && (lo2 / lo - 1.0).abs() < 0.02,
+        "{tau_cycles} τ, {lo} … {hi} against {tau_cycles2} τ, {lo2} … {hi2}"
     );
 }
