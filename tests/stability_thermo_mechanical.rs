@@ -449,3 +449,92 @@ fn the_crossing_pairs_thermal_share_matches_the_reference() {
     );
     assert!((m.angle_rad - l_ref.im.abs() * s.period()).abs() < 1e-3 * m.angle_rad);
 }
+
+/// The modes of Hill's eigenproblem near zero are the monodromy matrix's eigenvectors:
+/// for each near-zero exponent λ of the self-heated oscillator beside its Neimark–Sacker
+/// point, the mode's state at t = 0 (`[p, λp + ṗ, p_T]`) carried over one period by the
+/// variational equations (an independent integration) comes back multiplied by
+/// `μ = e^{λP}`.
+#[test]
+fn near_zero_modes_are_eigenvectors_of_the_monodromy_matrix() {
+    let tau = 100.0 * std::f64::consts::TAU;
+    let system = ThermoDuffing::new(tau);
+    let (b, k) = located_neimark_sacker(&system, 9);
+    let s9 = &b.bifurcations[k].solution;
+    // the largest relative residual `‖Φy − μy‖/‖y‖` of the modes at `order`, on the orbit
+    // solved again at that order
+    let worst = |order: u32| -> f64 {
+        let basis = Basis::integer(order).expect("basis");
+        let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
+        let guess = tmrotor::hb::HbSolution::from_unknowns(
+            s9.omega,
+            &basis,
+            1,
+            &embed(s9, order),
+            &Default::default(),
+        );
+        let (a, st) = tmrotor::hb::newton::solve_fixed(
+            &hb,
+            s9.omega,
+            &guess.unknowns(),
+            &tmrotor::hb::NewtonOptions::default(),
+        )
+        .expect("orbit");
+        let s = HbSolution::from_unknowns(s9.omega, &basis, 1, &a, &st);
+        let modes = HillPencil::new(&hb, &s, None)
+            .expect("pencil")
+            .near_zero_modes(3, &HillOptions::default())
+            .expect("modes");
+        assert_eq!(modes.len(), 3, "{modes:?}");
+        let phi = Variational::default()
+            .monodromy(&system, &s)
+            .expect("monodromy");
+        let period = s.period();
+        let mut worst: f64 = 0.0;
+        for m in &modes {
+            let (x, v, th) = m.state_at(&basis, s.omega, 1, 0.0);
+            let y: Vec<Complex64> = x.into_iter().chain(v).chain(th).collect();
+            let mu = (m.exponent * period).exp();
+            let py: Vec<Complex64> = (0..3)
+                .map(|i| (0..3).map(|j| y[j] * phi[(i, j)]).sum())
+                .collect();
+            let norm = y.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+            let err = py
+                .iter()
+                .zip(&y)
+                .map(|(a, b)| (a - mu * b).norm_sqr())
+                .sum::<f64>()
+                .sqrt()
+                / norm;
+            println!(
+                "order {order}, λ = {:.4e}: ‖Φy − μy‖/‖y‖ = {err:.2e}",
+                m.exponent
+            );
+            worst = worst.max(err);
+        }
+        worst
+    };
+    let (e9, e15) = (worst(9), worst(15));
+    // eigenvectors to the truncation's accuracy, converging with the order
+    assert!(e9 < 1e-5, "order 9: {e9}");
+    assert!(e15 < 0.1 * e9, "order 15: {e15} against {e9} at order 9");
+}
+
+/// `s`'s unknowns on the integer basis of `order` (its harmonics kept, new ones zero).
+fn embed(s: &HbSolution, order: u32) -> Vec<f64> {
+    let nc_old = s.basis.n_coeffs();
+    let (h_old, h_new) = ((nc_old - 1) / 2, order as usize);
+    let nc = 1 + 2 * h_new;
+    let block = |c: &[f64]| {
+        let mut out = vec![0.0; nc];
+        out[0] = c[0];
+        for h in 0..h_old.min(h_new) {
+            out[1 + h] = c[1 + h];
+            out[1 + h_new + h] = c[1 + h_old + h];
+        }
+        out
+    };
+    let mut u = block(s.mech_coeffs(0));
+    u.extend(block(s.therm_coeffs(0)));
+    u
+}

@@ -91,6 +91,62 @@ pub struct NearZero {
     pub steps: usize,
 }
 
+/// A Floquet mode of the truncated balance near zero: the exponent `λ` and the harmonic
+/// coefficients of its periodic factor `p` (a perturbation `Re(e^{λt} p(t))` of the
+/// orbit), in the layout of the balance's unknowns (mechanical DoFs, then thermal, each
+/// `1 + 2H` coefficients), complex, with unit Euclidean norm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HillMode {
+    pub exponent: Complex64,
+    pub coeffs: Vec<Complex64>,
+}
+
+impl HillMode {
+    /// The perturbation `e^{λt} p(t)` at time `t` as a complex state `[x, v, T]` (lengths
+    /// `n_mech`, `n_mech`, `n_therm`), `p` on `basis` at `omega`: `x = e^{λt} p`,
+    /// `v = e^{λt} (λ p + ṗ)`. Its real part (or that of any complex multiple) is a
+    /// perturbation of the orbit along the mode.
+    pub fn state_at(
+        &self,
+        basis: &crate::hb::Basis,
+        omega: f64,
+        n_mech: usize,
+        t: f64,
+    ) -> (Vec<Complex64>, Vec<Complex64>, Vec<Complex64>) {
+        let part = |f: fn(&Complex64) -> f64| -> HbSolution {
+            let u: Vec<f64> = self.coeffs.iter().map(f).collect();
+            HbSolution::from_unknowns(omega, basis, n_mech, &u, &Default::default())
+        };
+        let (re, im) = (part(|c| c.re), part(|c| c.im));
+        let n_therm = re.n_therm();
+        let eval = |s: &HbSolution| {
+            let (mut x, mut v, mut th) = (vec![0.0; n_mech], vec![0.0; n_mech], vec![0.0; n_therm]);
+            crate::system::PeriodicOrbit::state_at(s, t, &mut x, &mut v, &mut th);
+            (x, v, th)
+        };
+        let ((xr, vr, tr), (xi, vi, ti)) = (eval(&re), eval(&im));
+        let g = (self.exponent * t).exp();
+        let lam = self.exponent;
+        let zip = |a: &[f64], b: &[f64]| -> Vec<Complex64> {
+            a.iter()
+                .zip(b)
+                .map(|(&r, &i)| Complex64::new(r, i))
+                .collect()
+        };
+        let (x, dp, th) = (zip(&xr, &xi), zip(&vr, &vi), zip(&tr, &ti));
+        let v = x
+            .iter()
+            .zip(&dp)
+            .map(|(&p, &d)| g * (lam * p + d))
+            .collect();
+        (
+            x.into_iter().map(|p| g * p).collect(),
+            v,
+            th.into_iter().map(|p| g * p).collect(),
+        )
+    }
+}
+
 /// Hill's pencil `T(λ)` of the harmonic balance at a converged point.
 pub struct HillPencil<'a, 'h> {
     hb: &'a HarmonicBalance<'h>,
@@ -252,6 +308,41 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         want: usize,
         options: &HillOptions,
     ) -> Result<NearZero, StabilityError> {
+        self.near_zero_impl(want, options, false).map(|(z, _)| z)
+    }
+
+    /// [`Self::near_zero`] with the mode of each exponent found (in the same order): the
+    /// Ritz vectors of the Arnoldi iteration, whose residual is below the same tolerance.
+    pub fn near_zero_modes(
+        &self,
+        want: usize,
+        options: &HillOptions,
+    ) -> Result<Vec<HillMode>, StabilityError> {
+        let (z, modes) = self.near_zero_impl(want, options, true)?;
+        let nu = self.hb.n_unknowns();
+        Ok(z.exponents
+            .into_iter()
+            .zip(modes)
+            .map(|(exponent, mut v)| {
+                v.truncate(nu);
+                let norm = v.iter().map(|c| c.norm_sqr()).sum::<f64>().sqrt();
+                if norm > 0.0 {
+                    v.iter_mut().for_each(|c| *c /= norm);
+                }
+                HillMode {
+                    exponent,
+                    coeffs: v,
+                }
+            })
+            .collect())
+    }
+
+    fn near_zero_impl(
+        &self,
+        want: usize,
+        options: &HillOptions,
+        vectors: bool,
+    ) -> Result<(NearZero, Vec<Vec<Complex64>>), StabilityError> {
         let omega = self.parts.omega;
         let setup = |reason: String| StabilityError::Setup { omega, reason };
         let nu = self.hb.n_unknowns();
@@ -311,7 +402,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
                 Ok(())
             };
             let want = want.min(dim.saturating_sub(2)).max(1);
-            return arnoldi_nearest(op, dim, want, shift, r_max, options)
+            return arnoldi_nearest(op, dim, want, shift, r_max, options, vectors)
                 .map_err(|e| setup(format!("Hill eigenvalues near zero: {e}")));
         }
         Err(setup(format!("Hill's matrix at the shift: {last_err}")))
@@ -360,7 +451,8 @@ fn arnoldi_nearest(
     shift: f64,
     r_max: f64,
     options: &HillOptions,
-) -> Result<NearZero, String> {
+    vectors: bool,
+) -> Result<(NearZero, Vec<Vec<Complex64>>), String> {
     // at least twice the wanted count (a large thermal network wants many)
     let max_dim = options.max_dim.max(2 * want + 40).min(dim);
     // the Krylov basis as columns, orthogonalised by two passes of classical
@@ -418,8 +510,11 @@ fn arnoldi_nearest(
         let m = h.len();
         let breakdown = beta <= 1e-14 * h[j].iter().map(|x| x.abs()).fold(0.0, f64::max);
         if m >= next_check || breakdown || m >= max_dim {
-            if let Some(found) = ritz_check(&h, m, want, shift, r_max, options.tol, breakdown) {
-                return Ok(NearZero { steps: m, ..found });
+            let q = vectors.then(|| basis.as_ref().subcols(0, m));
+            if let Some((found, modes)) =
+                ritz_check(&h, m, want, (shift, r_max), options.tol, breakdown, q)
+            {
+                return Ok((NearZero { steps: m, ..found }, modes));
             }
             if breakdown || m >= max_dim {
                 return Err(format!(
@@ -439,21 +534,22 @@ fn arnoldi_nearest(
 }
 
 /// The converged eigenvalues nearest the shift from the Hessenberg matrix of `m` steps,
-/// when the `want` nearest and the one after them (or all in the disk `r_max`) are.
+/// when the `want` nearest and the one after them (or all in the disk `r_max`) are; with
+/// `basis` (the Krylov vectors), the Ritz vector of each too.
 fn ritz_check(
     h: &[Vec<f64>],
     m: usize,
     want: usize,
-    shift: f64,
-    r_max: f64,
+    (shift, r_max): (f64, f64),
     tol: f64,
     exact: bool,
-) -> Option<NearZero> {
+    basis: Option<faer::MatRef<'_, f64>>,
+) -> Option<(NearZero, Vec<Vec<Complex64>>)> {
     let hm = Mat::from_fn(m, m, |i, j| if i <= j + 1 { h[j][i] } else { 0.0 });
     let eig = hm.eigen().ok()?;
     let (s, u) = (eig.S(), eig.U());
     let beta = h[m - 1][m];
-    let mut ritz: Vec<(Complex64, bool)> = (0..m)
+    let mut ritz: Vec<(Complex64, bool, usize)> = (0..m)
         .filter_map(|k| {
             let theta: Complex64 = s[k];
             if !theta.re.is_finite() || !theta.im.is_finite() || theta.norm() == 0.0 {
@@ -462,12 +558,12 @@ fn ritz_check(
             let norm = (0..m).map(|i| u[(i, k)].norm_sqr()).sum::<f64>().sqrt();
             let last = u[(m - 1, k)].norm() / norm.max(f64::MIN_POSITIVE);
             let converged = exact || beta.abs() * last <= tol * theta.norm();
-            Some((Complex64::new(shift, 0.0) + theta.inv(), converged))
+            Some((Complex64::new(shift, 0.0) + theta.inv(), converged, k))
         })
         .collect();
     ritz.sort_by(|a, b| (a.0 - shift).norm().total_cmp(&(b.0 - shift).norm()));
     // the leading run of converged values
-    let lead = ritz.iter().take_while(|(_, c)| *c).count();
+    let lead = ritz.iter().take_while(|(_, c, _)| *c).count();
     let last_outside = lead > 0 && ritz[lead - 1].0.norm() >= r_max;
     if !(lead > want || last_outside || (exact && lead > 0)) {
         return None;
@@ -479,22 +575,40 @@ fn ritz_check(
     {
         k += 1;
     }
-    let inside: Vec<Complex64> = ritz[..k]
+    let mut inside: Vec<(Complex64, usize)> = ritz[..k]
         .iter()
-        .map(|(l, _)| *l)
-        .filter(|l| l.norm() < r_max)
+        .map(|&(l, _, e)| (l, e))
+        .filter(|(l, _)| l.norm() < r_max)
         .collect();
-    let edge_in = inside.iter().map(|l| l.norm()).fold(0.0, f64::max);
+    let edge_in = inside.iter().map(|(l, _)| l.norm()).fold(0.0, f64::max);
     let edge_out = ritz[k..lead]
         .iter()
-        .map(|(l, _)| l.norm())
+        .map(|(l, _, _)| l.norm())
         .fold(r_max, f64::min);
     let radius = 0.5 * (edge_in + edge_out.max(edge_in));
-    let mut exponents = inside;
-    exponents.sort_by(|a, b| a.norm().total_cmp(&b.norm()));
-    Some(NearZero {
-        exponents,
-        radius,
-        steps: m,
-    })
+    inside.sort_by(|a, b| a.0.norm().total_cmp(&b.0.norm()));
+    // the Ritz vectors `Q y` of the exponents kept, when asked for
+    let modes = match basis {
+        Some(q) => inside
+            .iter()
+            .map(|&(_, e)| {
+                (0..q.nrows())
+                    .map(|i| {
+                        (0..m).fold(Complex64::new(0.0, 0.0), |acc, j| {
+                            acc + u[(j, e)] * q[(i, j)]
+                        })
+                    })
+                    .collect()
+            })
+            .collect(),
+        None => Vec::new(),
+    };
+    Some((
+        NearZero {
+            exponents: inside.into_iter().map(|(l, _)| l).collect(),
+            radius,
+            steps: m,
+        },
+        modes,
+    ))
 }

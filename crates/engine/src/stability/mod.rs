@@ -44,7 +44,7 @@ pub mod variational;
 pub use exp_sip::{ExpSip, IntervalMap, MeanSplit, panel_kernel_isa};
 pub use expm::expm;
 pub use frozen::{FrozenOrbit, FrozenTemperature};
-pub use hill_near_zero::{HillOptions, HillPencil, NearZero, near_zero_exponents};
+pub use hill_near_zero::{HillMode, HillOptions, HillPencil, NearZero, near_zero_exponents};
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
 pub use sip::{Sip, SipMonodromy};
