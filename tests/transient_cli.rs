@@ -132,3 +132,70 @@ fn replay_transient_draws_runs_and_names_their_steepest_change() {
     assert!(csv.lines().count() > 20, "{csv}");
     assert!(figs.join("transient_amplitude.svg").exists());
 }
+
+#[test]
+fn a_start_along_a_floquet_mode_of_a_recorded_point() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let sweep = dir.path().join("s.mcap");
+    // the default window's fold pair: its middle points are unstable
+    let ok = tmrotor()
+        .args(["sweep", "--omega", "521.6:522.0", "--no-verify", "-q", "-o"])
+        .arg(&sweep)
+        .output()
+        .expect("runs");
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let rec = read_recording(&sweep).expect("sweep");
+    let point = rec
+        .points
+        .iter()
+        .find(|p| p.stable == Some(false))
+        .expect("an unstable point")
+        .index;
+    let out = dir.path().join("t.mcap");
+    let run = |extra: &[&str]| {
+        tmrotor()
+            .args(["transient", "--from"])
+            .arg(&sweep)
+            .args([
+                "--point",
+                &point.to_string(),
+                "--duration",
+                "0.05",
+                "-q",
+                "-o",
+            ])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .expect("runs")
+    };
+    // without a size: refused, naming the flag to give
+    let refused = run(&["--perturb-mode", "0"]);
+    assert!(!refused.status.success());
+    let msg = String::from_utf8_lossy(&refused.stderr);
+    assert!(msg.contains("--perturb"), "{msg}");
+    // a mode the point does not have
+    let refused = run(&["--perturb-mode", "999", "--perturb", "0.01"]);
+    assert!(!refused.status.success());
+    let msg = String::from_utf8_lossy(&refused.stderr);
+    assert!(msg.contains("Floquet modes near zero"), "{msg}");
+    let done = run(&["--perturb-mode", "0", "--perturb", "0.01"]);
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let t = read_recording(&out)
+        .expect("transient")
+        .transient
+        .expect("transient records");
+    let start = t.info.expect("info").start;
+    assert!(
+        start.contains("perturbed along Floquet mode 0") && start.contains("multiplier modulus"),
+        "{start}"
+    );
+}

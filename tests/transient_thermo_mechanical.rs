@@ -306,3 +306,124 @@ fn where_no_stable_orbit_exists_the_oscillator_hunts_between_the_sheets() {
         "{tau_cycles} τ, {lo} … {hi} against {tau_cycles2} τ, {lo2} … {hi2}"
     );
 }
+
+/// A start along a Floquet mode (`StartState::along_mode`, `tmrotor transient
+/// --perturb-mode`): on the middle, unstable segment of the self-heated oscillator's
+/// branch the mode of the real positive exponent λ leads away from the orbit at the rate
+/// λ (the time integration's own, measured) and in the direction of its sign: one side
+/// towards the upper sheet, the other towards the lower (at this speed the lower sheet is
+/// unstable too, beyond its Neimark–Sacker point, and both runs end on the upper one).
+#[test]
+fn a_start_along_the_unstable_mode_leaves_at_its_rate_to_either_side() {
+    let tau = 100.0 * TAU;
+    let system = ThermoDuffing::new(tau);
+    let basis = Basis::integer(9).expect("basis");
+    let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.8, 1.3);
+    opts.ds_max = 0.05;
+    opts.scale_mech = Some(1.0);
+    opts.scale_therm = Some(1.0);
+    opts.scale_omega = Some(1.0);
+    let method = Variational::default();
+    let mut cont = Continuation::new(hb, opts, Some(&method as _)).expect("continuation");
+    let branch = cont.run(|_| {}).expect("branch");
+    let folds: Vec<&HbSolution> = branch
+        .bifurcations
+        .iter()
+        .filter(|p| p.bifurcation == Some(BifurcationKind::SaddleNode))
+        .map(|p| &p.solution)
+        .collect();
+    assert_eq!(folds.len(), 2);
+    // a point of the middle segment, between the folds along the branch
+    let (a0, a1) = (folds[0].max_abs(0), folds[1].max_abs(0));
+    let mid = branch
+        .points
+        .iter()
+        .filter(|p| p.stable() == Some(false))
+        .map(|p| &p.solution)
+        .min_by(|p, q| {
+            let m = 0.5 * (a0 + a1);
+            (p.max_abs(0) - m)
+                .abs()
+                .total_cmp(&(q.max_abs(0) - m).abs())
+        })
+        .expect("a middle point");
+    let w = mid.omega;
+    let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
+    let run = |size: f64| -> (f64, Vec<f64>, Vec<f64>) {
+        let (start, mode) =
+            tmrotor::transient::StartState::along_mode(mid, &hb, 0, size, "middle".into())
+                .expect("start along the mode");
+        let mut tr = Transient::new(
+            &system,
+            SpeedProfile::Constant(w),
+            &start.x,
+            &start.v,
+            &start.temp,
+            fixed_steps(),
+        )
+        .expect("transient");
+        // the temperature's distance from the orbit's at the same phase, once a period
+        let (mut x, mut v, mut th) = ([0.0], [0.0], [0.0]);
+        mid.state_at(0.0, &mut x, &mut v, &mut th);
+        let theta0 = th[0];
+        let mut dev = vec![start.temp[0] - theta0];
+        let period = TAU / w;
+        let mut amp = Vec::new();
+        for p in 1..=300 {
+            let mut peak: f64 = 0.0;
+            tr.advance(p as f64 * period, &mut |s| {
+                peak = peak.max(s.x[0].abs());
+                true
+            })
+            .expect("advance");
+            dev.push(tr.state().2[0] - theta0);
+            amp.push(peak);
+        }
+        (mode.exponent.re, dev, amp)
+    };
+    let (lambda, up, amp_plus) = run(1e-3);
+    let (_, down, amp_minus) = run(-1e-3);
+    assert!(lambda > 0.0, "the middle point's leading exponent {lambda}");
+    // the rate: the deviation's growth between 3 and 100 times its start, where it is
+    // still small against the orbit
+    let period = TAU / w;
+    let rate = |dev: &[f64]| -> f64 {
+        let d0 = dev[0].abs();
+        let i = dev.iter().position(|d| d.abs() > 3.0 * d0).expect("growth");
+        let j = dev
+            .iter()
+            .position(|d| d.abs() > 100.0 * d0)
+            .expect("growth");
+        println!(
+            "deviation {:.2e} → {:.2e} (periods {i} → {j})",
+            dev[i], dev[j]
+        );
+        (dev[j].abs() / dev[i].abs()).ln() / ((j - i) as f64 * period)
+    };
+    let (r_up, r_down) = (rate(&up), rate(&down));
+    // where the deviation first reaches a hundred times its start: the vibration there
+    let at = |dev: &[f64], amp: &[f64]| {
+        let j = dev
+            .iter()
+            .position(|d| d.abs() > 100.0 * dev[0].abs())
+            .expect("growth");
+        amp[j - 1]
+    };
+    let (a_up, a_down) = (at(&up, &amp_plus), at(&down, &amp_minus));
+    let orbit_amp = mid.max_abs(0);
+    println!(
+        "Ω = {w:.5}: λ = {lambda:.5e} 1/s; measured {r_up:.5e} and {r_down:.5e}; amplitudes \
+         {a_up:.4} and {a_down:.4} against the orbit's {orbit_amp:.4} (folds {a0:.4}, {a1:.4})"
+    );
+    for r in [r_up, r_down] {
+        assert!((r / lambda - 1.0).abs() < 0.02, "{r} against {lambda}");
+    }
+    // opposite sides: the deviations grow with opposite signs, the vibration one side
+    // above the orbit's and the other below
+    assert!(up[10].signum() != down[10].signum());
+    assert!(
+        (a_up - orbit_amp) * (a_down - orbit_amp) < 0.0,
+        "{a_up} and {a_down} around {orbit_amp}"
+    );
+}

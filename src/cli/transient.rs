@@ -13,6 +13,7 @@ use indicatif::ProgressBar;
 use super::sweep::{StudyArgs, parse_range};
 use crate::cli::interrupt::install_interrupt_flag;
 use crate::derive::CoupledRederive;
+use crate::hb::HarmonicBalance;
 use crate::integrate::{SpeedProfile, ThermalStepping, TransientOptions};
 use crate::record::output::check_target;
 use crate::record::{McapOptions, read_recording};
@@ -70,6 +71,12 @@ pub struct TransientArgs {
         default_value_t = 0.0
     )]
     pub perturb: f64,
+    /// With --from: perturb along the K-th Floquet mode of the point nearest zero instead
+    /// of scaling the vibration (Hill's eigenproblem; 0 = the mode with the largest real
+    /// part of its exponent, the most unstable or least stable), by --perturb times the
+    /// orbit's largest vibration amplitude (its sign the direction).
+    #[arg(long, value_name = "K", requires = "from")]
+    pub perturb_mode: Option<usize>,
     /// Add K kelvin to every start temperature.
     #[arg(
         long,
@@ -265,11 +272,34 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
                     None => "",
                 }
             );
-            let start = StartState::on_orbit(&sol, sys.n_mech(), sys.n_therm(), label).perturbed(
-                &mean,
-                args.perturb,
-                args.perturb_temp,
-            );
+            let start = match args.perturb_mode {
+                None => StartState::on_orbit(&sol, sys.n_mech(), sys.n_therm(), label).perturbed(
+                    &mean,
+                    args.perturb,
+                    args.perturb_temp,
+                ),
+                Some(k) => {
+                    if args.perturb == 0.0 {
+                        bail!(
+                            "--perturb-mode {k}: give the size with --perturb (a fraction of \
+                             the orbit's vibration, e.g. 0.01)"
+                        );
+                    }
+                    let s = &problem.settings;
+                    let hb = HarmonicBalance::new(sys, &problem.basis, s.harmonic.aft_samples)?;
+                    let (start, mode) = StartState::along_mode(&sol, &hb, k, args.perturb, label)?;
+                    if !args.quiet {
+                        eprintln!(
+                            "transient: start along the Floquet mode of exponent {:.4e}{:+.4e}i \
+                             1/s (period of the orbit {:.4e} s)",
+                            mode.exponent.re,
+                            mode.exponent.im,
+                            crate::system::PeriodicOrbit::period(&sol)
+                        );
+                    }
+                    start.perturbed(&mean, 0.0, args.perturb_temp)
+                }
+            };
             // the recording's problem, rebuilt once more to own it
             let problem = SweepProblem::with_model(&problem.settings, problem.model.clone())?;
             (problem, start, Some(point.omega_rad_s))

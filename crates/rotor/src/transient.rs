@@ -100,6 +100,88 @@ impl StartState {
     }
 }
 
+/// The orbit's state plus a perturbation along one of its Floquet modes near zero.
+impl StartState {
+    /// On `orbit` (a converged point of `hb`) at time 0, moved along its `k`-th Floquet
+    /// mode nearest zero (Hill's eigenproblem, [`crate::stability::HillPencil`]), the
+    /// modes ordered by decreasing real part of their exponent (0: the most unstable, or
+    /// least stable). The mode's real part at t = 0 is scaled so that its largest
+    /// displacement is `size` times the orbit's largest vibration amplitude (its largest
+    /// displacement about the mean), the sign of `size` choosing the direction.
+    pub fn along_mode(
+        orbit: &crate::hb::HbSolution,
+        hb: &crate::hb::HarmonicBalance<'_>,
+        k: usize,
+        size: f64,
+        label: String,
+    ) -> Result<(Self, crate::stability::HillMode), TransientError> {
+        let setting = |reason: String| TransientError::Setting {
+            field: "perturb_mode",
+            value: k.to_string(),
+            reason,
+        };
+        let (n_mech, n_therm) = (orbit.n_mech(), orbit.n_therm());
+        let mut modes = crate::stability::HillPencil::new(hb, orbit, None)
+            .and_then(|p| p.near_zero_modes(n_therm + 2, &crate::stability::HillOptions::default()))
+            .map_err(|e| setting(format!("the point's Floquet modes: {e}")))?;
+        modes.sort_by(|a, b| b.exponent.re.total_cmp(&a.exponent.re));
+        let n = modes.len();
+        if k >= n {
+            return Err(setting(format!(
+                "the point has {n} Floquet modes near zero (0 … {})",
+                n.saturating_sub(1)
+            )));
+        }
+        let mode = modes.swap_remove(k);
+        let (dx, dv, dt) = mode.state_at(&orbit.basis, orbit.omega, n_mech, 0.0);
+        let mode_max = dx.iter().map(|c| c.re.abs()).fold(0.0, f64::max);
+        // the orbit's vibration: largest displacement about the mean, over 64 samples
+        let period = crate::system::PeriodicOrbit::period(orbit);
+        let (mut x, mut v, mut t) = (vec![0.0; n_mech], vec![0.0; n_mech], vec![0.0; n_therm]);
+        let mut vib: f64 = 0.0;
+        for j in 0..64 {
+            crate::system::PeriodicOrbit::state_at(
+                orbit,
+                j as f64 * period / 64.0,
+                &mut x,
+                &mut v,
+                &mut t,
+            );
+            for (d, xd) in x.iter().enumerate() {
+                vib = vib.max((xd - orbit.mech_coeffs(d)[0]).abs());
+            }
+        }
+        if !(mode_max > 0.0 && vib > 0.0) {
+            return Err(setting(
+                "the mode moves no displacement at t = 0, or the orbit does not vibrate; \
+                 perturb the temperatures with --perturb-temp instead"
+                    .into(),
+            ));
+        }
+        let scale = size * vib / mode_max;
+        let mut start = Self::on_orbit(orbit, n_mech, n_therm, label);
+        for (a, d) in start.x.iter_mut().zip(&dx) {
+            *a += scale * d.re;
+        }
+        for (a, d) in start.v.iter_mut().zip(&dv) {
+            *a += scale * d.re;
+        }
+        for (a, d) in start.temp.iter_mut().zip(&dt) {
+            *a += scale * d.re;
+        }
+        let mu = (mode.exponent * period).exp();
+        start.label = format!(
+            "{}, perturbed along Floquet mode {k} (exponent {:.4e}{:+.4e}i 1/s, multiplier \
+             modulus {:.6}) by {size} of the vibration",
+            start.label,
+            mode.exponent.re,
+            mode.exponent.im,
+            mu.norm()
+        );
+        Ok((start, mode))
+    }
+}
+
 /// Settings of one transient run.
 #[derive(Clone, Debug)]
 pub struct TransientSettings {
