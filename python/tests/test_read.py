@@ -8,6 +8,7 @@ import io
 import re
 import shutil
 from pathlib import Path
+import subprocess
 
 import numpy as np
 import pandas as pd
@@ -448,18 +449,55 @@ def test_not_a_recording(tmp_path: Path, sweep_rec: Path) -> None:
     with pytest.raises(tmrotor.RecordingError) as e:
         tmrotor.read(f)
     assert e.value.kind == "not_mcap"
-    # bytes altered inside a chunk of a finished file are damage, not a cut
+    with pytest.raises(tmrotor.RecordingError):
+        tmrotor.read(tmp_path)  # a directory
+
+
+def _replay_state(replay_bin: Path, f: Path) -> tuple[str, list[int]]:
+    """``replay info``'s state line and ``replay branch --csv``'s point indices."""
+    info = subprocess.run(
+        [str(replay_bin), "info", str(f)], capture_output=True, text=True, check=False
+    ).stdout
+    state = next(
+        (line.split(":", 1)[1].strip() for line in info.splitlines() if line.startswith("state:")),
+        "",
+    )
+    csv = subprocess.run(
+        [str(replay_bin), "branch", str(f), "--csv"], capture_output=True, text=True, check=False
+    ).stdout.splitlines()
+    points = [int(line.split(",")[0]) for line in csv[1:] if line]
+    return state, points
+
+
+@pytest.mark.parametrize("which", ["largest", "middle", "first"])
+def test_damaged_chunks_are_read_like_replay(
+    which: str, sweep_rec: Path, replay_bin: Path, tmp_path: Path
+) -> None:
+    """Bytes flipped inside one chunk of a finished file cost the points in that chunk,
+    not the file: the package keeps the same points replay keeps, names the lost ones, and
+    calls the file incomplete where replay does."""
     from mcap.reader import make_reader
 
     with open(sweep_rec, "rb") as fh:
-        chunks = make_reader(fh).get_summary().chunk_indexes
-    c = max(chunks, key=lambda c: c.chunk_length)
-    at = c.chunk_start_offset + c.chunk_length - 200  # in the compressed records
+        chunks = sorted(make_reader(fh).get_summary().chunk_indexes, key=lambda c: c.chunk_start_offset)
+    c = {
+        "largest": max(chunks, key=lambda c: c.chunk_length),
+        "middle": chunks[len(chunks) // 2],
+        "first": chunks[1],
+    }[which]
+    at = c.chunk_start_offset + c.chunk_length - 40  # in the compressed records
     data = bytearray(sweep_rec.read_bytes())
-    data[at : at + 16] = bytes(b ^ 0xFF for b in data[at : at + 16])
+    data[at : at + 8] = bytes(b ^ 0xFF for b in data[at : at + 8])
+    f = tmp_path / "damaged.mcap"
     f.write_bytes(bytes(data))
-    with pytest.raises(tmrotor.RecordingError) as e:
-        tmrotor.read(f)
-    assert e.value.kind == "corrupt"
-    with pytest.raises(tmrotor.RecordingError):
-        tmrotor.read(tmp_path)  # a directory
+    rec = tmrotor.read(f)
+    state, points = _replay_state(replay_bin, f)
+    whole = tmrotor.read(sweep_rec)
+    assert rec.points == points, (rec.points, points)
+    assert len(rec.points) < len(whole.points) or c.message_index_offsets == {}
+    assert not rec.info["complete"]
+    assert state != "complete", state
+    assert any("damaged" in n for n in rec.info["notes"]), rec.info["notes"]
+    lost = sorted(set(whole.points) - set(rec.points))
+    if lost and lost[-1] < rec.points[-1]:
+        assert rec.missing_points == [i for i in lost if i < rec.points[-1]]

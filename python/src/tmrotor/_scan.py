@@ -3,17 +3,25 @@
 Mirrors the Rust reader (``src/record/reader.rs``): the file is read from its first byte
 with the official ``mcap`` stream reader, not through the summary section, so a file cut
 short (a killed process, a file still being written) yields every record that was written
-completely. Chunk CRCs are checked; a damaged file is an error, a cut one is not.
-Messages are decoded with ``mcap_protobuf``'s decoder from the schemas embedded in the file.
+completely. Like the Rust reader, it goes on past damage: the top-level records are walked
+here with every length checked against the bytes there; a chunk whose lengths,
+decompression or CRC fail is skipped (one point per chunk: a flipped byte costs one point,
+not the file), a record whose length runs past the end is a cut or a damaged length (the
+walk then resumes at the next chunk or data-end header it finds), and each skip is noted.
+The records themselves are parsed by the official ``mcap`` stream reader, and messages are
+decoded with ``mcap_protobuf``'s decoder from the schemas embedded in the file.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import io
+import struct
+import zlib
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
-from mcap.exceptions import EndOfFile, InvalidMagic, McapError
+from mcap.exceptions import EndOfFile, McapError
 from mcap.records import (
     Attachment,
     Channel,
@@ -22,6 +30,7 @@ from mcap.records import (
     Message,
     Metadata,
     Schema,
+    Statistics,
 )
 from mcap.stream_reader import StreamReader
 from mcap_protobuf.decoder import DecoderFactory
@@ -76,31 +85,6 @@ class RecordingError(ValueError):
         super().__init__(what.format(f=file, r=reason))
 
 
-class _StrictBytes:
-    """A read-only stream over bytes whose ``read(n)`` raises ``EndOfFile`` when fewer than
-    ``n`` bytes are left, so a record cut in the middle is reported as the end of the file
-    instead of being parsed from a short buffer."""
-
-    def __init__(self, data: bytes):
-        self._data = memoryview(data)
-        self._pos = 0
-
-    def read(self, n: int = -1) -> bytes:
-        if n is None or n < 0:
-            n = len(self._data) - self._pos
-        end = self._pos + n
-        if end > len(self._data):
-            self._pos = len(self._data)
-            raise EndOfFile()
-        out = self._data[self._pos : end].tobytes()
-        self._pos = end
-        return out
-
-    @property
-    def position(self) -> int:
-        return self._pos
-
-
 @dataclass
 class LogEntry:
     """One ``/log`` message: MCAP log time (ns, the branch clock), level name, logger name
@@ -132,6 +116,8 @@ class Scan:
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     attachments: dict[str, bytes] = field(default_factory=dict)
     cut_short: bool = False
+    #: what was skipped as damaged, in words (the file is then incomplete)
+    damaged: list[str] = field(default_factory=list)
     saw_data_end: bool = False
     saw_footer: bool = False
     end_magic: bool = False
@@ -140,9 +126,127 @@ class Scan:
 _LOG_LEVELS = {0: "UNKNOWN", 1: "DEBUG", 2: "INFO", 3: "WARNING", 4: "ERROR", 5: "FATAL"}
 
 
+_OP_FOOTER = 0x02
+_OP_CHUNK = 0x06
+_OP_DATA_END = 0x0F
+#: largest record (or decompressed chunk) accepted, as the Rust reader's MAX_RECORD_BYTES
+_MAX_RECORD = 512 << 20
+
+
+def _parse(raw: bytes) -> list[Any]:
+    """The records in ``raw`` (whole records, no magic), parsed by the official reader."""
+    reader = StreamReader(io.BytesIO(raw), skip_magic=True, record_size_limit=_MAX_RECORD)
+    out: list[Any] = []
+    it = reader.records
+    while True:
+        try:
+            out.append(next(it))
+        except (StopIteration, EndOfFile):
+            # the reader reports the end of its buffer as EndOfFile: every whole record is in
+            return out
+
+
+def _chunk_records(body: bytes) -> list[Any]:
+    """The records of a chunk's body, after its lengths, decompression and CRC are
+    checked; ``ValueError`` naming what failed."""
+    if len(body) < 8 + 8 + 8 + 4 + 4:
+        raise ValueError("chunk header too short")
+    _start, _end, size, crc, name_len = struct.unpack_from("<QQQII", body, 0)
+    pos = 32
+    if pos + name_len + 8 > len(body):
+        raise ValueError("chunk compression name runs past the chunk")
+    compression = body[pos : pos + name_len].decode("utf-8", errors="replace")
+    pos += name_len
+    (records_len,) = struct.unpack_from("<Q", body, pos)
+    pos += 8
+    if pos + records_len != len(body):
+        raise ValueError("chunk records length disagrees with the chunk length")
+    if size > _MAX_RECORD or size > 64 * records_len + (1 << 20):
+        raise ValueError(f"chunk claims {size} uncompressed bytes")
+    compressed = body[pos:]
+    if compression == "":
+        raw = compressed
+    elif compression == "zstd":
+        import zstandard
+
+        raw = zstandard.ZstdDecompressor().decompress(compressed, max_output_size=size)
+    elif compression == "lz4":
+        import lz4.frame
+
+        raw = lz4.frame.decompress(compressed)
+    else:
+        raise ValueError(f"unknown chunk compression {compression!r}")
+    if len(raw) != size:
+        raise ValueError(f"chunk decompressed to {len(raw)} bytes, not {size}")
+    if crc != 0 and zlib.crc32(raw) != crc:
+        raise ValueError("chunk CRC mismatch")
+    return _parse(raw)
+
+
+def _resync(data: bytes, start: int) -> int | None:
+    """The offset of the next plausible chunk or data-end record after ``start``: an
+    opcode whose length fits the file and, for a chunk, whose header agrees with it."""
+    n = len(data)
+    pos = start
+    while True:
+        candidates = [i for i in (data.find(b"\x06", pos), data.find(b"\x0f", pos)) if i >= 0]
+        if not candidates:
+            return None
+        i = min(candidates)
+        if i + 9 <= n:
+            (length,) = struct.unpack_from("<Q", data, i + 1)
+            end = i + 9 + length
+            if data[i] == _OP_DATA_END and length == 4 and end <= n:
+                return i
+            if data[i] == _OP_CHUNK and 36 <= length and end <= n:
+                body = data[i + 9 : end]
+                name_len = struct.unpack_from("<I", body, 28)[0]
+                if 32 + name_len + 8 <= len(body):
+                    (rl,) = struct.unpack_from("<Q", body, 32 + name_len)
+                    if 32 + name_len + 8 + rl == len(body):
+                        return i
+        pos = i + 1
+
+
+def _records(data: bytes, out: Scan) -> Iterator[Any]:
+    """Every intact record of the file after its magic, in order; damage and a cut are
+    noted on ``out`` (``damaged``, ``cut_short``)."""
+    n = len(data)
+    pos = len(MAGIC)
+    while pos < n:
+        if n - pos < 9:
+            if not (out.saw_footer and data[pos:] == MAGIC[: n - pos]):
+                out.cut_short = not out.saw_footer
+            return
+        op = data[pos]
+        (length,) = struct.unpack_from("<Q", data, pos + 1)
+        end = pos + 9 + length
+        if length > _MAX_RECORD or end > n:
+            nxt = _resync(data, pos + 1)
+            if nxt is None:
+                if not out.saw_footer:
+                    out.cut_short = True
+                return
+            out.damaged.append(f"bytes {pos}..{nxt}: a record length runs past the end")
+            pos = nxt
+            continue
+        body = data[pos + 9 : end]
+        try:
+            records = _chunk_records(body) if op == _OP_CHUNK else _parse(data[pos:end])
+        except Exception as e:  # damaged chunk or record: skipped, noted
+            what = "chunk" if op == _OP_CHUNK else f"record (opcode 0x{op:02x})"
+            out.damaged.append(f"{what} at byte {pos} skipped: {e}")
+            records = []
+        yield from records
+        pos = end
+        if op == _OP_FOOTER:
+            return
+
+
+
 def scan(data: bytes, file: str) -> Scan:
     """Scans the bytes of a recording. Raises :class:`RecordingError` for files that are
-    not MCAP, are damaged, or hold no ``/run_info``."""
+    not MCAP or hold no ``/run_info`` (damage is skipped and listed in ``damaged``)."""
     if len(data) < len(MAGIC) or not data.startswith(MAGIC):
         raise RecordingError(
             file,
@@ -156,51 +260,48 @@ def scan(data: bytes, file: str) -> Scan:
     decoders: dict[int, Callable[[bytes], Any] | None] = {}
     factory = DecoderFactory()
 
-    stream = _StrictBytes(data)
-    reader = StreamReader(stream, validate_crcs=True)  # type: ignore[arg-type]
-    records = reader.records
-    # where the last record read ends: a file that ends exactly there was stopped between
-    # two records (no record is cut), one that ends later has a partial record at its end
-    end_of_last_record = len(MAGIC)
-    while True:
-        try:
-            record = next(records)
-            end_of_last_record = stream.position
-        except StopIteration:
-            break
-        except EndOfFile:
-            # after the footer only the end magic is left: its absence is noted below
-            if not out.saw_footer and end_of_last_record < len(data):
-                out.cut_short = True
-            break
-        except InvalidMagic as e:
-            if out.saw_footer:
-                break  # bad end magic: noted below, the records are all there
-            raise RecordingError(file, "not_mcap", str(e)) from e
-        except (McapError, ValueError) as e:  # CRCValidationError is a ValueError
-            raise RecordingError(file, "corrupt", f"{e} (a chunk was altered?)") from e
-        except Exception as e:  # undecodable chunk (zstd/lz4 errors), bad record layout
-            raise RecordingError(file, "corrupt", f"{type(e).__name__}: {e}") from e
-
-        if isinstance(record, Schema):
-            if not out.saw_data_end:
-                schemas[record.id] = record
-        elif isinstance(record, Channel):
-            if not out.saw_data_end and record.id not in channels:
+    records = list(_records(data, out))
+    # schemas and channels first, from wherever they are intact: a channel is written in
+    # the chunk of its first message, and repeated in the summary section, so a damaged
+    # first chunk does not take the later messages of its topics with it
+    for in_summary in (False, True):
+        seen_end = False
+        for record in records:
+            if isinstance(record, DataEnd):
+                seen_end = True
+            elif seen_end != in_summary:
+                continue
+            elif isinstance(record, Schema):
+                schemas.setdefault(record.id, record)
+            elif isinstance(record, Channel) and record.id not in channels:
                 channels[record.id] = record
-                schema = schemas.get(record.schema_id)
-                out.topics.setdefault(
-                    record.topic,
-                    {"schema": schema.name if schema else "", "messages": 0},
-                )
+    for ch in channels.values():
+        schema = schemas.get(ch.schema_id)
+        out.topics.setdefault(ch.topic, {"schema": schema.name if schema else "", "messages": 0})
+    read_per_channel: dict[int, int] = {}
+    for record in records:
+        if isinstance(record, Message):
+            read_per_channel[record.channel_id] = read_per_channel.get(record.channel_id, 0) + 1
+        if isinstance(record, Statistics):
+            # the summary's counts against what was read: a chunk lost without a trace (cut
+            # out cleanly) shows here, as in the Rust reader
+            for cid, count in sorted(record.channel_message_counts.items()):
+                got = read_per_channel.get(cid, 0)
+                ch = channels.get(cid)
+                if got < count and ch is not None:
+                    out.damaged.append(
+                        f"the summary counts {count} {ch.topic} messages, {got} were read"
+                    )
+    for record in records:
+        if isinstance(record, (Schema, Channel, Statistics)):
+            continue
         elif isinstance(record, Message):
             ch = channels.get(record.channel_id)
             if ch is None:
-                raise RecordingError(
-                    file,
-                    "corrupt",
-                    f"message {record.sequence} refers to unknown channel {record.channel_id}",
+                out.damaged.append(
+                    f"message {record.sequence} refers to unknown channel {record.channel_id}"
                 )
+                continue
             out.topics[ch.topic]["messages"] += 1
             if ch.topic == TOPIC_SCENE or ch.message_encoding != "protobuf":
                 continue  # /scene is not needed to rebuild the run
@@ -217,9 +318,8 @@ def scan(data: bytes, file: str) -> Scan:
             try:
                 msg = decode(record.data)
             except Exception as e:
-                raise RecordingError(
-                    file, "corrupt", f"{ch.topic}: protobuf decoding failed: {e}"
-                ) from e
+                out.damaged.append(f"{ch.topic}: protobuf decoding failed: {e}")
+                continue
             _file_message(out, ch.topic, msg, record.log_time, file)
         elif isinstance(record, Attachment):
             out.attachments[record.name] = bytes(record.data)

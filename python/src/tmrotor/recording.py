@@ -242,6 +242,19 @@ class Recording:
         status = status_md.get("status")
         if s.cut_short:
             notes.append("the file ends in the middle of a record (cut short)")
+        for d in s.damaged:
+            notes.append(f"damaged, skipped: {d}")
+        # points lost before the last one read (their chunks damaged), as replay names them
+        if self.points:
+            lost = sorted(set(range(self.points[-1])) - set(self.points))
+            if lost:
+                notes.append(
+                    f"points missing: {len(lost)} ({', '.join(str(i) for i in lost[:10])}"
+                    f"{', …' if len(lost) > 10 else ''})"
+                )
+        self.missing_points: list[int] = (
+            sorted(set(range(self.points[-1])) - set(self.points)) if self.points else []
+        )
         if not s.end_magic:
             notes.append("the file does not end with the MCAP magic bytes")
         if not (s.saw_data_end and s.saw_footer):
@@ -250,6 +263,8 @@ class Recording:
             notes.append("no run status: the run did not finish writing")
         complete = (
             not s.cut_short
+            and not s.damaged
+            and not self.missing_points
             and s.end_magic
             and s.saw_data_end
             and s.saw_footer
