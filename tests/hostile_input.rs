@@ -184,3 +184,197 @@ fn linear_analyses_take_set_and_truncation_names_its_node_flags() {
     // the tour's study file ships
     assert!(root.join("examples/study.toml").is_file());
 }
+
+/// A fixed-seed corpus of mutated model files (the built-in one with lines deleted,
+/// duplicated or cut, numbers replaced by hostile values, bytes flipped): `model check`
+/// never panics, never hangs, and a refusal names the file and a line or a field.
+#[test]
+fn a_corpus_of_mutated_model_files_is_checked_without_a_panic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (_, text) = builtin(dir.path());
+    let lines: Vec<&str> = text.lines().collect();
+    let mut seed: u64 = 0x5EED_CAFE_F00D_D00D;
+    let mut next = move |n: usize| -> usize {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 33) as usize) % n.max(1)
+    };
+    let hostile = [
+        "0",
+        "-1",
+        "1e300",
+        "-1e300",
+        "nan",
+        "inf",
+        "\"x\"",
+        "[]",
+        "{}",
+        "1e-300",
+        "99999999999",
+        "-0.0",
+        "true",
+    ];
+    let (mut accepted, mut refused_n) = (0, 0);
+    for case in 0..240 {
+        let mut ls: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        let what = case % 6;
+        let i = next(ls.len());
+        match what {
+            0 => {
+                ls.remove(i);
+            }
+            1 => {
+                let l = ls[i].clone();
+                ls.insert(i, l);
+            }
+            2 | 3 => {
+                // a value replaced by a hostile one, on a `key = number` line
+                let candidates: Vec<usize> = (0..ls.len())
+                    .filter(|&k| {
+                        let l = ls[k].trim_start();
+                        !l.starts_with('#')
+                            && l.split_once('=').is_some_and(|(_, v)| {
+                                v.trim()
+                                    .starts_with(|c: char| c.is_ascii_digit() || c == '-')
+                            })
+                    })
+                    .collect();
+                let k = candidates[next(candidates.len())];
+                let key = ls[k]
+                    .split_once('=')
+                    .map(|(a, _)| a.to_string())
+                    .unwrap_or_default();
+                ls[k] = format!("{key}= {}", hostile[next(hostile.len())]);
+            }
+            4 => {
+                let l = &ls[i];
+                let cut = next(l.len() + 1);
+                let cut = (0..=cut)
+                    .rev()
+                    .find(|&c| l.is_char_boundary(c))
+                    .unwrap_or(0);
+                ls[i] = l[..cut].to_string();
+            }
+            _ => {
+                ls.truncate(i);
+            }
+        }
+        let mut bytes = ls.join("\n").into_bytes();
+        if case % 17 == 0 && !bytes.is_empty() {
+            let b = next(bytes.len());
+            bytes[b] ^= 0x80; // not UTF-8 any more, or another character
+        }
+        let path = dir.path().join(format!("case{case}.toml"));
+        std::fs::write(&path, &bytes).expect("write");
+        let p = path.to_str().expect("path");
+        let started = std::time::Instant::now();
+        let o = tmrotor(&["model", "check", p]);
+        let secs = started.elapsed().as_secs_f64();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_ne!(o.status.code(), Some(101), "case {case} panicked: {err}");
+        assert!(
+            o.status.code().is_some(),
+            "case {case} killed by a signal: {err}"
+        );
+        assert!(secs < 20.0, "case {case} took {secs} s");
+        if o.status.success() {
+            accepted += 1;
+        } else {
+            refused_n += 1;
+            assert!(
+                err.contains(&format!("case{case}.toml")),
+                "case {case}: the error does not name the file: {err}"
+            );
+            // a line number or a field path after the file name
+            let after = err.split(&format!("case{case}.toml")).nth(1).unwrap_or("");
+            assert!(
+                after.starts_with(':') || after.contains('.') || after.contains('['),
+                "case {case}: no line or field named: {err}"
+            );
+        }
+    }
+    println!("{accepted} accepted, {refused_n} refused");
+    assert!(refused_n > 60, "only {refused_n} of 240 mutations refused");
+}
+
+/// The same for campaign files (the shipped paper campaign, mutated), checked with
+/// `campaign --dry-run`: never a panic or a hang, and a refusal names the file.
+#[test]
+fn a_corpus_of_mutated_campaign_files_is_checked_without_a_panic() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let text = std::fs::read_to_string(root.join("examples/paper_campaign.toml")).expect("read");
+    let lines: Vec<&str> = text.lines().collect();
+    let mut seed: u64 = 0xC0FF_EE00_1234_5678;
+    let mut next = move |n: usize| -> usize {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 33) as usize) % n.max(1)
+    };
+    let hostile = [
+        "0",
+        "-1",
+        "1e300",
+        "nan",
+        "\"\"",
+        "[]",
+        "\"/dev/null\"",
+        "-5",
+        "1e-300",
+    ];
+    let mut refused_n = 0;
+    for case in 0..80 {
+        let mut ls: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        let i = next(ls.len());
+        match case % 4 {
+            0 => {
+                ls.remove(i);
+            }
+            1 => {
+                let l = ls[i].clone();
+                ls.insert(i, l);
+            }
+            2 => {
+                let candidates: Vec<usize> = (0..ls.len())
+                    .filter(|&k| {
+                        let l = ls[k].trim_start();
+                        !l.starts_with('#') && l.contains('=')
+                    })
+                    .collect();
+                let k = candidates[next(candidates.len())];
+                let key = ls[k]
+                    .split_once('=')
+                    .map(|(a, _)| a.to_string())
+                    .unwrap_or_default();
+                ls[k] = format!("{key}= {}", hostile[next(hostile.len())]);
+            }
+            _ => {
+                ls.truncate(i);
+            }
+        }
+        let path = dir.path().join(format!("camp{case}.toml"));
+        std::fs::write(&path, ls.join("\n")).expect("write");
+        let p = path.to_str().expect("path");
+        let started = std::time::Instant::now();
+        let o = tmrotor(&["campaign", p, "--dry-run"]);
+        let secs = started.elapsed().as_secs_f64();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_ne!(o.status.code(), Some(101), "case {case} panicked: {err}");
+        assert!(
+            o.status.code().is_some(),
+            "case {case} killed by a signal: {err}"
+        );
+        assert!(secs < 30.0, "case {case} took {secs} s");
+        if !o.status.success() {
+            refused_n += 1;
+            assert!(
+                err.contains(&format!("camp{case}")),
+                "case {case}: the error does not name the file: {err}"
+            );
+        }
+    }
+    println!("{refused_n} of 80 refused");
+    assert!(refused_n > 10, "only {refused_n} of 80 mutations refused");
+}
