@@ -378,3 +378,41 @@ fn a_corpus_of_mutated_campaign_files_is_checked_without_a_panic() {
     println!("{refused_n} of 80 refused");
     assert!(refused_n > 10, "only {refused_n} of 80 mutations refused");
 }
+
+/// The linear analyses say what they leave out and blame the right thing, and their CSVs
+/// carry numbers at full precision (the shortest form that reads back exactly).
+#[test]
+fn linear_analyses_name_what_they_leave_out_and_write_full_precision() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let rub = root.join("examples/rotors/jeffcott_rub.toml");
+    let rub = rub.to_str().expect("path");
+    let o = tmrotor(&[
+        "modes", "--model", rub, "--speed", "100", "--count", "2", "--csv",
+    ]);
+    assert!(o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("1 [[nonlinear]] element") && err.contains("left out of the linear analyses"),
+        "{err}"
+    );
+    let csv = String::from_utf8_lossy(&o.stdout);
+    let row = csv.lines().nth(1).expect("a mode");
+    let freq = row.split(',').nth(1).expect("frequency");
+    // more than six decimals, and exactly what the number prints as
+    let v: f64 = freq.parse().expect("number");
+    assert_eq!(format!("{v}"), freq);
+    assert!(
+        freq.split('.').nth(1).is_some_and(|d| d.len() > 6),
+        "{freq}"
+    );
+    let contact = root.join("examples/rotors/two_mass_contact.toml");
+    let o = tmrotor(&[
+        "unbalance",
+        "--model",
+        contact.to_str().expect("path"),
+        "--speeds",
+        "1:2:3",
+    ]);
+    refused(&o, &["no unbalance", "eccentricity_m"]);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("speed grid"));
+}

@@ -214,7 +214,7 @@ fn the_commands_write_csv_and_figures() {
     // the response at 300 rad/s is the library's, which tests/ross_linear.rs checks
     let row = csv
         .lines()
-        .find(|l| l.starts_with("300.000000,rotor,300.000000,3,"))
+        .find(|l| l.starts_with("300,rotor,300,3,"))
         .expect("a row at 300 rad/s, node 3");
     let amp: f64 = row
         .split(',')

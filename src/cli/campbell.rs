@@ -71,7 +71,7 @@ pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
 /// Runs `tmrotor campbell`, writing the critical speeds to `out`.
 pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let speeds = parse_speeds(&args.speeds)?;
-    let model = super::model::load_with(args.model.as_ref(), &args.set)?;
+    let model = super::model::load_for_linear(args.model.as_ref(), &args.set)?;
     let asm = Assembly::new(&model)?;
     let diagram = linear::campbell(&asm, &speeds, args.count)?;
     if let Some(path) = &args.csv {

@@ -290,7 +290,7 @@ pub fn campbell_csv(c: &Campbell) -> String {
         for (i, m) in p.modes.iter().enumerate() {
             let _ = writeln!(
                 text,
-                "{:.6},{},{:.6},{:.6},{:.6},{:.6},{},{:.4},{:.4}",
+                "{},{},{},{},{},{},{},{},{}",
                 p.speed_rad_s,
                 i + 1,
                 m.frequency_rad_s,
@@ -319,7 +319,7 @@ pub fn shapes_csv(modes: &[Mode], node_ids: &[u32], axial_m: &[f64]) -> String {
             let orbit = NodeOrbit { x: d[0], y: d[1] };
             let _ = writeln!(
                 text,
-                "{},{:.6},{},{:.4},{},{:.6},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
+                "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
                 k + 1,
                 m.frequency_rad_s,
                 m.whirl,
@@ -358,7 +358,7 @@ pub fn unbalance_csv(resp: &[UnbalanceResponse], node_ids: &[u32]) -> String {
             let o = r.node(i);
             let _ = writeln!(
                 text,
-                "{:.6},{},{:.6},{},{:.6e},{:.3},{:.6e},{:.3},{:.6e},{:.6e},{}",
+                "{},{},{},{},{},{},{},{},{},{},{}",
                 r.speed_rad_s,
                 r.rotor_id,
                 r.frequency_rad_s,

@@ -70,6 +70,27 @@ pub fn load_with(file: Option<&PathBuf>, set: &[(String, toml::Value)]) -> anyho
     Ok(Model::load(file.map(|f| f.as_path()), &set)?)
 }
 
+/// [`load_with`] for the linear analyses (`modes`, `campbell`, `unbalance`), which say on
+/// stderr when the model's `[[nonlinear]]` elements are left out of them.
+pub fn load_for_linear(
+    file: Option<&PathBuf>,
+    set: &[(String, toml::Value)],
+) -> anyhow::Result<Model> {
+    let model = load_with(file, set)?;
+    let n = model.spec.nonlinear.len();
+    if n > 0 {
+        eprintln!(
+            "note: {}: {n} [[nonlinear]] element{} (rub, stops, gaps, polynomial supports) \
+             {} left out of the linear analyses, their linear terms too; only the bearings are \
+             linearised. The sweep includes them.",
+            model.source,
+            if n == 1 { "" } else { "s" },
+            if n == 1 { "is" } else { "are" }
+        );
+    }
+    Ok(model)
+}
+
 /// Runs a model command, writing to `out`.
 pub fn run(cmd: &ModelCommand, out: &mut dyn Write) -> anyhow::Result<()> {
     match cmd {

@@ -48,7 +48,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
             args.speed
         );
     }
-    let model = super::model::load_with(args.model.as_ref(), &args.set)?;
+    let model = super::model::load_for_linear(args.model.as_ref(), &args.set)?;
     let asm = Assembly::new(&model)?;
     let modes = linear::modes(&asm, args.speed, args.count)?;
     if args.csv {
@@ -59,7 +59,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         for (i, m) in modes.iter().enumerate() {
             writeln!(
                 out,
-                "{},{:.6},{:.6},{:.6},{},{:.6},{:.6},{:.4}",
+                "{},{},{},{},{},{},{},{}",
                 i + 1,
                 m.frequency_rad_s,
                 m.frequency_hz(),

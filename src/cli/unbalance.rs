@@ -40,7 +40,7 @@ pub struct UnbalanceArgs {
 /// Runs `tmrotor unbalance`, writing the peaks of the drawn nodes to `out`.
 pub fn run(args: &UnbalanceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let speeds = super::campbell::parse_speeds(&args.speeds)?;
-    let model = super::model::load_with(args.model.as_ref(), &args.set)?;
+    let model = super::model::load_for_linear(args.model.as_ref(), &args.set)?;
     let asm = Assembly::new(&model)?;
     let resp = linear::unbalance_response(&asm, &speeds)
         .with_context(|| format!("unbalance response of {}", model.spec.name))?;

@@ -69,6 +69,12 @@ pub enum LinearError {
     /// A speed grid that cannot be used.
     #[error("bad speed grid: {0}")]
     BadSpeeds(String),
+    /// An unbalance response of a model without unbalance.
+    #[error(
+        "the model has no unbalance: give a disk an eccentricity (disks[i].eccentricity_m) to \
+         compute an unbalance response"
+    )]
+    NoUnbalance,
 }
 
 /// Whirl direction of a mode.

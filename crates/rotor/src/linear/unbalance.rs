@@ -89,9 +89,7 @@ pub fn unbalance_response(
     speeds: &[f64],
 ) -> Result<Vec<UnbalanceResponse>, LinearError> {
     if asm.unbalances.is_empty() {
-        return Err(LinearError::BadSpeeds(
-            "the model has no unbalance (give a disk eccentricity_m)".into(),
-        ));
+        return Err(LinearError::NoUnbalance);
     }
     let n = asm.n_dof;
     let mut out = Vec::new();
