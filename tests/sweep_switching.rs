@@ -173,3 +173,44 @@ fn the_sweep_follows_the_period_doubled_branch_as_its_own() {
         );
     }
 }
+
+/// Which bases switch: the dual rotor's paper basis holds the half orders (no switching;
+/// `--no-half-orders` switches), a single rotor's integer basis holds none, so its period
+/// doublings are followed with the default settings, and `switch_branches = false` or no
+/// stability turn it off.
+#[test]
+fn a_single_rotor_switches_by_default_the_paper_basis_does_not() {
+    let root = env!("CARGO_MANIFEST_DIR");
+    let dual = StudySettings::default();
+    assert!(!SweepProblem::new(&dual).expect("dual").switches_branches());
+    let mut primary = dual.clone();
+    primary.harmonic.half_orders = false;
+    assert!(
+        SweepProblem::new(&primary)
+            .expect("primary")
+            .switches_branches()
+    );
+    let single = StudySettings {
+        model: Some(format!("{root}/examples/rotors/jeffcott_midspan_disk.toml").into()),
+        ..Default::default()
+    };
+    assert!(
+        single.harmonic.half_orders,
+        "the default keeps the setting on"
+    );
+    assert!(
+        SweepProblem::new(&single)
+            .expect("single")
+            .switches_branches()
+    );
+    let mut off = single.clone();
+    off.sweep.switch_branches = false;
+    assert!(!SweepProblem::new(&off).expect("off").switches_branches());
+    let mut no_stability = single;
+    no_stability.floquet.stability = false;
+    assert!(
+        !SweepProblem::new(&no_stability)
+            .expect("no stability")
+            .switches_branches()
+    );
+}

@@ -336,6 +336,27 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
         writeln!(out, "  stability not assessed: {note}")?;
     }
     truncation_summary(&report, out)?;
+    let doublings = report
+        .bifurcations
+        .iter()
+        .filter(|(_, k)| k.starts_with("period-doubling"))
+        .count();
+    if doublings > 0 && report.branches.is_empty() && !problem.switches_branches() {
+        let why = if !settings.sweep.switch_branches {
+            "--no-switch (or switch_branches = false) leaves them"
+        } else if !settings.floquet.stability {
+            "switching needs stability"
+        } else {
+            "the basis holds the half orders of Eq. 34, on which a doubled response has no \
+             branch of its own; --no-half-orders sweeps on the primary basis and follows each \
+             doubled branch as a branch of its own"
+        };
+        writeln!(
+            out,
+            "  {} located, not followed: {why}",
+            plural(doublings, "period doubling", "period doublings")
+        )?;
+    }
     for b in &report.branches {
         writeln!(
             out,

@@ -153,8 +153,9 @@ pub struct SweepSettings {
     pub max_points: usize,
     /// Follow the period-doubled branch from every period doubling the sweep locates,
     /// each recorded as a branch of its own beside the run's (branch 1, 2, …; see
-    /// `SweepProblem::run`). Default true. It takes effect on the primary basis
-    /// (`half_orders = false`) with stability on: there a period doubling is located as
+    /// `SweepProblem::run`). Default true. It takes effect on a primary basis
+    /// (`half_orders = false`, or a single rotor's integer basis, which has no half
+    /// orders either way) with stability on: there a period doubling is located as
     /// such, and its branch needs the half orders the basis lacks. On the paper's basis the
     /// half orders are already in; a period doubling there would need quarter orders, a
     /// basis three times as large, and is left to the user.
@@ -714,7 +715,7 @@ pub fn primary_basis(order: u32, lambda: Ratio) -> Result<Basis, crate::hb::Basi
 /// single rotor). The basis holds frequencies, so a counter-rotating rotor's `−6/5` needs
 /// the same `6/5 ω` harmonics as a co-rotating one's; a part that does not spin adds none.
 /// Ratios are rational by model validation.
-fn speed_ratio(model: &Model) -> Ratio {
+pub fn speed_ratio(model: &Model) -> Ratio {
     let one = Ratio { num: 1, den: 1 };
     model
         .speed_ratios()

@@ -790,11 +790,23 @@ impl SweepProblem {
         })
     }
 
-    /// Whether [`Self::run`] follows the period-doubled branches: `switch_branches` on the
-    /// primary basis with stability on (see [`SweepSettings::switch_branches`]).
+    /// Whether [`Self::run`] follows the period-doubled branches: `switch_branches` on a
+    /// primary basis with stability on (see [`SweepSettings::switch_branches`]). The basis
+    /// is primary when it holds no half orders: `half_orders = false`, or a single rotor
+    /// (λ = 1), whose basis is the integer one either way.
     pub fn switches_branches(&self) -> bool {
         let s = &self.settings;
-        s.sweep.switch_branches && !s.harmonic.half_orders && s.floquet.stability
+        s.sweep.switch_branches && self.primary() && s.floquet.stability
+    }
+
+    /// Whether the run's basis is primary: every harmonic a multiple of `ω/q` for the
+    /// speed ratio `λ = p/q` (no half order a period doubling brings in).
+    fn primary(&self) -> bool {
+        let q = crate::study::speed_ratio(&self.model).den;
+        self.basis
+            .harmonics()
+            .iter()
+            .all(|h| (u64::from(h.num) * u64::from(q)) % u64::from(h.den) == 0)
     }
 
     /// Follows the period-doubled branch of every period doubling `rec` located on the
