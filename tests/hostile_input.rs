@@ -185,6 +185,32 @@ fn linear_analyses_take_set_and_truncation_names_its_node_flags() {
     assert!(root.join("examples/study.toml").is_file());
 }
 
+/// A fixed-seed linear congruential generator: `next(n)` is in `0..n`.
+fn lcg(mut seed: u64) -> impl FnMut(usize) -> usize {
+    move |n| {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        ((seed >> 33) as usize) % n.max(1)
+    }
+}
+
+/// Runs `tmrotor args` for mutation `case`: neither a panic, nor a signal, nor more than
+/// `limit_s` seconds. Its output and stderr.
+fn run_case(case: usize, args: &[&str], limit_s: f64) -> (Output, String) {
+    let started = std::time::Instant::now();
+    let o = tmrotor(args);
+    let secs = started.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_ne!(o.status.code(), Some(101), "case {case} panicked: {err}");
+    assert!(
+        o.status.code().is_some(),
+        "case {case} killed by a signal: {err}"
+    );
+    assert!(secs < limit_s, "case {case} took {secs} s");
+    (o, err)
+}
+
 /// A fixed-seed corpus of mutated model files (the built-in one with lines deleted,
 /// duplicated or cut, numbers replaced by hostile values, bytes flipped): `model check`
 /// never panics, never hangs, and a refusal names the file and a line or a field.
@@ -193,13 +219,7 @@ fn a_corpus_of_mutated_model_files_is_checked_without_a_panic() {
     let dir = tempfile::tempdir().expect("tempdir");
     let (_, text) = builtin(dir.path());
     let lines: Vec<&str> = text.lines().collect();
-    let mut seed: u64 = 0x5EED_CAFE_F00D_D00D;
-    let mut next = move |n: usize| -> usize {
-        seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((seed >> 33) as usize) % n.max(1)
-    };
+    let mut next = lcg(0x5EED_CAFE_F00D_D00D);
     let hostile = [
         "0",
         "-1",
@@ -268,16 +288,7 @@ fn a_corpus_of_mutated_model_files_is_checked_without_a_panic() {
         let path = dir.path().join(format!("case{case}.toml"));
         std::fs::write(&path, &bytes).expect("write");
         let p = path.to_str().expect("path");
-        let started = std::time::Instant::now();
-        let o = tmrotor(&["model", "check", p]);
-        let secs = started.elapsed().as_secs_f64();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_ne!(o.status.code(), Some(101), "case {case} panicked: {err}");
-        assert!(
-            o.status.code().is_some(),
-            "case {case} killed by a signal: {err}"
-        );
-        assert!(secs < 20.0, "case {case} took {secs} s");
+        let (o, err) = run_case(case, &["model", "check", p], 20.0);
         if o.status.success() {
             accepted += 1;
         } else {
@@ -306,13 +317,7 @@ fn a_corpus_of_mutated_campaign_files_is_checked_without_a_panic() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(root.join("examples/paper_campaign.toml")).expect("read");
     let lines: Vec<&str> = text.lines().collect();
-    let mut seed: u64 = 0xC0FF_EE00_1234_5678;
-    let mut next = move |n: usize| -> usize {
-        seed = seed
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        ((seed >> 33) as usize) % n.max(1)
-    };
+    let mut next = lcg(0xC0FF_EE00_1234_5678);
     let hostile = [
         "0",
         "-1",
@@ -357,16 +362,7 @@ fn a_corpus_of_mutated_campaign_files_is_checked_without_a_panic() {
         let path = dir.path().join(format!("camp{case}.toml"));
         std::fs::write(&path, ls.join("\n")).expect("write");
         let p = path.to_str().expect("path");
-        let started = std::time::Instant::now();
-        let o = tmrotor(&["campaign", p, "--dry-run"]);
-        let secs = started.elapsed().as_secs_f64();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_ne!(o.status.code(), Some(101), "case {case} panicked: {err}");
-        assert!(
-            o.status.code().is_some(),
-            "case {case} killed by a signal: {err}"
-        );
-        assert!(secs < 30.0, "case {case} took {secs} s");
+        let (o, err) = run_case(case, &["campaign", p, "--dry-run"], 30.0);
         if !o.status.success() {
             refused_n += 1;
             assert!(

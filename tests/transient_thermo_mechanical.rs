@@ -5,7 +5,7 @@
 //! orbit exists, the oscillator hunts between the sheets of its frozen response.
 
 use num_complex::Complex64;
-use tmrotor::continuation::{Continuation, ContinuationOptions};
+use tmrotor::continuation::{Branch, Continuation, ContinuationOptions};
 use tmrotor::hb::{Basis, HarmonicBalance, HbSolution, NewtonOptions, newton};
 use tmrotor::integrate::{SpeedProfile, ThermalStepping, Transient, TransientOptions};
 use tmrotor::stability::{BifurcationKind, HillOptions, HillPencil, Variational};
@@ -77,20 +77,26 @@ fn periodic_orbit(system: &ThermoDuffing, w: f64, mut y: [f64; 3]) -> [f64; 3] {
     y
 }
 
-#[test]
-fn past_a_neimark_sacker_point_the_temperature_modulates_at_the_predicted_period() {
-    let tau = 100.0 * TAU;
-    let system = ThermoDuffing::new(tau);
-    let basis = Basis::integer(9).expect("basis");
-    let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
-    let mut opts = ContinuationOptions::new(0.8, 1.3);
+/// The self-heated oscillator's branch on `basis` from Ω = 0.8 to `end`, with the
+/// variational equations' stability.
+fn coupled_branch(system: &ThermoDuffing, basis: &Basis, end: f64) -> Branch {
+    let hb = HarmonicBalance::new(system, basis, None).expect("hb");
+    let mut opts = ContinuationOptions::new(0.8, end);
     opts.ds_max = 0.05;
     opts.scale_mech = Some(1.0);
     opts.scale_therm = Some(1.0);
     opts.scale_omega = Some(1.0);
     let method = Variational::default();
     let mut cont = Continuation::new(hb, opts, Some(&method as _)).expect("continuation");
-    let branch = cont.run(|_| {}).expect("branch");
+    cont.run(|_| {}).expect("branch")
+}
+
+#[test]
+fn past_a_neimark_sacker_point_the_temperature_modulates_at_the_predicted_period() {
+    let tau = 100.0 * TAU;
+    let system = ThermoDuffing::new(tau);
+    let basis = Basis::integer(9).expect("basis");
+    let branch = coupled_branch(&system, &basis, 1.3);
     let ns = branch
         .bifurcations
         .iter()
@@ -182,15 +188,7 @@ fn where_no_stable_orbit_exists_the_oscillator_hunts_between_the_sheets() {
     let mut system = ThermoDuffing::new(tau);
     system.heating = 3.0;
     let basis = Basis::integer(9).expect("basis");
-    let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
-    let mut opts = ContinuationOptions::new(0.8, 1.6);
-    opts.ds_max = 0.05;
-    opts.scale_mech = Some(1.0);
-    opts.scale_therm = Some(1.0);
-    opts.scale_omega = Some(1.0);
-    let method = Variational::default();
-    let mut cont = Continuation::new(hb, opts, Some(&method as _)).expect("continuation");
-    let branch = cont.run(|_| {}).expect("branch");
+    let branch = coupled_branch(&system, &basis, 1.6);
     let kinds = |k| {
         branch
             .bifurcations
@@ -318,15 +316,7 @@ fn a_start_along_the_unstable_mode_leaves_at_its_rate_to_either_side() {
     let tau = 100.0 * TAU;
     let system = ThermoDuffing::new(tau);
     let basis = Basis::integer(9).expect("basis");
-    let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
-    let mut opts = ContinuationOptions::new(0.8, 1.3);
-    opts.ds_max = 0.05;
-    opts.scale_mech = Some(1.0);
-    opts.scale_therm = Some(1.0);
-    opts.scale_omega = Some(1.0);
-    let method = Variational::default();
-    let mut cont = Continuation::new(hb, opts, Some(&method as _)).expect("continuation");
-    let branch = cont.run(|_| {}).expect("branch");
+    let branch = coupled_branch(&system, &basis, 1.3);
     let folds: Vec<&HbSolution> = branch
         .bifurcations
         .iter()

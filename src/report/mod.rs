@@ -11,7 +11,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::campaign::Manifest;
-use crate::derive::peaks::resonant_peaks;
+use crate::derive::peaks::{local_maxima, resonant_peaks};
 use crate::record::reader::{Recording, read_recording};
 use crate::record::types::PointRecord;
 use crate::stability::BifurcationKind;
@@ -119,18 +119,9 @@ pub fn run_findings(name: &str, rec: &Recording) -> RunFindings {
     let pts = &rec.points;
     let amp = |p: &PointRecord| node.and_then(|i| p.amplitude_rms_m.get(i)).copied();
     let amps: Vec<Option<f64>> = pts.iter().map(amp).collect();
-    let mut maxima: Vec<(f64, f64)> = Vec::new();
-    for i in 1..pts.len().saturating_sub(1) {
-        if let (Some(a0), Some(a1), Some(a2)) = (amps[i - 1], amps[i], amps[i + 1])
-            && a1 > a0
-            && a1 >= a2
-        {
-            maxima.push((pts[i].omega_rad_s, a1 * 1e6));
-        }
-    }
-    let resonances = resonant_peaks(&amps)
-        .into_iter()
-        .filter_map(|i| amps[i].map(|a| (pts[i].omega_rad_s, a * 1e6)));
+    let at = |i: usize| amps[i].map(|a| (pts[i].omega_rad_s, a * 1e6));
+    let mut maxima: Vec<(f64, f64)> = local_maxima(&amps).filter_map(at).collect();
+    let resonances = resonant_peaks(&amps).into_iter().filter_map(at);
     // distinct resonances: at least 30 rad/s apart, the higher kept
     let mut kept: Vec<(f64, f64)> = Vec::new();
     for m in resonances {

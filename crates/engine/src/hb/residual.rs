@@ -177,26 +177,31 @@ pub struct SparseLinear {
     entries: Vec<LinearEntry>,
 }
 
+impl LinearEntry {
+    /// Adds this entry's terms of `L(ω) coeffs` to `out`, `w` the harmonics' angular
+    /// frequencies `ν_h ω` (`nh` of them).
+    #[inline]
+    fn add_to(&self, w: &[f64], coeffs: &[f64], out: &mut [f64]) {
+        let &LinearEntry { ri, cj, k, c, m } = self;
+        let nh = w.len();
+        out[ri] += k * coeffs[cj];
+        for (h, &w) in w.iter().enumerate() {
+            let a = k - w * w * m;
+            let (xa, xb) = (coeffs[cj + 1 + h], coeffs[cj + 1 + nh + h]);
+            out[ri + 1 + h] += a * xa + w * c * xb;
+            out[ri + 1 + nh + h] += -w * c * xa + a * xb;
+        }
+    }
+}
+
 impl SparseLinear {
     /// Adds the linear terms' coefficients `L(ω) coeffs` to `out`, as
     /// [`HarmonicBalance::add_linear`] (the same sums in the same order) for the
     /// harmonic balance `hb` this was built for.
     pub fn apply(&self, hb: &HarmonicBalance<'_>, omega: f64, coeffs: &[f64], out: &mut [f64]) {
-        let basis = hb.aft.basis();
-        let nh = basis.n_harmonics();
-        let w: Vec<f64> = basis
-            .harmonics()
-            .iter()
-            .map(|r| r.value() * omega)
-            .collect();
-        for &LinearEntry { ri, cj, k, c, m } in &self.entries {
-            out[ri] += k * coeffs[cj];
-            for (h, &w) in w.iter().enumerate() {
-                let a = k - w * w * m;
-                let (xa, xb) = (coeffs[cj + 1 + h], coeffs[cj + 1 + nh + h]);
-                out[ri + 1 + h] += a * xa + w * c * xb;
-                out[ri + 1 + nh + h] += -w * c * xa + a * xb;
-            }
+        let w = hb.harmonic_frequencies(omega);
+        for e in &self.entries {
+            e.add_to(&w, coeffs, out);
         }
     }
 }
@@ -361,31 +366,52 @@ impl<'a> HarmonicBalance<'a> {
 
     /// Adds `Z(ω) A` to `out`.
     pub fn add_linear(&self, lin: &LinearPart, omega: f64, coeffs: &[f64], out: &mut [f64]) {
-        self.sparse_linear(lin).apply(self, omega, coeffs, out);
+        let w = self.harmonic_frequencies(omega);
+        for e in self.linear_entries(lin) {
+            e.add_to(&w, coeffs, out);
+        }
     }
 
     /// The nonzero entries of `lin` in the order [`Self::add_linear`] visits them, for
     /// applying the same linear part to many vectors ([`SparseLinear::apply`]) without
     /// scanning its zeros each time.
     pub fn sparse_linear(&self, lin: &LinearPart) -> SparseLinear {
-        let nc = self.n_coeffs();
-        let mut entries = Vec::new();
-        for fld in fields(lin, self.n_mech, self.n_therm) {
-            for i in 0..fld.n {
-                let ri = (fld.offset + i) * nc;
-                for j in 0..fld.n {
-                    let cj = (fld.offset + j) * nc;
-                    let k = fld.stiffness.get(i, j);
-                    let c = fld.damping.get(i, j);
-                    let m = fld.mass.map_or(0.0, |m| m.get(i, j));
-                    if k == 0.0 && c == 0.0 && m == 0.0 {
-                        continue;
-                    }
-                    entries.push(LinearEntry { ri, cj, k, c, m });
-                }
-            }
+        SparseLinear {
+            entries: self.linear_entries(lin).collect(),
         }
-        SparseLinear { entries }
+    }
+
+    /// The angular frequencies `ν_h ω` of the basis's harmonics.
+    fn harmonic_frequencies(&self, omega: f64) -> Vec<f64> {
+        self.aft
+            .basis()
+            .harmonics()
+            .iter()
+            .map(|r| r.value() * omega)
+            .collect()
+    }
+
+    /// The nonzero `(row, column)` entries of `lin`, field by field, row by row.
+    fn linear_entries<'l>(&self, lin: &'l LinearPart) -> impl Iterator<Item = LinearEntry> + 'l {
+        let nc = self.n_coeffs();
+        fields(lin, self.n_mech, self.n_therm)
+            .into_iter()
+            .flat_map(move |fld| {
+                (0..fld.n).flat_map(move |i| {
+                    (0..fld.n).filter_map(move |j| {
+                        let k = fld.stiffness.get(i, j);
+                        let c = fld.damping.get(i, j);
+                        let m = fld.mass.map_or(0.0, |m| m.get(i, j));
+                        (k != 0.0 || c != 0.0 || m != 0.0).then_some(LinearEntry {
+                            ri: (fld.offset + i) * nc,
+                            cj: (fld.offset + j) * nc,
+                            k,
+                            c,
+                            m,
+                        })
+                    })
+                })
+            })
     }
 
     /// Time samples of the nonlinear DoFs: `x`, `v` (p series each) and `T` (q series),

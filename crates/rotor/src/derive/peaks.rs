@@ -34,14 +34,18 @@ pub fn prominence(y: &[Option<f64>], i: usize) -> f64 {
 /// at least [`PEAK_PROMINENCE`] of their height. The ends of a branch are not peaks (the
 /// range ends there, not the response).
 pub fn resonant_peaks(y: &[Option<f64>]) -> Vec<usize> {
-    (1..y.len().saturating_sub(1))
-        .filter(|&i| match (y[i - 1], y[i], y[i + 1]) {
-            (Some(a0), Some(a1), Some(a2)) => {
-                a1 > a0 && a1 >= a2 && prominence(y, i) >= PEAK_PROMINENCE * a1
-            }
-            _ => false,
-        })
+    local_maxima(y)
+        .filter(|&i| y[i].is_some_and(|a| prominence(y, i) >= PEAK_PROMINENCE * a))
         .collect()
+}
+
+/// Indices of the interior local maxima of `y`: higher than the value before and not
+/// lower than the one after, all three present.
+pub fn local_maxima(y: &[Option<f64>]) -> impl Iterator<Item = usize> + '_ {
+    (1..y.len().saturating_sub(1)).filter(|&i| match (y[i - 1], y[i], y[i + 1]) {
+        (Some(a0), Some(a1), Some(a2)) => a1 > a0 && a1 >= a2,
+        _ => false,
+    })
 }
 
 #[cfg(test)]

@@ -87,7 +87,7 @@ pub fn write_map(map: &MapRecord, path: &Path) -> Result<(), RecordError> {
         .create(Cursor::new(Vec::new()))
         .map_err(mcap_err)?;
     let mut channels = Channels::default();
-    let mut publish = |topic: Topic, seq: usize, msg: &dyn MessageBytes| {
+    let mut publish = |topic: Topic, seq: usize, bytes: Vec<u8>| {
         let channel_id = channels.id(&mut writer, topic)?;
         let header = mcap::records::MessageHeader {
             channel_id,
@@ -95,18 +95,18 @@ pub fn write_map(map: &MapRecord, path: &Path) -> Result<(), RecordError> {
             log_time: seq as u64,
             publish_time: seq as u64,
         };
-        writer.write_to_known_channel(&header, &msg.bytes())
+        writer.write_to_known_channel(&header, &bytes)
     };
     let m = map_to_pb(map);
-    publish(TOPIC_MAP_INFO, 0, &m.info).map_err(mcap_err)?;
+    publish(TOPIC_MAP_INFO, 0, m.info.encode_to_vec()).map_err(mcap_err)?;
     for (k, c) in m.curves.iter().enumerate() {
-        publish(TOPIC_MAP_CURVES, k, c).map_err(mcap_err)?;
+        publish(TOPIC_MAP_CURVES, k, c.encode_to_vec()).map_err(mcap_err)?;
     }
     for (k, e) in m.pair_ends.iter().enumerate() {
-        publish(TOPIC_MAP_PAIR_ENDS, k, e).map_err(mcap_err)?;
+        publish(TOPIC_MAP_PAIR_ENDS, k, e.encode_to_vec()).map_err(mcap_err)?;
     }
     for (k, r) in m.regions.iter().enumerate() {
-        publish(TOPIC_MAP_REGIONS, k, r).map_err(mcap_err)?;
+        publish(TOPIC_MAP_REGIONS, k, r.encode_to_vec()).map_err(mcap_err)?;
     }
     writer.finish().map_err(mcap_err)?;
     let bytes = writer.into_inner().into_inner();
@@ -114,17 +114,6 @@ pub fn write_map(map: &MapRecord, path: &Path) -> Result<(), RecordError> {
         path: path.to_path_buf(),
         source,
     })
-}
-
-/// A protobuf message as bytes (object-safe, so one `publish` takes every map message).
-trait MessageBytes {
-    fn bytes(&self) -> Vec<u8>;
-}
-
-impl<M: Message> MessageBytes for M {
-    fn bytes(&self) -> Vec<u8> {
-        self.encode_to_vec()
-    }
 }
 
 /// Reads an operating map's recording. A topic that does not belong to a map, a message
