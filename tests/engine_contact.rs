@@ -1,7 +1,8 @@
 //! NLvib's two-mass oscillator with a unilateral spring (`systems::contact`), H = 21,
-//! 1024 AFT samples, Ω from 0.8 down to 0.5, stability by shooting from the balance's
-//! orbit: the folds the shot orbits confirm are the published ones (0.6534401, 0.755664),
-//! the Neimark–Sacker point is the published 0.618354, and the middle branch is unstable.
+//! the contact integrated exactly between its switching instants, Ω from 0.8 down to 0.5,
+//! stability by shooting from the balance's orbit: two folds and no artefact, at the
+//! published 0.6534401 and 0.755664, the Neimark–Sacker point at the published 0.618354,
+//! and the middle branch unstable.
 
 mod engine_support;
 
@@ -13,8 +14,8 @@ use tmrotor::systems::contact::UnilateralContact;
 fn contact_folds_and_neimark_sacker_match_the_published_values() {
     let system = UnilateralContact::default();
     let (branch, [first, second]) = contact_benchmark(&system);
-    // the middle branch (between the two folds along the branch, away from the sampling
-    // cluster next to the upper fold) is unstable through a real multiplier above +1 (1.6–2.4
+    // the middle branch (between the two folds along the branch, away from the upper
+    // fold) is unstable through a real multiplier above +1 (1.6–2.4
     // by shooting in the published study), which the variational equations around the
     // truncated orbit miss near 0.70 (the reason for shooting here)
     let middle: Vec<_> = branch

@@ -210,10 +210,17 @@ impl StabilityMethod for VariationalFloquet {
 }
 
 /// NLvib's two-mass contact benchmark (`systems::contact`, or the same equations from a
-/// model file) continued as published: H = 21, 1024 AFT samples, Ω from 0.8 down to 0.5,
-/// stability by shooting. Asserts the folds the shot orbits confirm (0.6534401, 0.755664)
-/// and the Neimark–Sacker point (0.618354); returns the branch and the indices of the two
-/// confirmed folds' points.
+/// model file) continued as published: H = 21, Ω from 0.8 down to 0.5, stability by
+/// shooting, the contact force integrated exactly between its switching instants
+/// (`hb::events`, the default for a system with switching functions). Asserts: no
+/// saddle-node but the two folds (no sampling artefacts), at most 200 points, the folds at
+/// the published 0.6534401 and 0.755664 and the Neimark–Sacker point at 0.618354. Returns
+/// the branch and the indices of the two folds' points.
+///
+/// The upper fold's tolerance is 5e-5: the published value comes from a sampled AFT and
+/// carries its sampling error. Sampled with 1024 points the fold lies at 0.7556594, with
+/// 4096 at 0.7556281, and with 16384 the artefact folds climb to 0.7556310; integrated
+/// exactly it is 0.7556310 (docs/validation.md).
 pub fn contact_benchmark(system: &dyn System) -> (tmrotor::continuation::Branch, [usize; 2]) {
     use tmrotor::continuation::{Continuation, ContinuationOptions};
     use tmrotor::hb::{Basis, HarmonicBalance};
@@ -222,24 +229,26 @@ pub fn contact_benchmark(system: &dyn System) -> (tmrotor::continuation::Branch,
 
     let basis = Basis::integer(21).expect("basis");
     let hb = HarmonicBalance::new(system, &basis, Some(1024)).expect("hb");
+    assert!(hb.event_refinement(), "the contact is integrated exactly");
     let (w0, w1) = UnilateralContact::OMEGA_RANGE;
     let mut opts = ContinuationOptions::new(w0, w1);
-    opts.ds_max = 0.05;
+    opts.ds_max = 0.3;
     let method = Shooting::default();
     let mut cont = Continuation::new(hb, opts, Some(&method)).expect("continuation");
     let branch = cont.run(|_| {}).expect("run");
+    assert!(branch.points.len() <= 200, "{} points", branch.points.len());
     let mut confirmed: Vec<(f64, usize)> = branch
         .bifurcations
         .iter()
-        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode) && branch.confirmed(b))
+        .filter(|b| b.bifurcation == Some(BifurcationKind::SaddleNode))
         .map(|b| (b.solution.omega, b.index))
         .collect();
     confirmed.sort_by_key(|c| c.1);
     let mut folds: Vec<f64> = confirmed.iter().map(|c| c.0).collect();
     folds.sort_by(f64::total_cmp);
-    assert_eq!(folds.len(), 2, "confirmed folds {folds:?}");
+    assert_eq!(folds.len(), 2, "folds {folds:?}");
     assert!((folds[0] - 0.6534401).abs() < 1e-6, "{folds:?}");
-    assert!((folds[1] - 0.755664).abs() < 1e-5, "{folds:?}");
+    assert!((folds[1] - 0.755664).abs() < 5e-5, "{folds:?}");
     let ns: Vec<f64> = branch
         .bifurcations
         .iter()

@@ -232,6 +232,29 @@ pub trait System: Sync {
         self.eval_nonlinear(omega, t, x, v, temp, out);
     }
 
+    /// Number of switching functions ([`System::switching`]); 0 (the default) when the
+    /// nonlinear terms are smooth.
+    fn n_switching(&self) -> usize {
+        0
+    }
+
+    /// The switching functions at one instant, in the arguments of
+    /// [`System::eval_nonlinear`] (`out` has length [`System::n_switching`]): their zeros
+    /// are the instants where `f` or `g` stop being smooth, e.g. the penetration `d − g` of
+    /// a unilateral contact. The harmonic balance locates them on the orbit and integrates
+    /// the pieces between them exactly (`hb::events`). `f` and `g` must be continuous
+    /// across a zero; their derivatives may jump.
+    fn switching(
+        &self,
+        _omega: f64,
+        _t: f64,
+        _x: &[f64],
+        _v: &[f64],
+        _temp: &[f64],
+        _out: &mut [f64],
+    ) {
+    }
+
     /// Mechanical load `F(t; ω)` (length `n_mech`), written into `out`.
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]);
 

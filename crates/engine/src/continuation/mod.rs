@@ -727,7 +727,11 @@ pub struct Branch {
 impl Branch {
     /// Whether the located bifurcation `b` is confirmed by the multipliers of the points
     /// on either side ([`crate::stability::confirms_fold`]): always for kinds other than
-    /// saddle-nodes, never when a side has no stability.
+    /// saddle-nodes. The points compared are the assessed ones within
+    /// [`Self::CONFIRM_REACH`] points before and after the fold, any pair of them: a method
+    /// that corrects the orbit (shooting) may fail right at the fold, where its Newton
+    /// matrix is singular, and puts the true fold a truncation error away from the
+    /// balance's. Never confirmed without assessed points on both sides.
     pub fn confirmed(&self, b: &BranchPoint) -> bool {
         if b.bifurcation != Some(BifurcationKind::SaddleNode) {
             return true;
@@ -738,11 +742,18 @@ impl Branch {
                 .find(|p| p.index == i)
                 .and_then(|p| p.stability.as_ref())
         };
-        match (b.index.checked_sub(1).and_then(at), at(b.index)) {
-            (Some(x), Some(y)) => crate::stability::confirms_fold(x, y),
-            _ => false,
-        }
+        let reach = Self::CONFIRM_REACH;
+        let before: Vec<_> = (1..=reach)
+            .filter_map(|k| b.index.checked_sub(k).and_then(at))
+            .collect();
+        let after: Vec<_> = (0..reach).filter_map(|k| at(b.index + k)).collect();
+        before
+            .iter()
+            .any(|x| after.iter().any(|y| crate::stability::confirms_fold(x, y)))
     }
+
+    /// How many points away from a fold [`Self::confirmed`] looks for assessed ones.
+    pub const CONFIRM_REACH: usize = 3;
 }
 
 /// The cubic Hermite curve `X(θ)` from an accepted point (`θ = 0`, unit tangent `τ₀`) to

@@ -169,6 +169,12 @@ impl Aft {
     /// (`1 + 2H` coefficients); `buf` receives the spectrum.
     pub fn project(&self, samples: &[f64], out: &mut [f64], buf: &mut Vec<Complex64>) {
         self.spectrum(samples, buf);
+        self.project_spectrum(buf, out);
+    }
+
+    /// The basis coefficients (`1 + 2H`, into `out`) of a series with normalised spectrum
+    /// `spec` ([`Aft::spectrum`], or [`super::EventNodes::spectrum`]).
+    pub fn project_spectrum(&self, buf: &[Complex64], out: &mut [f64]) {
         let nh = self.multiples.len();
         out[0] = buf[0].re;
         for (h, &m) in self.multiples.iter().enumerate() {

@@ -6,6 +6,7 @@
 //! |---|---|
 //! | [`Basis`] | constant + rational multiples of ω (Eq. 34) |
 //! | [`Aft`] | coefficients ↔ time samples by FFT (Eq. 28) |
+//! | [`EventNodes`] | exact coefficients of piecewise-smooth terms: quadrature between located switching instants |
 //! | [`HarmonicBalance`] | residual `R(A, ω)` (Eq. 25–27), exact `∂R/∂A`, `∂R/∂ω` |
 //! | [`LinearSolver`] | Newton systems with the linear DoFs condensed per harmonic |
 //! | [`newton`] | damped Newton with separate mechanical / thermal tests (Eq. 29) |
@@ -14,6 +15,7 @@
 pub mod aft;
 pub mod basis;
 pub mod condense;
+pub mod events;
 pub mod newton;
 pub mod residual;
 pub mod solution;
@@ -22,6 +24,7 @@ pub mod time_residual;
 pub use aft::{Aft, AftError, Signal};
 pub use basis::{Basis, BasisError, Ratio};
 pub use condense::{Border, Factorization, LinearSolver, SolveError};
+pub use events::{EventNodes, PanelRule};
 pub use newton::{NewtonError, NewtonOptions, NewtonStats};
 pub use residual::{HarmonicBalance, HbError, JacobianParts, ResidualNorms, SparseLinear};
 pub use solution::HbSolution;

@@ -25,6 +25,7 @@ use thiserror::Error;
 
 use super::aft::{Aft, AftError, Signal};
 use super::basis::Basis;
+use super::events::{EventNodes, PanelRule, Row, illinois};
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 
 /// Errors of the harmonic-balance layer.
@@ -114,6 +115,13 @@ pub struct HarmonicBalance<'a> {
     nl: NonlinearDofs,
     n_mech: usize,
     n_therm: usize,
+    /// Integrate the nonlinear terms between located switching instants
+    /// ([`HarmonicBalance::with_event_refinement`]).
+    events: bool,
+    /// The event quadrature's uniform panels.
+    rule: PanelRule,
+    /// The basis's integer multiples `m_h` of the base frequency.
+    multiples: Vec<usize>,
     /// Per-sample evaluation buffers of earlier residuals, reused: allocating and zeroing
     /// them (128 × 13 kB on the dual rotor) was about a tenth of a residual.
     eval_pool: std::sync::Mutex<Vec<Vec<NonlinearEval>>>,
@@ -127,6 +135,53 @@ impl std::fmt::Debug for HarmonicBalance<'_> {
             .field("nl", &self.nl)
             .field("aft", &self.aft)
             .finish()
+    }
+}
+
+/// Nonlinear DoFs' state width (`2p + q`) from which the event nodes are evaluated in
+/// parallel: below it a node costs less than handing it to another thread.
+const PARALLEL_WIDTH: usize = 8;
+
+/// The nonlinear terms over one period: at the AFT's samples, or at event nodes.
+struct Evaluation {
+    evals: Vec<NonlinearEval>,
+    nodes: Option<EventNodes>,
+}
+
+/// Scratch state of the nonlinear DoFs at one instant.
+struct NodeState {
+    x: Vec<f64>,
+    v: Vec<f64>,
+    temp: Vec<f64>,
+    trig: Vec<(f64, f64, f64)>,
+    powers: Vec<(f64, f64)>,
+}
+
+impl NodeState {
+    /// Writes `x`, `v`, `T` into `out`.
+    fn write(&self, out: &mut [f64]) {
+        let p = self.x.len();
+        out[..p].copy_from_slice(&self.x);
+        out[p..2 * p].copy_from_slice(&self.v);
+        out[2 * p..].copy_from_slice(&self.temp);
+    }
+
+    /// Reads `x`, `v`, `T` from what [`Self::write`] wrote.
+    fn read(&mut self, from: &[f64]) {
+        let p = self.x.len();
+        self.x.copy_from_slice(&from[..p]);
+        self.v.copy_from_slice(&from[p..2 * p]);
+        self.temp.copy_from_slice(&from[2 * p..]);
+    }
+
+    fn new(p: usize, q: usize) -> Self {
+        Self {
+            x: vec![0.0; p],
+            v: vec![0.0; p],
+            temp: vec![0.0; q],
+            trig: Vec::new(),
+            powers: Vec::new(),
+        }
     }
 }
 
@@ -235,14 +290,143 @@ impl<'a> HarmonicBalance<'a> {
         let (n_mech, n_therm) = (system.n_mech(), system.n_therm());
         check_dofs("mechanical", &nl.mech, n_mech)?;
         check_dofs("thermal", &nl.therm, n_therm)?;
+        let aft = Aft::new(basis, n_samples)?;
+        let m_max = basis.max_integer_multiple() as usize;
         Ok(Self {
             system,
-            aft: Aft::new(basis, n_samples)?,
+            events: system.n_switching() > 0,
+            rule: PanelRule::new((aft.n_samples() / 8).max(8 * (m_max + 1)), 2 * m_max),
+            multiples: (0..basis.n_harmonics())
+                .map(|h| basis.integer_multiple(h) as usize)
+                .collect(),
+            aft,
             nl,
             n_mech,
             n_therm,
             eval_pool: std::sync::Mutex::new(Vec::new()),
         })
+    }
+
+    /// With `on`, the nonlinear terms' coefficients and Jacobian are integrated exactly
+    /// between the instants where the system's switching functions change sign
+    /// ([`EventNodes`]); without, they are sampled on the AFT's uniform grid. On by
+    /// default for systems with switching functions ([`System::n_switching`]).
+    pub fn with_event_refinement(mut self, on: bool) -> Self {
+        self.events = on;
+        self
+    }
+
+    /// Whether the nonlinear terms are integrated between switching instants.
+    pub fn event_refinement(&self) -> bool {
+        self.events
+    }
+
+    /// The event quadrature's nodes at `(A, ω)`: its switching instants (as phases
+    /// `Ω_b t`), and as many nodes as a residual evaluates the nonlinear terms at. `None`
+    /// without event refinement.
+    pub fn event_nodes(&self, coeffs: &[f64], omega: f64) -> Option<EventNodes> {
+        self.events.then(|| self.refine_nodes(coeffs, omega).0)
+    }
+
+    /// The event nodes at `(A, ω)` and the nonlinear DoFs' states at the panel rule's
+    /// nodes (`x`, `v`, `T` of each, node-major).
+    fn refine_nodes(&self, coeffs: &[f64], omega: f64) -> (EventNodes, Vec<f64>) {
+        let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
+        let width = 2 * p + q;
+        let ns = self.system.n_switching();
+        let wb = self.aft.base_frequency(omega);
+        let theta = self.rule.theta();
+        let mut states = vec![0.0; theta.len() * width];
+        let one = |st: &mut NodeState, (i, out): (usize, &mut [f64])| {
+            self.state_from_row(coeffs, wb, self.rule.row(i), st);
+            st.write(out);
+        };
+        if width >= PARALLEL_WIDTH {
+            states
+                .par_chunks_mut(width)
+                .enumerate()
+                .with_min_len(64)
+                .for_each_init(|| NodeState::new(p, q), one);
+        } else if width > 0 {
+            let mut st = NodeState::new(p, q);
+            states
+                .chunks_mut(width)
+                .enumerate()
+                .for_each(|io| one(&mut st, io));
+        }
+        let mut values = vec![0.0; theta.len() * ns];
+        if ns > 0 {
+            for ((out, s), &th) in values
+                .chunks_mut(ns)
+                .zip(states.chunks(width.max(1)))
+                .zip(theta)
+            {
+                let (x, rest) = s.split_at(p);
+                let (v, temp) = rest.split_at(p);
+                self.system.switching(omega, th / wb, x, v, temp, out);
+            }
+        }
+        let mut st = NodeState::new(p, q);
+        let mut buf = vec![0.0; ns];
+        let nodes = self.rule.refine(&values, ns, |i, a, b| {
+            let mut f = |th: f64| {
+                self.state_at(coeffs, omega, th / wb, &mut st);
+                self.system
+                    .switching(omega, th / wb, &st.x, &st.v, &st.temp, &mut buf);
+                buf[i]
+            };
+            let (fa, fb) = (f(a), f(b));
+            illinois(&mut f, a, fa, b, fb)
+        });
+        (nodes, states)
+    }
+
+    /// The nonlinear DoFs' values, rates and temperatures at the phase whose row
+    /// `e^{−ikθ}` is `row` (base frequency `wb`).
+    fn state_from_row(&self, coeffs: &[f64], wb: f64, row: &[Complex64], st: &mut NodeState) {
+        let nc = self.n_coeffs();
+        let nh = self.multiples.len();
+        let eval = |c: &[f64]| {
+            let (mut x, mut v) = (c[0], 0.0);
+            for (h, &m) in self.multiples.iter().enumerate() {
+                let (cs, sn) = (row[m].re, -row[m].im);
+                let (a, b) = (c[1 + h], c[1 + nh + h]);
+                x += a * cs + b * sn;
+                v += m as f64 * wb * (b * cs - a * sn);
+            }
+            (x, v)
+        };
+        for (k, &d) in self.nl.mech.iter().enumerate() {
+            (st.x[k], st.v[k]) = eval(&coeffs[d * nc..(d + 1) * nc]);
+        }
+        for (k, &d) in self.nl.therm.iter().enumerate() {
+            let g = self.n_mech + d;
+            st.temp[k] = eval(&coeffs[g * nc..(g + 1) * nc]).0;
+        }
+    }
+
+    /// The nonlinear DoFs' values, rates and temperatures at time `t`.
+    fn state_at(&self, coeffs: &[f64], omega: f64, t: f64, st: &mut NodeState) {
+        let nc = self.n_coeffs();
+        let basis = self.aft.basis();
+        basis.trig_table_recurrent(omega, t, &mut st.powers, &mut st.trig);
+        for (k, &d) in self.nl.mech.iter().enumerate() {
+            let (x, v, _) = basis.eval_with(&coeffs[d * nc..(d + 1) * nc], &st.trig);
+            st.x[k] = x;
+            st.v[k] = v;
+        }
+        for (k, &d) in self.nl.therm.iter().enumerate() {
+            let g = self.n_mech + d;
+            st.temp[k] = basis.eval_with(&coeffs[g * nc..(g + 1) * nc], &st.trig).0;
+        }
+    }
+
+    /// The normalised spectrum of `series` (values at the AFT samples, or at `nodes`).
+    fn spectrum(&self, nodes: Option<&EventNodes>, series: &[f64], buf: &mut Vec<Complex64>) {
+        match nodes {
+            Some(q) => q.spectrum(&self.rule, series, self.aft.n_samples(), buf),
+            None => self.aft.spectrum(series, buf),
+        }
     }
 
     pub fn system(&self) -> &'a dyn System {
@@ -448,16 +632,60 @@ impl<'a> HarmonicBalance<'a> {
     /// pool; hand them back with [`Self::recycle`]).
     /// The nonlinear terms at every AFT sample; their derivatives too when
     /// `derivatives`.
-    fn evaluate(&self, coeffs: &[f64], omega: f64, derivatives: bool) -> Vec<NonlinearEval> {
-        let n = self.aft.n_samples();
+    fn evaluate(&self, coeffs: &[f64], omega: f64, derivatives: bool) -> Evaluation {
         let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
-        let (xs, vs, ts) = self.nonlinear_samples(coeffs, omega);
         let mut evals = self
             .eval_pool
             .lock()
             .ok()
             .and_then(|mut pool| pool.pop())
             .unwrap_or_default();
+        if self.events {
+            let (nodes, states) = self.refine_nodes(coeffs, omega);
+            let width = 2 * p + q;
+            let wb = self.aft.base_frequency(omega);
+            evals.resize_with(nodes.len(), || NonlinearEval::new(p, q));
+            let eval_one =
+                |st: &mut NodeState, ((th, row), e): ((&f64, &Row), &mut NonlinearEval)| {
+                    let t = th / wb;
+                    match *row {
+                        Row::Rule(i) => st.read(&states[i * width..(i + 1) * width]),
+                        Row::Own(_) => {
+                            self.state_from_row(coeffs, wb, nodes.row(&self.rule, *row), st)
+                        }
+                    }
+                    if derivatives {
+                        self.system
+                            .eval_nonlinear(omega, t, &st.x, &st.v, &st.temp, e);
+                    } else {
+                        self.system
+                            .eval_nonlinear_values(omega, t, &st.x, &st.v, &st.temp, e);
+                    }
+                };
+            if width >= PARALLEL_WIDTH {
+                nodes
+                    .theta
+                    .par_iter()
+                    .zip(nodes.rows.par_iter())
+                    .zip(evals.par_iter_mut())
+                    .with_min_len(64)
+                    .for_each_init(|| NodeState::new(p, q), eval_one);
+            } else {
+                let mut st = NodeState::new(p, q);
+                nodes
+                    .theta
+                    .iter()
+                    .zip(&nodes.rows)
+                    .zip(evals.iter_mut())
+                    .for_each(|n| eval_one(&mut st, n));
+            }
+            return Evaluation {
+                evals,
+                nodes: Some(nodes),
+            };
+        }
+        let n = self.aft.n_samples();
+        let (xs, vs, ts) = self.nonlinear_samples(coeffs, omega);
         evals.resize_with(n, || NonlinearEval::new(p, q));
         let eval_one = |(x, v, t): &mut (Vec<f64>, Vec<f64>, Vec<f64>),
                         (j, e): (usize, &mut NonlinearEval)| {
@@ -489,11 +717,11 @@ impl<'a> HarmonicBalance<'a> {
                 .enumerate()
                 .for_each(|je| eval_one(&mut b, je));
         }
-        evals
+        Evaluation { evals, nodes: None }
     }
 
     /// Returns the buffers of [`Self::evaluate`] to the pool.
-    fn recycle(&self, evals: Vec<NonlinearEval>) {
+    fn recycle(&self, Evaluation { evals, .. }: Evaluation) {
         if let Ok(mut pool) = self.eval_pool.lock() {
             // one per thread that may evaluate at once is plenty
             if pool.len() < 4 {
@@ -534,7 +762,6 @@ impl<'a> HarmonicBalance<'a> {
         self.check_len("coefficient vector", coeffs.len())?;
         self.check_len("residual vector", out.len())?;
         let nc = self.n_coeffs();
-        let n = self.aft.n_samples();
         let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
         let load = self.load_coeffs(omega);
         for (o, l) in out.iter_mut().zip(&load) {
@@ -544,24 +771,25 @@ impl<'a> HarmonicBalance<'a> {
         self.check_linear(&lin)?;
         self.add_linear(&lin, omega, coeffs, out);
         if p + q > 0 {
-            let evals = self.evaluate(coeffs, omega, jac.is_some());
+            let ev = self.evaluate(coeffs, omega, jac.is_some());
             let mut buf = Vec::new();
-            let mut series = vec![0.0; n];
+            let mut series = vec![0.0; ev.evals.len()];
             let mut proj = vec![0.0; nc];
             let globals = self.nonlinear_global();
             for (k, &g) in globals.iter().enumerate() {
-                for (j, e) in evals.iter().enumerate() {
+                for (j, e) in ev.evals.iter().enumerate() {
                     series[j] = if k < p { e.f[k] } else { e.g[k - p] };
                 }
-                self.aft.project(&series, &mut proj, &mut buf);
+                self.spectrum(ev.nodes.as_ref(), &series, &mut buf);
+                self.aft.project_spectrum(&buf, &mut proj);
                 for (o, v) in out[g * nc..(g + 1) * nc].iter_mut().zip(&proj) {
                     *o += v;
                 }
             }
             if let Some(jac) = jac {
-                self.nonlinear_jacobian(&evals, omega, jac, false);
+                self.nonlinear_jacobian(&ev, omega, jac, false);
             }
-            self.recycle(evals);
+            self.recycle(ev);
         }
         if out.iter().any(|v| !v.is_finite()) {
             return Err(HbError::NonFinite {
@@ -582,9 +810,9 @@ impl<'a> HarmonicBalance<'a> {
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
         let mut out = vec![0.0; pn * pn];
         if pn > 0 {
-            let evals = self.evaluate(coeffs, omega, true);
-            self.nonlinear_jacobian(&evals, omega, &mut out, true);
-            self.recycle(evals);
+            let ev = self.evaluate(coeffs, omega, true);
+            self.nonlinear_jacobian(&ev, omega, &mut out, true);
+            self.recycle(ev);
         }
         if out.iter().any(|v| !v.is_finite()) {
             return Err(HbError::NonFinite {
@@ -599,13 +827,14 @@ impl<'a> HarmonicBalance<'a> {
     /// velocity derivatives taken as values instead ([`Self::velocity_sensitivity`]).
     fn nonlinear_jacobian(
         &self,
-        evals: &[NonlinearEval],
+        ev: &Evaluation,
         omega: f64,
         jac: &mut [f64],
         velocity_only: bool,
     ) {
+        let evals = &ev.evals[..];
         let nc = self.n_coeffs();
-        let n = self.aft.n_samples();
+        let n = evals.len();
         let (p, q) = (self.nl.mech.len(), self.nl.therm.len());
         let pt = p + q;
         let ld = pt * nc;
@@ -664,7 +893,7 @@ impl<'a> HarmonicBalance<'a> {
                         for (s, e) in series.iter_mut().zip(evals) {
                             *s = which.of(e)[idx];
                         }
-                        aft.spectrum(&series, &mut buf);
+                        self.spectrum(ev.nodes.as_ref(), &series, &mut buf);
                         aft.add_product_block(&buf, signal, omega, 1.0, &mut rows[l * nc..], ld);
                     }
                 }

@@ -116,7 +116,8 @@ impl Default for ShootingOptions {
 /// A `period`-periodic solution of `system` at `omega` by Newton's method on
 /// `y(P; y0) − y0 = 0` (single shooting from `t = 0`), started from `y0`. Finds stable and
 /// unstable orbits alike. Returns the initial state of the orbit and the monodromy matrix
-/// at the converged point.
+/// at the converged point. Converged: a residual or a Newton correction below
+/// [`ShootingOptions::tol`] (the latter spares the integration that would only confirm it).
 pub fn shoot_periodic(
     system: &dyn System,
     omega: f64,
@@ -142,11 +143,19 @@ pub fn shoot_periodic(
         });
         let rhs = Mat::from_fn(d, 1, |i, _| -r[i]);
         let delta = jac.partial_piv_lu().solve(rhs);
+        let mut step = 0.0f64;
         for i in 0..d {
             y[i] += delta[(i, 0)];
+            step = step.max(delta[(i, 0)].abs());
         }
         if y.iter().any(|v| !v.is_finite()) {
             break;
+        }
+        // a Newton correction below the tolerance: the corrected state is converged (the
+        // next residual would be of the order of its square), and the monodromy at the
+        // state before it differs from the one after by O(correction) ≤ tol
+        if step <= opts.tol * scale {
+            return Ok(FlowSensitivity { y, phi: flow.phi });
         }
     }
     Err(IntegrateError::Shooting {

@@ -94,6 +94,23 @@ impl System for UnilateralContact {
         out.df_dv[0] = 0.0;
     }
 
+    fn n_switching(&self) -> usize {
+        1
+    }
+
+    /// The penetration `q₁ − gap`: the contact closes and opens at its zeros.
+    fn switching(
+        &self,
+        _omega: f64,
+        _t: f64,
+        x: &[f64],
+        _v: &[f64],
+        _temp: &[f64],
+        out: &mut [f64],
+    ) {
+        out[0] = x[0] - self.gap;
+    }
+
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
         out[0] = 0.0;
         out[1] = self.force * (omega * t).cos();

@@ -44,6 +44,21 @@ pub enum ElementLaw {
 pub type ElementForce = ([f64; 2], [[f64; 2]; 2]);
 
 impl ElementLaw {
+    /// The switching function at relative displacement `u`: the penetration whose zeros
+    /// are the instants where the force stops being smooth (`r − g` for rub, `n·u − g` for
+    /// a unilateral spring); `None` for a smooth law.
+    pub fn switching(&self, u: [f64; 2]) -> Option<f64> {
+        match *self {
+            Self::Rub { gap_m, .. } => Some(u[0].hypot(u[1]) - gap_m),
+            Self::Polynomial { .. } => None,
+            Self::Unilateral {
+                gap_m,
+                direction: n,
+                ..
+            } => Some(n[0] * u[0] + n[1] * u[1] - gap_m),
+        }
+    }
+
     /// Force and exact Jacobian at relative displacement `u` (m).
     pub fn force(&self, u: [f64; 2]) -> ElementForce {
         let zero = ([0.0; 2], [[0.0; 2]; 2]);

@@ -761,6 +761,35 @@ impl System for CoupledRotor {
         self.eval_terms(omega, t, x, temp, out, false);
     }
 
+    /// One per rub or unilateral element (in model order): contact opens and closes at
+    /// their zeros, which the harmonic balance integrates between exactly. The Hertz
+    /// bearings' `δ^{3/2}` contacts are left to the AFT's samples: their force and its
+    /// first derivative are continuous at contact, so sampling them converges fast.
+    fn n_switching(&self) -> usize {
+        self.elements
+            .iter()
+            .filter(|e| e.law.switching([0.0; 2]).is_some())
+            .count()
+    }
+
+    fn switching(
+        &self,
+        _omega: f64,
+        _t: f64,
+        x: &[f64],
+        _v: &[f64],
+        _temp: &[f64],
+        out: &mut [f64],
+    ) {
+        let values = self.elements.iter().filter_map(|e| {
+            let xb = |o: usize| e.b.map_or(0.0, |b| x[b + o]);
+            e.law.switching([x[e.a] - xb(0), x[e.a + 1] - xb(1)])
+        });
+        for (o, v) in out.iter_mut().zip(values) {
+            *o = v;
+        }
+    }
+
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]) {
         self.assembly.forcing(omega, t, out);
     }
