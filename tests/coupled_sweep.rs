@@ -32,6 +32,7 @@ fn frozen_clearance_reproduces_the_mechanical_only_solution() {
         CouplingOptions {
             thermal: false,
             frozen_clearance: false,
+            ..Default::default()
         },
     )
     .expect("mechanical");
@@ -41,6 +42,7 @@ fn frozen_clearance_reproduces_the_mechanical_only_solution() {
         CouplingOptions {
             thermal: true,
             frozen_clearance: true,
+            ..Default::default()
         },
     )
     .expect("frozen");
@@ -80,6 +82,7 @@ fn two_way_coupling_changes_the_vibration() {
         CouplingOptions {
             thermal: true,
             frozen_clearance: true,
+            ..Default::default()
         },
     )
     .expect("frozen");

@@ -44,7 +44,11 @@ fn impossible_values_in_a_model_file_are_refused_like_the_flags() {
             "thermal.ambient_temp_c",
             "absolute zero",
         ),
-        ("thermal.flow_l_min=0.0", "thermal.flow_l_min", "above 0"),
+        (
+            "thermal.flow_l_min=0.0",
+            "thermal.flow_l_min",
+            "(0, 1000] L/min",
+        ),
         (
             "thermal.air.rotor_convection_factor=5.0",
             "thermal.air.rotor_convection_factor",
@@ -411,4 +415,114 @@ fn linear_analyses_name_what_they_leave_out_and_write_full_precision() {
     ]);
     refused(&o, &["no unbalance", "eccentricity_m"]);
     assert!(!String::from_utf8_lossy(&o.stderr).contains("speed grid"));
+}
+
+/// A fixed-seed corpus of hostile flag values: one flag of a short sweep (or of `campbell`,
+/// `unbalance`, `modes`) given a hostile value. No panic, no hang; a refusal names the
+/// flag; an accepted value runs to the end.
+#[test]
+fn a_corpus_of_hostile_flag_values_is_refused_by_name_or_run() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("f.mcap");
+    let out = out.to_str().expect("utf-8 path");
+    let hostile = [
+        "0",
+        "-1",
+        "1e300",
+        "-1e300",
+        "nan",
+        "inf",
+        "-inf",
+        "x",
+        "",
+        "1e-300",
+        "99999999999999999999",
+        "1e309",
+        "0x10",
+        "1:2:3",
+        ":",
+        "400:",
+        "5:4",
+        "\u{1F642}",
+        "-0",
+        "2,0",
+    ];
+    // (command, flag, the rest of a short run)
+    let sweep: &[&str] = &[
+        "--order",
+        "1",
+        "--omega",
+        "400:401",
+        "--max-points",
+        "3",
+        "--no-verify",
+        "-q",
+    ];
+    let flags: &[(&str, &str)] = &[
+        ("sweep", "--flow"),
+        ("sweep", "--cooling-temp"),
+        ("sweep", "--ambient-temp"),
+        ("sweep", "--order"),
+        ("sweep", "--omega"),
+        ("sweep", "--ds-max"),
+        ("sweep", "--max-points"),
+        ("sweep", "--sip-intervals"),
+        ("sweep", "--reduction-cutoff"),
+        ("sweep", "--stability-method"),
+        ("sweep", "--interval-map"),
+        ("sweep", "--verify-orders"),
+        ("campbell", "--speeds"),
+        ("campbell", "--count"),
+        ("unbalance", "--speeds"),
+        ("modes", "--count"),
+    ];
+    let mut next = lcg(0xF1A6_5EED_0BAD_CAFE);
+    let (mut accepted, mut refused_n) = (0, 0);
+    for case in 0..160 {
+        let (command, flag) = flags[next(flags.len())];
+        let value = hostile[next(hostile.len())];
+        // `--flag=value`, so that values starting with '-' are values
+        let given = format!("{flag}={value}");
+        let mut args: Vec<&str> = vec![command, &given];
+        match command {
+            "sweep" => {
+                // the mutated flag replaces its default in the short run
+                let mut rest = sweep.iter().peekable();
+                while let Some(a) = rest.next() {
+                    if *a == flag {
+                        rest.next();
+                        continue;
+                    }
+                    args.push(a);
+                }
+                if flag != "--verify-orders" {
+                    args.extend(["-o", out]);
+                } else {
+                    // with the check on, over a window without bifurcations
+                    args.retain(|a| *a != "--no-verify");
+                    args.extend(["-o", out]);
+                }
+            }
+            "campbell" if flag == "--count" => args.extend(["--speeds", "0:1000:3"]),
+            "campbell" | "unbalance" => {}
+            _ => {}
+        }
+        let (o, err) = run_case(case, &args, 60.0);
+        if o.status.success() {
+            accepted += 1;
+            continue;
+        }
+        refused_n += 1;
+        assert!(
+            err.contains(flag) || err.contains(&flag[2..]),
+            "case {case}: `tmrotor {}` refused without naming {flag}: {err}",
+            args.join(" ")
+        );
+        let _ = std::fs::remove_file(out);
+    }
+    eprintln!("{accepted} hostile flag values accepted, {refused_n} refused by name");
+    assert!(
+        refused_n > accepted,
+        "{refused_n} refused, {accepted} accepted"
+    );
 }

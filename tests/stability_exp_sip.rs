@@ -106,6 +106,7 @@ fn dual_rotor_point(omega: f64, thermal: bool) -> DualRotorPoint {
         CouplingOptions {
             thermal,
             frozen_clearance: false,
+            ..Default::default()
         },
     )
     .expect("coupled rotor");

@@ -97,6 +97,12 @@ pub struct SweepArgs {
     /// model, docs/transient.md); 2.4× the harmonics, several times the cost.
     #[arg(long)]
     pub combination_tones: bool,
+    /// Integrate every rolling element's contact exactly between the instants where it
+    /// takes up and loses its load, instead of sampling the bearings (study key
+    /// `exact_contacts`): where elements lose contact, sampling moves folds and makes tiny
+    /// artefact fold pairs that no multiplier confirms; several times the cost per point
+    #[arg(long)]
+    pub exact_contacts: bool,
     /// Do not follow the period-doubled branches from the period doublings located on the
     /// primary basis (with --no-half-orders the sweep follows each as a branch of its own).
     #[arg(long)]
@@ -179,6 +185,9 @@ impl SweepArgs {
         }
         if self.combination_tones {
             s.harmonic.combination_tones = true;
+        }
+        if self.exact_contacts {
+            s.harmonic.exact_contacts = true;
         }
         if self.no_switch {
             s.sweep.switch_branches = false;

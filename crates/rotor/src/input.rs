@@ -75,6 +75,30 @@ fn not_utf8(bytes: &[u8], at: usize) -> String {
     )
 }
 
+/// The command-line flag that sets each study setting (`tmrotor sweep`), for messages:
+/// a value refused names the key a study file writes and the flag a user typed.
+pub const SETTING_FLAGS: &[(&str, &str)] = &[
+    ("flow_l_min", "--flow"),
+    ("cooling_temp_c", "--cooling-temp"),
+    ("ambient_temp_c", "--ambient-temp"),
+    ("order", "--order"),
+    ("omega_start", "--omega"),
+    ("omega_end", "--omega"),
+    ("ds_max", "--ds-max"),
+    ("max_points", "--max-points"),
+    ("sip_intervals", "--sip-intervals"),
+    ("reduction_cutoff_rad_s", "--reduction-cutoff"),
+    ("verify_orders", "--verify-orders"),
+];
+
+/// ` (flag --x)` for a setting that a flag sets, else nothing.
+pub fn flag_note(field: &str) -> String {
+    SETTING_FLAGS
+        .iter()
+        .find(|(k, _)| *k == field)
+        .map_or(String::new(), |(_, f)| format!(" (flag {f})"))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -34,7 +34,10 @@ pub enum StudyError {
     Coupled(#[from] CoupledError),
     #[error(transparent)]
     Basis(#[from] crate::hb::BasisError),
-    #[error("study setting {field} = {value}: {reason}")]
+    #[error(
+        "study setting {field}{} = {value}: {reason}",
+        crate::input::flag_note(field)
+    )]
     Setting {
         field: &'static str,
         value: String,
@@ -120,6 +123,11 @@ pub struct HarmonicSettings {
     /// which has none of them; the nonlinear bearings make them, and near a resonance they
     /// change the response (docs/transient.md: the time response against the balance).
     pub combination_tones: bool,
+    /// Integrate every rolling element's contact between the instants where it takes up
+    /// and loses its load ([`CouplingOptions::exact_contacts`]). Default false (the AFT's
+    /// samples, several times cheaper); true where elements lose contact and sampling
+    /// makes or moves folds.
+    pub exact_contacts: bool,
 }
 
 impl Default for HarmonicSettings {
@@ -129,6 +137,7 @@ impl Default for HarmonicSettings {
             aft_samples: None,
             half_orders: true,
             combination_tones: false,
+            exact_contacts: false,
         }
     }
 }
@@ -264,6 +273,7 @@ pub struct FlatSettings {
     pub aft_samples: Option<usize>,
     pub half_orders: bool,
     pub combination_tones: bool,
+    pub exact_contacts: bool,
     pub verify: bool,
     pub verify_orders: Vec<u32>,
     pub verify_max_seconds: f64,
@@ -307,6 +317,7 @@ impl From<StudySettings> for FlatSettings {
             aft_samples: harmonic.aft_samples,
             half_orders: harmonic.half_orders,
             combination_tones: harmonic.combination_tones,
+            exact_contacts: harmonic.exact_contacts,
             verify: floquet.verify,
             verify_orders: floquet.verify_orders,
             verify_max_seconds: floquet.verify_max_seconds,
@@ -330,6 +341,7 @@ impl From<FlatSettings> for StudySettings {
                 aft_samples: f.aft_samples,
                 half_orders: f.half_orders,
                 combination_tones: f.combination_tones,
+                exact_contacts: f.exact_contacts,
             },
             sweep: SweepSettings {
                 omega_start: f.omega_start,
@@ -538,6 +550,7 @@ impl SweepProblem {
             CouplingOptions {
                 thermal: settings.operating.thermal,
                 frozen_clearance: false,
+                exact_contacts: settings.harmonic.exact_contacts,
             },
         )?;
         let lambda = speed_ratio(&model);
@@ -597,8 +610,13 @@ impl SweepSettings {
                 "must be positive and differ from omega_start",
             );
         }
-        if !(self.ds_max.is_finite() && self.ds_max > 0.0) {
-            return bad("ds_max", self.ds_max, "must be positive");
+        let ds_min = crate::continuation::ContinuationOptions::new(0.0, 1.0).ds_min;
+        if !(self.ds_max.is_finite() && self.ds_max >= ds_min && self.ds_max <= 10.0) {
+            return bad(
+                "ds_max",
+                self.ds_max,
+                "must lie in [1e-7, 10] (the continuation's smallest step, and a step that crosses a branch's features unseen)",
+            );
         }
         if self.max_points == 0 {
             return bad("max_points", 0, "must be at least 1");
@@ -876,6 +894,7 @@ mod tests {
             "aft_samples",
             "half_orders",
             "combination_tones",
+            "exact_contacts",
             "verify",
             "verify_orders",
             "verify_max_seconds",

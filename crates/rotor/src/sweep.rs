@@ -218,7 +218,7 @@ pub fn audit_step(
                 nearest_real_to_one(f).map_or("none".to_string(), |m| format!("{m:.4}"))
             };
             audit.notes.push(format!(
-                "saddle-node {between} not confirmed by the orbits' multipliers: no real multiplier of the monodromy product passes +1 there (the real one nearest +1 is {} before and {} after); the fold belongs to the truncated harmonic balance, whose real exponent is counted instead — check it with a higher truncation order",
+                "saddle-node {between} not confirmed by the orbits' multipliers: no real multiplier of the monodromy product passes +1 there (the real one nearest +1 is {} before and {} after); the fold belongs to the truncated harmonic balance, whose real exponent is counted instead — where rolling elements lose contact, sampling the bearings makes such folds (--exact-contacts integrates the contacts exactly and decides); else check it with a higher truncation order",
                 show(a),
                 show(b)
             ));
@@ -260,7 +260,7 @@ pub fn audit_step(
                 b.slow_unstable_count()
             )
         } else if a.fold_parity_mismatch != b.fold_parity_mismatch {
-            "a real multiplier of the monodromy product passes +1 where the branch does not fold: the truncated harmonic balance, whose real exponents pass zero only at folds, and the orbit's linearisation disagree here — raise the truncation order to decide"
+            "a real multiplier of the monodromy product passes +1 where the branch does not fold: the truncated harmonic balance, whose real exponents pass zero only at folds, and the orbit's linearisation disagree here — where rolling elements lose contact, sampling the bearings moves folds (--exact-contacts integrates the contacts exactly and decides); else raise the truncation order"
                 .to_string()
         } else if a.split_uncertain() || b.split_uncertain() {
             format!(

@@ -57,7 +57,10 @@ pub enum CoupledError {
         field: String,
         reason: String,
     },
-    #[error("study setting {field} = {value}: {reason}")]
+    #[error(
+        "study setting {field}{} = {value}: {reason}",
+        crate::input::flag_note(field)
+    )]
     Study {
         field: &'static str,
         value: f64,
@@ -83,6 +86,13 @@ pub struct CouplingOptions {
     pub thermal: bool,
     /// Keep the clearance at `δ0` although temperatures are solved (one-way coupling).
     pub frozen_clearance: bool,
+    /// Integrate every rolling element's contact between the instants where it takes up
+    /// and loses its load, as the rub and unilateral elements always are (`hb::events`),
+    /// instead of sampling the bearings on the AFT's grid. Default false: the Hertz
+    /// contact's force and first derivative are continuous, and sampling is several
+    /// times cheaper; where elements lose contact, sampling shifts folds and can make tiny
+    /// artefact fold pairs (docs/stability.md).
+    pub exact_contacts: bool,
 }
 
 impl Default for CouplingOptions {
@@ -90,6 +100,7 @@ impl Default for CouplingOptions {
         Self {
             thermal: true,
             frozen_clearance: false,
+            exact_contacts: false,
         }
     }
 }
@@ -153,6 +164,8 @@ pub struct CoupledRotor {
     nl: NonlinearDofs,
     ambient_temp_c: f64,
     frozen_clearance: bool,
+    /// Rolling elements' contacts as switching functions ([`CouplingOptions::exact_contacts`]).
+    exact_contacts: bool,
     scratch: Mutex<Vec<Scratch>>,
 }
 
@@ -480,6 +493,7 @@ impl CoupledRotor {
             nl: NonlinearDofs { mech, therm },
             ambient_temp_c,
             frozen_clearance: options.frozen_clearance,
+            exact_contacts: options.exact_contacts,
             scratch: Mutex::new(Vec::new()),
         })
     }
@@ -615,11 +629,11 @@ impl CoupledRotor {
 
 fn apply_overrides(spec: &mut ThermalSpec, study: &StudyOverrides) -> Result<(), CoupledError> {
     if let Some(q) = study.flow_l_min {
-        if !(q.is_finite() && q > 0.0) {
+        if !(q.is_finite() && q > 0.0 && q <= crate::thermal::spec::MAX_FLOW_L_MIN) {
             return Err(CoupledError::Study {
                 field: "flow_l_min",
                 value: q,
-                reason: "the lubricant flow rate must be positive",
+                reason: "the lubricant flow rate must lie in (0, 1000] L/min",
             });
         }
         spec.flow_l_min = q;
@@ -762,25 +776,41 @@ impl System for CoupledRotor {
     }
 
     /// One per rub or unilateral element (in model order): contact opens and closes at
-    /// their zeros, which the harmonic balance integrates between exactly. The Hertz
-    /// bearings' `δ^{3/2}` contacts are left to the AFT's samples: their force and its
-    /// first derivative are continuous at contact, so sampling them converges fast.
+    /// their zeros, which the harmonic balance integrates between exactly. With
+    /// [`CouplingOptions::exact_contacts`], before them one per rolling element of each
+    /// bearing, its penetration `δ_j = Δx cos φ_j + Δy sin φ_j − (δ0 + δv)`; without, the
+    /// bearings' `δ^{3/2}` contacts are left to the AFT's samples.
     fn n_switching(&self) -> usize {
-        self.elements
-            .iter()
-            .filter(|e| e.law.switching([0.0; 2]).is_some())
-            .count()
+        let elements: usize = if self.exact_contacts {
+            self.bearings.iter().map(|b| b.hertz.n_elements).sum()
+        } else {
+            0
+        };
+        elements
+            + self
+                .elements
+                .iter()
+                .filter(|e| e.law.switching([0.0; 2]).is_some())
+                .count()
     }
 
-    fn switching(
-        &self,
-        _omega: f64,
-        _t: f64,
-        x: &[f64],
-        _v: &[f64],
-        _temp: &[f64],
-        out: &mut [f64],
-    ) {
+    fn switching(&self, omega: f64, t: f64, x: &[f64], _v: &[f64], temp: &[f64], out: &mut [f64]) {
+        let mut k = 0;
+        if self.exact_contacts {
+            for b in &self.bearings {
+                let (dx, dy) = relative(b, x);
+                let cv = self.expansion(b, temp);
+                let clearance = b.hertz.clearance_m + self.acting_delta_v(cv.as_ref());
+                let step = 2.0 * std::f64::consts::PI / b.hertz.n_elements as f64;
+                let cage = cage_angle(b, omega, t);
+                for e in 0..b.hertz.n_elements {
+                    let (s, c) = (cage + step * e as f64).sin_cos();
+                    out[k] = dx * c + dy * s - clearance;
+                    k += 1;
+                }
+            }
+        }
+        let out = &mut out[k..];
         let values = self.elements.iter().filter_map(|e| {
             let xb = |o: usize| e.b.map_or(0.0, |b| x[b + o]);
             e.law.switching([x[e.a] - xb(0), x[e.a + 1] - xb(1)])

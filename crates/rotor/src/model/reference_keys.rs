@@ -1013,7 +1013,7 @@ pub const KEYS: &[Key] = &[
         unit: "L/min",
         need: Need::Required,
         default: "",
-        range: "> 0",
+        range: "(0, 1000]",
         meaning: "Lubricant flow rate q_l delivered to each bearing, removing ρ_l c_l q_l (T_L − T_L∞) at each lubricant node (Eq. 14).",
     },
     Key {
@@ -1825,7 +1825,7 @@ pub const KEYS: &[Key] = &[
         unit: "L/min",
         need: Need::Optional,
         default: "2",
-        range: "> 0",
+        range: "(0, 1000]",
         meaning: "Lubricant flow rate q_l delivered to each bearing (Eq. 14).",
     },
     Key {

@@ -164,9 +164,12 @@ pub struct PointRecord {
     pub stable: Option<bool>,
     /// Bifurcation detected between the previous point and this one.
     pub bifurcation: Option<BifurcationKind>,
-    /// Dynamic residual norm (Eq. 36).
+    /// Mechanical residual: the 2-norm of the harmonic-balance residual's mechanical
+    /// coefficients (Eq. 36 projected onto the basis), N. Accepted at most 1e-8 of the
+    /// load's norm ([`crate::hb::newton`]).
     pub residual_mech: f64,
-    /// Thermal residual norm (Eq. 36).
+    /// Thermal residual: the same over the thermal coefficients, W. Accepted at most 1e-3
+    /// of the thermal load's norm.
     pub residual_therm: f64,
     /// Newton iterations of the corrector.
     pub newton_iterations: u32,

@@ -13,6 +13,12 @@ use super::ThermalError;
 use crate::bearing::ContactLaw;
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
+/// The largest lubricant flow rate per bearing accepted (L/min), from a file, `--set` or
+/// `--flow`: a bound of sanity, some fifty times the jet flow of the largest bearings the
+/// model describes (the paper's campaign runs 1–20 L/min); beyond it the lubricant would
+/// hold every lubricant node at its supply temperature anyway.
+pub const MAX_FLOW_L_MIN: f64 = 1000.0;
+
 /// Viscosity law (Eq. 12).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
@@ -444,12 +450,15 @@ impl ThermalSpec {
         found.extend(temperature(file, p("cooling_temp_c"), self.cooling_temp_c).err());
         // the bound of `--flow` and of a study file: no lubricant flow leaves the bearings'
         // heat without its main path out (Eq. 14)
-        if !(self.flow_l_min.is_finite() && self.flow_l_min > 0.0) {
+        if !(self.flow_l_min.is_finite()
+            && self.flow_l_min > 0.0
+            && self.flow_l_min <= MAX_FLOW_L_MIN)
+        {
             return Err(invalid(
                 file,
                 p("flow_l_min"),
                 format!(
-                    "the lubricant flow rate must be above 0 L/min, got {}",
+                    "the lubricant flow rate must lie in (0, {MAX_FLOW_L_MIN}] L/min, got {}",
                     self.flow_l_min
                 ),
             ));
