@@ -541,8 +541,9 @@ pub fn plot_campaign(
     options: &FigureOptions,
 ) -> Result<CampaignFigures, CampaignError> {
     let manifest = read_manifest_file(&dir.join("manifest.toml"))?;
-    let loaded = manifest
-        .runs
+    // transient runs are recordings on the time axis: `replay plot` draws them
+    let swept: Vec<&ManifestEntry> = manifest.runs.iter().filter(|e| !e.is_transient()).collect();
+    let loaded = swept
         .par_iter()
         .enumerate()
         .map(|(k, e)| load_run(dir, e, k))

@@ -106,6 +106,118 @@ pub struct CampaignRun {
     pub model_sha256: String,
     /// Write a lean recording (the campaign file's `lean`).
     pub lean: bool,
+    /// A transient run instead of a sweep (the run's `transient` table).
+    pub transient: Option<TransientRun>,
+}
+
+/// A campaign run integrated in time instead of swept (`transient = { … }` in a run):
+/// the coupled rotor from a cold start (temperatures at ambient, the static equilibrium)
+/// over a speed profile, as `tmrotor transient --speed` or `--ramp` runs it, written to
+/// the run's recording on the simulated time axis.
+///
+/// ```toml
+/// [[runs]]
+/// name = "runup-1"
+/// flow_l_min = 1.0
+/// transient = { ramp = "400:650", accel = 1.0 }
+/// ```
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransientRun {
+    /// A fixed speed, rad/s.
+    pub speed: Option<f64>,
+    /// A linear run-up (`"START:END"`, START < END) or coast-down, rad/s.
+    pub ramp: Option<String>,
+    /// The ramp's acceleration magnitude, rad/s² (default 10).
+    pub accel: Option<f64>,
+    /// Simulated time, s (default: the ramp's end plus 1 s; 100 revolutions at a fixed
+    /// speed).
+    pub duration_s: Option<f64>,
+    /// Relative local error tolerance of the mechanical integrator (default 1e-4, as
+    /// `tmrotor transient`).
+    pub rtol: Option<f64>,
+    /// Displacement samples per revolution on `/transient/samples` (default 16).
+    pub samples_per_rev: Option<u32>,
+}
+
+impl TransientRun {
+    /// The integrator's settings, checked; the error says which key and why.
+    pub fn settings(&self) -> Result<crate::transient::TransientSettings, String> {
+        use crate::integrate::{SpeedProfile, TransientOptions};
+        let profile = match (&self.ramp, self.speed) {
+            (Some(_), Some(_)) => return Err("transient: give speed or ramp, not both".into()),
+            (Some(r), None) => {
+                let parsed = r
+                    .split_once(':')
+                    .and_then(|(a, b)| Some((a.trim().parse().ok()?, b.trim().parse().ok()?)));
+                let Some((from, to)) = parsed else {
+                    return Err(format!(
+                        "transient.ramp {r:?}: must be \"START:END\" in rad/s"
+                    ));
+                };
+                if from == to {
+                    return Err(format!(
+                        "transient.ramp {r:?}: START and END are equal; use speed"
+                    ));
+                }
+                SpeedProfile::Ramp {
+                    from,
+                    to,
+                    accel: self.accel.unwrap_or(10.0),
+                }
+            }
+            (None, Some(w)) => {
+                if self.accel.is_some() {
+                    return Err("transient.accel: only with a ramp".into());
+                }
+                SpeedProfile::Constant(w)
+            }
+            (None, None) => {
+                return Err("transient: give speed (rad/s) or ramp (\"START:END\")".into());
+            }
+        };
+        profile.check().map_err(|e| {
+            format!(
+                "transient.{}: {e}",
+                if self.ramp.is_some() {
+                    "ramp/accel"
+                } else {
+                    "speed"
+                }
+            )
+        })?;
+        let duration_s = match self.duration_s {
+            Some(d) => d,
+            None => match profile.end_time() {
+                Some(t) => t + 1.0,
+                None => 100.0 * std::f64::consts::TAU / profile.omega(0.0),
+            },
+        };
+        if !(duration_s.is_finite() && duration_s > 0.0 && duration_s <= 1e6) {
+            return Err(format!(
+                "transient.duration_s {duration_s}: the simulated time must lie in (0, 1e6] s"
+            ));
+        }
+        let rtol = self.rtol.unwrap_or(crate::transient::DEFAULT_RTOL);
+        if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
+            return Err(format!("transient.rtol {rtol}: must lie in (0, 1)"));
+        }
+        let samples_per_revolution = self.samples_per_rev.unwrap_or(16);
+        if samples_per_revolution > 4096 {
+            return Err(format!(
+                "transient.samples_per_rev {samples_per_revolution}: at most 4096"
+            ));
+        }
+        Ok(crate::transient::TransientSettings {
+            profile,
+            duration_s,
+            options: TransientOptions {
+                rtol,
+                ..TransientOptions::default()
+            },
+            samples_per_revolution,
+        })
+    }
 }
 
 /// Errors of a campaign.
@@ -263,6 +375,16 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
                 }
             }
         }
+        let transient = match merged.remove("transient") {
+            None => None,
+            Some(v) => {
+                let t: TransientRun = v.try_into().map_err(|e: toml::de::Error| {
+                    error(&origin, format!("transient: {}", e.to_string().trim_end()))
+                })?;
+                t.settings().map_err(|e| error(&origin, e))?;
+                Some(t)
+            }
+        };
         let name = name.ok_or_else(|| error(&origin, "missing `name` (a string)".into()))?;
         if name.is_empty() || name.contains(['/', '\\']) || runs.iter().any(|r| r.name == name) {
             return Err(error(
@@ -283,6 +405,7 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
             settings,
             model_sha256: String::new(),
             lean: spec.lean,
+            transient,
         });
     }
     let out = match &spec.output_dir {
@@ -588,10 +711,35 @@ fn completed_before<'m>(
 
 /// Where run `r`'s recording goes in `out`, and its settings as a manifest table.
 fn recording_and_settings(r: &CampaignRun, out: &Path) -> (PathBuf, toml::Table) {
-    (
-        out.join(format!("{}.mcap", r.name)),
-        toml::Table::try_from(&r.settings).unwrap_or_default(),
-    )
+    let mut table = toml::Table::try_from(&r.settings).unwrap_or_default();
+    if let Some(t) = &r.transient
+        && let Ok(v) = toml::Value::try_from(t)
+    {
+        table.insert("transient".into(), v);
+    }
+    (out.join(format!("{}.mcap", r.name)), table)
+}
+
+impl ManifestEntry {
+    /// A transient run (its settings hold a `transient` table): a recording on the time
+    /// axis, which the campaign figures and the report leave out.
+    pub fn is_transient(&self) -> bool {
+        self.settings.contains_key("transient")
+    }
+
+    /// `13 points`, or `78 revolutions` for a transient run.
+    pub fn count_text(&self) -> String {
+        let (one, many) = if self.is_transient() {
+            ("revolution", "revolutions")
+        } else {
+            ("point", "points")
+        };
+        format!(
+            "{} {}",
+            self.points,
+            if self.points == 1 { one } else { many }
+        )
+    }
 }
 
 /// One run of a campaign as its next invocation would take it ([`plan`]).
@@ -672,7 +820,7 @@ pub fn run(
                 name: r.name.clone(),
                 status: "pending".into(),
                 recording: format!("{}.mcap", r.name),
-                settings: toml::Table::try_from(&r.settings).unwrap_or_default(),
+                settings: recording_and_settings(r, &out).1,
                 ..Default::default()
             })
             .collect(),
@@ -831,6 +979,12 @@ fn run_one(
             .to_string(),
         ..Default::default()
     };
+    if let Some(t) = &r.transient {
+        run_transient_one(r, t, rec_path, interrupt, &mut entry);
+        entry.seconds = start.elapsed().as_secs_f64();
+        entry.sha256 = sha256_file(rec_path).unwrap_or_default();
+        return entry;
+    }
     let result = SweepProblem::new(&r.settings)
         .map_err(|e| e.to_string())
         .and_then(|problem| {
@@ -903,6 +1057,57 @@ fn run_one(
     }
     entry.sha256 = sha256_file(rec_path).unwrap_or_default();
     entry
+}
+
+/// Runs transient run `r` into `rec_path`, filling `entry`: status, revolutions as
+/// `points`, how it ended.
+fn run_transient_one(
+    r: &CampaignRun,
+    t: &TransientRun,
+    rec_path: &Path,
+    interrupt: Option<Arc<AtomicBool>>,
+    entry: &mut ManifestEntry,
+) {
+    let result = t.settings().and_then(|settings| {
+        let problem = SweepProblem::new(&r.settings).map_err(|e| e.to_string())?;
+        let start = crate::transient::StartState::cold(&problem);
+        let mut sink =
+            McapSink::create(rec_path, McapOptions::default()).map_err(|e| e.to_string())?;
+        crate::transient::run_transient(
+            &problem,
+            &start,
+            &settings,
+            &mut sink,
+            &mut |_| {},
+            interrupt,
+        )
+        .map_err(|e| e.to_string())
+    });
+    match result {
+        Ok(report) => {
+            entry.points = report.revolutions as usize;
+            entry.status = if report.interrupted {
+                "interrupted".into()
+            } else {
+                "completed".into()
+            };
+            entry.ended = format!(
+                "{:.4} s simulated in {:.1} s ({:.3} simulated s per wall s){}",
+                report.simulated_s,
+                report.wall_s,
+                report.speed(),
+                report.last.as_ref().map_or(String::new(), |l| format!(
+                    ", ω {:.3} rad/s at the end",
+                    l.omega_rad_s
+                ))
+            );
+            entry.time = format!(
+                "{} steps ({} rejected), {} thermal steps",
+                report.stats.accepted, report.stats.rejected, report.stats.thermal_steps
+            );
+        }
+        Err(e) => entry.status = format!("failed: {e}"),
+    }
 }
 
 /// Joins shard manifests (`manifest-shard-*-of-*.toml` in `dir`) into `manifest.toml`,

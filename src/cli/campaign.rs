@@ -273,8 +273,12 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
     for r in &manifest.runs {
         writeln!(
             out,
-            "{:>12}  {:<12} {:>5} points {:>7.1} s  {}",
-            r.name, r.status, r.points, r.seconds, r.recording
+            "{:>12}  {:<12} {:>18} {:>7.1} s  {}",
+            r.name,
+            r.status,
+            r.count_text(),
+            r.seconds,
+            r.recording
         )?;
     }
     if !args.no_figures {
@@ -453,6 +457,8 @@ struct RunTally {
     completed: bool,
     /// Ended, however (completed, interrupted, failed).
     ended: bool,
+    /// A transient run: its count is of revolutions, not in the points' total.
+    transient: bool,
     bar: Option<ProgressBar>,
 }
 
@@ -495,7 +501,11 @@ impl Tally {
             "{}/{} runs completed{before}, {} points, {} bifurcations",
             self.completed(),
             self.runs.len(),
-            self.runs.iter().map(|r| r.points).sum::<usize>(),
+            self.runs
+                .iter()
+                .filter(|r| !r.transient)
+                .map(|r| r.points)
+                .sum::<usize>(),
             self.runs.iter().map(|r| r.bifurcations).sum::<usize>()
         )
     }
@@ -553,11 +563,12 @@ impl Display {
                     (r.completed, r.ended) = (true, true);
                     r.points = entry.points;
                     r.bifurcations = entry.bifurcations.len();
+                    r.transient = entry.is_transient();
                 }
                 if self.log {
                     eprintln!(
-                        "{run}: completed before ({} points), not redone",
-                        entry.points
+                        "{run}: completed before ({}), not redone",
+                        entry.count_text()
                     );
                 }
             }
@@ -601,21 +612,22 @@ impl Display {
                     r.completed = entry.status == "completed";
                     r.points = entry.points;
                     r.bifurcations = entry.bifurcations.len();
+                    r.transient = entry.is_transient();
                     if let Some(bar) = &r.bar {
                         bar.set_position(1000);
                         bar.set_message(format!(
-                            "{}, {} points, {} bifurcations",
+                            "{}, {}, {} bifurcations",
                             entry.status,
-                            entry.points,
+                            entry.count_text(),
                             entry.bifurcations.len()
                         ));
                     }
                 }
                 if self.log {
                     eprintln!(
-                        "{run}: {}, {} points, {} bifurcations, {:.1} s ({}/{} runs completed)",
+                        "{run}: {}, {}, {} bifurcations, {:.1} s ({}/{} runs completed)",
                         entry.status,
-                        entry.points,
+                        entry.count_text(),
                         entry.bifurcations.len(),
                         entry.seconds,
                         t.completed(),

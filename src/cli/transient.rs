@@ -110,10 +110,7 @@ pub struct TransientArgs {
     pub quiet: bool,
 }
 
-/// The default relative tolerance of the command: 1e-4 holds a settled orbit to about
-/// 1e-3 of its amplitude on the built-in model at a third of the cost of 1e-6
-/// (docs/transient.md).
-pub const DEFAULT_RTOL: f64 = 1e-4;
+pub use crate::transient::DEFAULT_RTOL;
 
 /// Reads a `time_s,omega_rad_s` table.
 fn read_table(path: &Path) -> anyhow::Result<Vec<(f64, f64)>> {

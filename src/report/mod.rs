@@ -277,6 +277,7 @@ pub fn campaign_runs(dir: &Path) -> Result<Vec<(String, PathBuf)>, ReportError> 
     Ok(manifest
         .runs
         .iter()
+        .filter(|e| !e.is_transient())
         .map(|e| (e.name.clone(), dir.join(&e.recording)))
         .collect())
 }

@@ -279,6 +279,11 @@ impl RevolutionSums {
     }
 }
 
+/// The default relative tolerance of a transient run: 1e-4 holds a settled orbit to
+/// about 1e-3 of its amplitude on the built-in model at a third of the cost of 1e-6
+/// (docs/transient.md).
+pub const DEFAULT_RTOL: f64 = 1e-4;
+
 /// Runs the transient of `problem` from `start` into `sink`. `progress` sees each
 /// revolution; `interrupt` set stops at the next step with status `interrupted`.
 pub fn run_transient(
