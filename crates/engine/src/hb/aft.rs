@@ -112,6 +112,11 @@ impl Aft {
         &self.basis
     }
 
+    /// The integer multiple `m_h` of the base frequency of each harmonic `h`.
+    pub fn multiples(&self) -> &[usize] {
+        &self.multiples
+    }
+
     /// Samples per period `N`.
     pub fn n_samples(&self) -> usize {
         self.n

@@ -181,34 +181,6 @@ impl Basis {
         }));
     }
 
-    /// [`Basis::trig_table`] from one `sin_cos` call: the base angle's multiples by
-    /// repeated complex multiplication (`powers` is scratch). Rounding grows like the
-    /// multiple times the machine epsilon, about 1e-14 at multiple 50.
-    pub fn trig_table_recurrent(
-        &self,
-        omega: f64,
-        t: f64,
-        powers: &mut Vec<(f64, f64)>,
-        out: &mut Vec<(f64, f64, f64)>,
-    ) {
-        let wb = omega / f64::from(self.base_den);
-        let (s1, c1) = (wb * t).sin_cos();
-        let m_max = self.max_integer_multiple() as usize;
-        powers.clear();
-        powers.push((0.0, 1.0));
-        let (mut s, mut c) = (0.0, 1.0);
-        for _ in 0..m_max {
-            (s, c) = (s * c1 + c * s1, c * c1 - s * s1);
-            powers.push((s, c));
-        }
-        out.clear();
-        out.extend((0..self.harmonics.len()).map(|h| {
-            let m = self.integer_multiple(h) as usize;
-            let (s, c) = powers[m];
-            (m as f64 * wb, s, c)
-        }));
-    }
-
     /// [`Basis::eval`] with the harmonic values taken from a [`Basis::trig_table`].
     #[inline]
     pub fn eval_with(&self, coeffs: &[f64], trig: &[(f64, f64, f64)]) -> (f64, f64, f64) {

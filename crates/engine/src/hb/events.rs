@@ -67,7 +67,7 @@ fn gauss_nodes(a: f64, b: f64, theta: &mut Vec<f64>, weights: &mut Vec<f64>) {
 
 /// Appends `e^{−ikθ}`, `k = 0..k_len`, for each `θ` (rounding grows like `k ε`: 1e-14 at
 /// `k = 50`).
-fn push_phases(theta: &[f64], k_len: usize, out: &mut Vec<Complex64>) {
+pub(crate) fn push_phases(theta: &[f64], k_len: usize, out: &mut Vec<Complex64>) {
     for &t in theta {
         let (s, c) = t.sin_cos();
         let step = Complex64::new(c, -s);

@@ -25,7 +25,7 @@ use thiserror::Error;
 
 use super::aft::{Aft, AftError, Signal};
 use super::basis::Basis;
-use super::events::{EventNodes, PanelRule, Row, illinois};
+use super::events::{EventNodes, PanelRule, Row, illinois, push_phases};
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 
 /// Errors of the harmonic-balance layer.
@@ -120,8 +120,6 @@ pub struct HarmonicBalance<'a> {
     events: bool,
     /// The event quadrature's uniform panels.
     rule: PanelRule,
-    /// The basis's integer multiples `m_h` of the base frequency.
-    multiples: Vec<usize>,
     /// Per-sample evaluation buffers of earlier residuals, reused: allocating and zeroing
     /// them (128 × 13 kB on the dual rotor) was about a tenth of a residual.
     eval_pool: std::sync::Mutex<Vec<Vec<NonlinearEval>>>,
@@ -153,8 +151,8 @@ struct NodeState {
     x: Vec<f64>,
     v: Vec<f64>,
     temp: Vec<f64>,
-    trig: Vec<(f64, f64, f64)>,
-    powers: Vec<(f64, f64)>,
+    /// `e^{−ikθ}` at an instant off the panel rule's nodes ([`HarmonicBalance::state_at_phase`]).
+    row: Vec<Complex64>,
 }
 
 impl NodeState {
@@ -179,8 +177,7 @@ impl NodeState {
             x: vec![0.0; p],
             v: vec![0.0; p],
             temp: vec![0.0; q],
-            trig: Vec::new(),
-            powers: Vec::new(),
+            row: Vec::new(),
         }
     }
 }
@@ -296,9 +293,6 @@ impl<'a> HarmonicBalance<'a> {
             system,
             events: system.n_switching() > 0,
             rule: PanelRule::new((aft.n_samples() / 8).max(8 * (m_max + 1)), 2 * m_max),
-            multiples: (0..basis.n_harmonics())
-                .map(|h| basis.integer_multiple(h) as usize)
-                .collect(),
             aft,
             nl,
             n_mech,
@@ -370,7 +364,7 @@ impl<'a> HarmonicBalance<'a> {
         let mut buf = vec![0.0; ns];
         let nodes = self.rule.refine(&values, ns, |i, a, b| {
             let mut f = |th: f64| {
-                self.state_at(coeffs, omega, th / wb, &mut st);
+                self.state_at_phase(coeffs, wb, th, &mut st);
                 self.system
                     .switching(omega, th / wb, &st.x, &st.v, &st.temp, &mut buf);
                 buf[i]
@@ -385,10 +379,11 @@ impl<'a> HarmonicBalance<'a> {
     /// `e^{−ikθ}` is `row` (base frequency `wb`).
     fn state_from_row(&self, coeffs: &[f64], wb: f64, row: &[Complex64], st: &mut NodeState) {
         let nc = self.n_coeffs();
-        let nh = self.multiples.len();
+        let multiples = self.aft.multiples();
+        let nh = multiples.len();
         let eval = |c: &[f64]| {
             let (mut x, mut v) = (c[0], 0.0);
-            for (h, &m) in self.multiples.iter().enumerate() {
+            for (h, &m) in multiples.iter().enumerate() {
                 let (cs, sn) = (row[m].re, -row[m].im);
                 let (a, b) = (c[1 + h], c[1 + nh + h]);
                 x += a * cs + b * sn;
@@ -405,20 +400,14 @@ impl<'a> HarmonicBalance<'a> {
         }
     }
 
-    /// The nonlinear DoFs' values, rates and temperatures at time `t`.
-    fn state_at(&self, coeffs: &[f64], omega: f64, t: f64, st: &mut NodeState) {
-        let nc = self.n_coeffs();
-        let basis = self.aft.basis();
-        basis.trig_table_recurrent(omega, t, &mut st.powers, &mut st.trig);
-        for (k, &d) in self.nl.mech.iter().enumerate() {
-            let (x, v, _) = basis.eval_with(&coeffs[d * nc..(d + 1) * nc], &st.trig);
-            st.x[k] = x;
-            st.v[k] = v;
-        }
-        for (k, &d) in self.nl.therm.iter().enumerate() {
-            let g = self.n_mech + d;
-            st.temp[k] = basis.eval_with(&coeffs[g * nc..(g + 1) * nc], &st.trig).0;
-        }
+    /// The nonlinear DoFs' values, rates and temperatures at phase `theta` (`Ω_b t`, base
+    /// frequency `wb`), off the panel rule's nodes.
+    fn state_at_phase(&self, coeffs: &[f64], wb: f64, theta: f64, st: &mut NodeState) {
+        let mut row = std::mem::take(&mut st.row);
+        row.clear();
+        push_phases(&[theta], self.aft.basis().max_integer_multiple() as usize + 1, &mut row);
+        self.state_from_row(coeffs, wb, &row, st);
+        st.row = row;
     }
 
     /// The normalised spectrum of `series` (values at the AFT samples, or at `nodes`).
