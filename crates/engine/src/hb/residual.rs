@@ -405,7 +405,11 @@ impl<'a> HarmonicBalance<'a> {
     fn state_at_phase(&self, coeffs: &[f64], wb: f64, theta: f64, st: &mut NodeState) {
         let mut row = std::mem::take(&mut st.row);
         row.clear();
-        push_phases(&[theta], self.aft.basis().max_integer_multiple() as usize + 1, &mut row);
+        push_phases(
+            &[theta],
+            self.aft.basis().max_integer_multiple() as usize + 1,
+            &mut row,
+        );
         self.state_from_row(coeffs, wb, &row, st);
         st.row = row;
     }

@@ -173,6 +173,29 @@ impl HertzBearing {
         )
     }
 
+    /// Each rolling element's penetration `δ_j = Δx cos φ_j + Δy sin φ_j − (δ0 + δv)` with
+    /// `cos φ_j`, `sin φ_j`, `φ_j = ω_c t + 2πj/N` (arguments as [`Self::force`]): the
+    /// element carries load while it is positive.
+    pub fn penetrations(
+        &self,
+        dx_m: f64,
+        dy_m: f64,
+        delta_v_m: f64,
+        cage_angle_rad: f64,
+    ) -> impl Iterator<Item = (f64, f64, f64)> {
+        let clearance = self.clearance_m + delta_v_m;
+        // element angles by rotation from the first (one sin_cos per call instead of one
+        // per element; the recurrence's rounding stays at ~1e-16 per element)
+        let (s_step, c_step) = (2.0 * PI / self.n_elements as f64).sin_cos();
+        let (s0, c0) = cage_angle_rad.sin_cos();
+        (0..self.n_elements).scan((s0, c0), move |(s, c), e| {
+            if e > 0 {
+                (*s, *c) = (*s * c_step + *c * s_step, *c * c_step - *s * s_step);
+            }
+            Some((dx_m * *c + dy_m * *s - clearance, *c, *s))
+        })
+    }
+
     /// Force, radial load, loaded-element count and derivatives (Eqs. 3–5).
     ///
     /// * `dx_m`, `dy_m`: inner-ring minus outer-ring displacement;
@@ -180,18 +203,8 @@ impl HertzBearing {
     /// * `cage_angle_rad`: `ω_c t`.
     pub fn force(&self, dx_m: f64, dy_m: f64, delta_v_m: f64, cage_angle_rad: f64) -> BearingForce {
         let k = self.stiffness;
-        let clearance = self.clearance_m + delta_v_m;
         let mut out = BearingForce::default();
-        let step = 2.0 * PI / self.n_elements as f64;
-        // element angles by rotation from the first (one sin_cos per call instead of one
-        // per element; the recurrence's rounding stays at ~1e-16 per element)
-        let (s_step, c_step) = step.sin_cos();
-        let (mut s, mut c) = cage_angle_rad.sin_cos();
-        for e in 0..self.n_elements {
-            if e > 0 {
-                (s, c) = (s * c_step + c * s_step, c * c_step - s * s_step);
-            }
-            let delta = dx_m * c + dy_m * s - clearance;
+        for (delta, c, s) in self.penetrations(dx_m, dy_m, delta_v_m, cage_angle_rad) {
             if delta <= 0.0 {
                 continue;
             }

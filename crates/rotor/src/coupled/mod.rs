@@ -800,12 +800,9 @@ impl System for CoupledRotor {
             for b in &self.bearings {
                 let (dx, dy) = relative(b, x);
                 let cv = self.expansion(b, temp);
-                let clearance = b.hertz.clearance_m + self.acting_delta_v(cv.as_ref());
-                let step = 2.0 * std::f64::consts::PI / b.hertz.n_elements as f64;
-                let cage = cage_angle(b, omega, t);
-                for e in 0..b.hertz.n_elements {
-                    let (s, c) = (cage + step * e as f64).sin_cos();
-                    out[k] = dx * c + dy * s - clearance;
+                let dv = self.acting_delta_v(cv.as_ref());
+                for (delta, _, _) in b.hertz.penetrations(dx, dy, dv, cage_angle(b, omega, t)) {
+                    out[k] = delta;
                     k += 1;
                 }
             }
