@@ -186,13 +186,9 @@ impl TransientRun {
                 }
             )
         })?;
-        let duration_s = match self.duration_s {
-            Some(d) => d,
-            None => match profile.end_time() {
-                Some(t) => t + 1.0,
-                None => 100.0 * std::f64::consts::TAU / profile.omega(0.0),
-            },
-        };
+        let duration_s = self
+            .duration_s
+            .unwrap_or_else(|| profile.default_duration());
         if !(duration_s.is_finite() && duration_s > 0.0 && duration_s <= 1e6) {
             return Err(format!(
                 "transient.duration_s {duration_s}: the simulated time must lie in (0, 1e6] s"
@@ -202,7 +198,9 @@ impl TransientRun {
         if !(rtol.is_finite() && rtol > 0.0 && rtol < 1.0) {
             return Err(format!("transient.rtol {rtol}: must lie in (0, 1)"));
         }
-        let samples_per_revolution = self.samples_per_rev.unwrap_or(16);
+        let samples_per_revolution = self
+            .samples_per_rev
+            .unwrap_or(crate::transient::DEFAULT_SAMPLES_PER_REVOLUTION);
         if samples_per_revolution > 4096 {
             return Err(format!(
                 "transient.samples_per_rev {samples_per_revolution}: at most 4096"

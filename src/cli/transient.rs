@@ -100,7 +100,7 @@ pub struct TransientArgs {
     #[arg(long, value_name = "N")]
     pub max_thermal_revolutions: Option<u32>,
     /// Displacement samples per revolution on /transient/samples; 0 for none [default: 16].
-    #[arg(long, value_name = "N", default_value_t = 16)]
+    #[arg(long, value_name = "N", default_value_t = crate::transient::DEFAULT_SAMPLES_PER_REVOLUTION)]
     pub samples_per_rev: u32,
     /// Output recording.
     #[arg(short, long, default_value = "transient.mcap")]
@@ -317,13 +317,7 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
         }
     };
     let profile = args.profile(start_speed)?;
-    let duration = match args.duration {
-        Some(d) => d,
-        None => match profile.end_time() {
-            Some(t) => t + 1.0,
-            None => 100.0 * std::f64::consts::TAU / profile.omega(0.0),
-        },
-    };
+    let duration = args.duration.unwrap_or_else(|| profile.default_duration());
     if !(duration.is_finite() && duration > 0.0) {
         bail!("--duration {duration}: the simulated time must be finite and above 0 s");
     }

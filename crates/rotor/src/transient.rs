@@ -98,10 +98,7 @@ impl StartState {
         }
         self
     }
-}
 
-/// The orbit's state plus a perturbation along one of its Floquet modes near zero.
-impl StartState {
     /// On `orbit` (a converged point of `hb`) at time 0, moved along its `k`-th Floquet
     /// mode nearest zero (Hill's eigenproblem, [`crate::stability::HillPencil`]), the
     /// modes ordered by decreasing real part of their exponent (0: the most unstable, or
@@ -283,6 +280,9 @@ impl RevolutionSums {
 /// about 1e-3 of its amplitude on the built-in model at a third of the cost of 1e-6
 /// (docs/transient.md).
 pub const DEFAULT_RTOL: f64 = 1e-4;
+
+/// Displacement samples per revolution recorded on `/transient/samples` by default.
+pub const DEFAULT_SAMPLES_PER_REVOLUTION: u32 = 16;
 
 /// Runs the transient of `problem` from `start` into `sink`. `progress` sees each
 /// revolution; `interrupt` set stops at the next step with status `interrupted`.

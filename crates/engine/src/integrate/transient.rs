@@ -130,6 +130,15 @@ impl SpeedProfile {
         }
     }
 
+    /// The simulated time a run of this profile takes unless told otherwise: its natural
+    /// end plus 1 s to settle, or 100 revolutions at a constant speed (s).
+    pub fn default_duration(&self) -> f64 {
+        match self.end_time() {
+            Some(t) => t + 1.0,
+            None => 100.0 * std::f64::consts::TAU / self.omega(0.0),
+        }
+    }
+
     /// Speed at `t` (rad/s).
     pub fn omega(&self, t: f64) -> f64 {
         match self {
