@@ -113,8 +113,8 @@ impl HbSolution {
     }
 
     /// `max_t |x_dof(t)|` over one period: dense sampling (at least 1024 and 32 per period
-    /// of the highest harmonic) refined by a parabola through the largest sample and its
-    /// neighbours (error of order `Δt⁴`).
+    /// of the highest harmonic, synthesised by one inverse FFT) refined by a parabola
+    /// through the largest sample and its neighbours (error of order `Δt⁴`).
     pub fn max_abs(&self, dof: usize) -> f64 {
         let c = self.mech_coeffs(dof);
         let m = self.basis.max_integer_multiple() as usize;
@@ -126,22 +126,28 @@ impl HbSolution {
                 .0
                 .abs()
         };
-        let (jmax, vmax) =
-            (0..n)
-                .map(|j| (j, f(j as f64)))
-                .fold(
-                    (0, f64::NEG_INFINITY),
-                    |acc, (j, v)| if v > acc.1 { (j, v) } else { acc },
-                );
-        let (y0, y1, y2) = (f(jmax as f64 - 1.0), vmax, f(jmax as f64 + 1.0));
+        let mut samples = vec![0.0; n];
+        match super::aft::Aft::new(&self.basis, Some(n)) {
+            Ok(aft) => aft.synthesize(c, &mut samples, &mut Vec::new()),
+            Err(_) => {
+                for (j, s) in samples.iter_mut().enumerate() {
+                    *s = f(j as f64);
+                }
+            }
+        }
+        let (jmax, _) = samples.iter().map(|v| v.abs()).enumerate().fold(
+            (0, f64::NEG_INFINITY),
+            |acc, (j, v)| if v > acc.1 { (j, v) } else { acc },
+        );
+        let (y0, y1, y2) = (f(jmax as f64 - 1.0), f(jmax as f64), f(jmax as f64 + 1.0));
         let denom = y0 - 2.0 * y1 + y2;
         if denom < 0.0 {
             let off = 0.5 * (y0 - y2) / denom;
             if off.abs() <= 1.0 {
-                return f(jmax as f64 + off).max(vmax);
+                return f(jmax as f64 + off).max(y1);
             }
         }
-        vmax
+        y1
     }
 }
 
