@@ -37,6 +37,18 @@ What is checked, in this order (the first problem stops the check, exit status 1
    `RunInfo.bearings[k].name` (from /run_info), so a label cannot drift from its index
    (`--no-label-check` turns this off).
 
+6. Pairing by position: Foxglove Studio 1.48 and Lichtblick ignore a series' own
+   `xValuePath` and pair every series of a Plot whose `xAxisVal` is `custom` with the
+   panel's `xAxisPath` by position ("Mismatch in the number of elements in x-axis and
+   y-axis messages" otherwise). So every enabled series of such a panel must read the
+   x path's topic with no message filter (`{...}` right after the topic), and neither
+   may the x path.
+7. Readable axes: a Plot series whose sampled values are all below 0.001 in magnitude
+   (and not all zero) is drawn as a flat line, since the y-axis ticks are rounded to
+   three decimals: plot a field in smaller units (e.g. `_um` instead of `_m`).
+8. The 3D panel's `followTf` frame is published by a `foxglove.FrameTransform` in the
+   recording (1.48 reports `Frame ... not found` for a frame only used by entities).
+
 `--ignore-topic TOPIC` leaves out what the layout shows from TOPIC (e.g. `/scene` for a
 recording written without it).
 
@@ -108,6 +120,9 @@ TYPE_NAMES = {
 # tmrotor: which RunInfo list names the entries of a per-node / per-bearing array.
 RUNINFO_LISTS = {
     ("/summary", "amplitude_rms_m"): "nodes",
+    ("/summary", "amplitude_rms_um"): "nodes",
+    ("/summary", "amplitude_rms_stable_um"): "nodes",
+    ("/summary", "amplitude_rms_unstable_um"): "nodes",
     ("/bifurcations", "amplitude_rms_m"): "nodes",
     ("/orbits", "nodes"): "nodes",
     ("/temperatures", "nodes"): "thermal_nodes",
@@ -843,6 +858,8 @@ class PathUse:
     text: str
     role: str
     label: str | None = None
+    # a Plot series paired by position with this x path (rule 6)
+    paired_with: str | None = None
 
 
 def _is_number_literal(s: Any) -> bool:
@@ -858,6 +875,22 @@ def _is_number_literal(s: Any) -> bool:
 def _expect(cond: bool, msg: str) -> None:
     if not cond:
         raise LayoutProblem(msg)
+
+
+def _check_pairing(pid: str, series: str, y: str, x: str) -> None:
+    """Rule 6: a series paired by position with the panel's x path."""
+    ym, xm = parse_path(y), parse_path(x)
+    for what, mp, text in (("x axis", xm, x), (series, ym, y)):
+        if mp.parts and isinstance(mp.parts[0], Filter):
+            raise LayoutProblem(
+                f"[{pid}] {what} {text!r} filters whole messages: Foxglove Studio 1.48 and Lichtblick "
+                f"pair each series with the x axis {x!r} by position, and a filtered series has fewer "
+                f"elements (error badge 'Mismatch in the number of elements'); plot an unfiltered "
+                f"field instead (e.g. amplitude_rms_stable_um, NaN where unstable)")
+    if ym.topic != xm.topic:
+        raise LayoutProblem(
+            f"[{pid}] {series} {y!r} reads {ym.topic}, the x axis {x!r} reads {xm.topic}: older "
+            f"Foxglove pairs them by position, which only holds for one topic")
 
 
 def panel_uses(pid: str, cfg: dict) -> tuple[list[PathUse], list[str], list[str]]:
@@ -909,7 +942,10 @@ def panel_uses(pid: str, cfg: dict) -> tuple[list[PathUse], list[str], list[str]
             if _is_number_literal(v):
                 notes.append(f"series {i}{state}: reference line at {v}")
                 continue
-            uses.append(PathUse(pid, f"series {i}{state} y", v, "number", label))
+            x_default = (cfg.get("xAxisPath") or {}).get("value")
+            paired = (x_default if xval == "custom" and s.get("enabled", True)
+                      and isinstance(x_default, str) and x_default else None)
+            uses.append(PathUse(pid, f"series {i}{state} y", v, "number", label, paired))
             if s.get("xValuePath"):
                 _expect(xval in ("custom", "currentCustom"),
                         f"{sw}.xValuePath is set but xAxisVal is {xval!r}, not a message path")
@@ -999,6 +1035,20 @@ def label_check(use: PathUse, mp: MessagePath, run_info) -> str | None:
 # ------------------------------------------------------------------------------------
 
 
+def _check_readable(use: PathUse, mp: MessagePath, rec: Recording, variables: dict) -> None:
+    """Rule 7: the sampled values of a Plot series do not all round to zero on the axis."""
+    values = []
+    for msg in rec.samples.get(mp.topic) or []:
+        for v in data_walk(mp, msg, variables, honor_filters=True, stats=WalkStats()):
+            if isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v):
+                values.append(float(v))
+    if values and any(v != 0.0 for v in values) and max(abs(v) for v in values) < 1e-3:
+        raise LayoutProblem(
+            f"[{use.panel}] {use.what} {use.text!r}: every sampled value is below 0.001 in magnitude "
+            f"(largest {max(abs(v) for v in values):.3g}); Foxglove rounds the y-axis ticks to three "
+            f"decimals and draws a flat line: plot the field in smaller units (e.g. _um)")
+
+
 def check(layout_path: str, recording_path: str, max_samples: int, labels: bool, quiet: bool,
           ignored: frozenset[str] = frozenset()) -> int:
     say = (lambda *a: None) if quiet else print
@@ -1034,7 +1084,7 @@ def check(layout_path: str, recording_path: str, max_samples: int, labels: bool,
     say(f"layout {layout_path}: valid layout JSON, {len(panels)} panels "
         f"({', '.join(sorted({panel_type(p) for p, _ in panels}))})")
 
-    rec = read_recording(recording_path, needed | {"/run_info"}, max_samples)
+    rec = read_recording(recording_path, needed | {"/run_info", "/tf"}, max_samples)
     missing = sorted(t for t in needed if t not in rec.schemas)
     if missing:
         t = missing[0]
@@ -1073,12 +1123,26 @@ def check(layout_path: str, recording_path: str, max_samples: int, labels: bool,
                     raise LayoutProblem(f"[{pid}] followTf {follow!r} is not a frame of its topics' messages "
                                         f"(frames found: {', '.join(sorted(frames)) or 'none'})")
                 say(f"  ok  followTf {follow!r} is the frame_id of the messages")
+                published = set()
+                for t, schema in rec.schemas.items():
+                    if schema == "foxglove.FrameTransform":
+                        for m in rec.samples.get(t) or []:
+                            published |= {m.parent_frame_id, m.child_frame_id}
+                if follow not in published:
+                    raise LayoutProblem(f"[{pid}] followTf {follow!r} is not published by a "
+                                        f"foxglove.FrameTransform in the recording (Foxglove Studio 1.48: "
+                                        f"'Frame {follow!r} not found')")
+                say(f"  ok  followTf {follow!r} is published by a foxglove.FrameTransform")
         for u in uses:
             try:
                 mp, r = resolve(u.text, u.role, rec, variables)
             except LayoutProblem as e:
                 raise LayoutProblem(f"[{u.panel}] {u.what}: {e}") from None
             extra = list(r.notes)
+            if u.paired_with:
+                _check_pairing(u.panel, u.what, u.text, u.paired_with)
+            if u.role == "number" and mp.modifier is None:
+                _check_readable(u, mp, rec, variables)
             if labels:
                 lc = label_check(u, mp, run_info)
                 if lc:

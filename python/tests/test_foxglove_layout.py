@@ -65,8 +65,8 @@ def test_shipped_layout_resolves(layout_recording):
                   "3D!orbits", "RosOut!events", "StateTransitions!branch", "Table!nodes"):
         assert f"[{panel}]" in out, f"{panel} not checked:\n{out}"
     assert "x axis (default): /summary.omega_rad_s -> double" in out
-    assert "/summary{stability==2}.amplitude_rms_m[7] -> double" in out
-    assert "followTf 'rotor'" in out
+    assert "/summary.amplitude_rms_unstable_um[7] -> double" in out
+    assert "followTf 'rotor' is published by a foxglove.FrameTransform" in out
     assert "topic /log (foxglove.Log" in out
 
 
@@ -77,15 +77,15 @@ def test_shipped_layout_shape():
     amplitude = configs["Plot!amplitude"]
     assert amplitude["xAxisVal"] == "custom"
     assert amplitude["xAxisPath"]["value"] == "/summary.omega_rad_s"
-    # stable and unstable series of the same nodes, each with its own filtered x values
+    # stable and unstable series of the same nodes in micrometres, unfiltered (NaN where
+    # the point is of the other kind), so older Foxglove pairs them with the x axis
     values = [p["value"] for p in amplitude["paths"]]
     for k in (11, 7, 10):  # 2#, 3#, 4# bearing nodes in RunInfo.nodes order
-        assert f"/summary{{stability==1}}.amplitude_rms_m[{k}]" in values
-        assert f"/summary{{stability==2}}.amplitude_rms_m[{k}]" in values
+        assert f"/summary.amplitude_rms_stable_um[{k}]" in values
+        assert f"/summary.amplitude_rms_unstable_um[{k}]" in values
     for p in amplitude["paths"]:
-        if "{stability==" in p["value"]:
-            flt = p["value"][len("/summary"):p["value"].index("}") + 1]
-            assert p["xValuePath"] == f"/summary{flt}.omega_rad_s"
+        assert "{" not in p["value"], p
+        assert p["xValuePath"] == "/summary.omega_rad_s"
     assert configs["3D!orbits"]["followTf"] == "rotor"
     assert configs["RosOut!events"]["topicToRender"] == "/log"
 
@@ -93,11 +93,11 @@ def test_shipped_layout_shape():
 def test_misspelt_field_is_rejected(layout_recording, tmp_path):
     doc = shipped()
     series = doc["configById"]["Plot!amplitude"]["paths"][0]
-    series["value"] = series["value"].replace("amplitude_rms_m", "amplitude_rms")
+    series["value"] = series["value"].replace("amplitude_rms_stable_um", "amplitude_rms_stabel_um")
     run = check(write(doc, tmp_path / "misspelt.json"), layout_recording)
     assert run.returncode == 1, run.stdout + run.stderr
-    assert "no field 'amplitude_rms' in tmrotor.v1.PointSummary" in run.stderr
-    assert "did you mean 'amplitude_rms_m'" in run.stderr
+    assert "no field 'amplitude_rms_stabel_um' in tmrotor.v1.PointSummary" in run.stderr
+    assert "did you mean 'amplitude_rms_stable_um'" in run.stderr
     assert "[Plot!amplitude] series 1 y" in run.stderr
 
 
@@ -121,6 +121,14 @@ def _set(doc: dict, panel: str, keys: list, value) -> None:
          "7 is not a value of tmrotor.v1.Stability"),
         ("Plot!amplitude", ["paths", 0, "value"], "/summary.amplitude_rms_m[18]",
          "index [18] is out of range"),
+        # what Foxglove Studio 1.48 showed: a filtered series paired with the unfiltered x
+        # axis (error badge), and metres on an axis with three decimals (a flat line)
+        ("Plot!amplitude", ["paths", 0, "value"], "/summary{stability==1}.amplitude_rms_m[11]",
+         "filters whole messages"),
+        ("Plot!amplitude", ["paths", 0, "value"], "/summary.amplitude_rms_m[11]",
+         "Foxglove rounds the y-axis ticks to three decimals"),
+        ("Plot!clearance", ["paths", 0, "value"], "/floquet.spectral_radius",
+         "older Foxglove pairs them by position"),
         ("Plot!amplitude", ["paths", 0, "label"], "node 11 (4# bearing) stable",
          "RunInfo.nodes[11] is 'node 12'"),
         ("Plot!temperatures", ["paths", 0, "value"], "/temperature.nodes[51].mean_c",
@@ -180,4 +188,4 @@ def test_shipped_transient_layout_resolves(transient_recording):
     for panel in ("Plot!amplitude", "Plot!temperatures", "Plot!clearance", "Plot!loads",
                   "Plot!displacement", "Plot!speed", "RosOut!events"):
         assert f"[{panel}]" in out, f"{panel} not checked:\n{out}"
-    assert "/transient/revolution.amplitude_rms_m[13] -> double" in out
+    assert "/transient/revolution.amplitude_rms_um[13] -> double" in out

@@ -19,6 +19,7 @@ use crate::integrate::{
     IntegrateError, SpeedProfile, StepView, ThermalStepping, Transient, TransientOptions,
     TransientStats,
 };
+use crate::record::convert::to_micrometres;
 use crate::record::transient::{Revolution, Samples, TransientInfo, TransientSink};
 use crate::record::{RecordError, RunStatus};
 use crate::study::SweepProblem;
@@ -421,11 +422,15 @@ fn drive(
             while next_sample_phase <= s.phase {
                 next_sample_phase += spacing;
             }
+            let x_m: Vec<f64> = run.nodes.iter().map(|n| s.x[n.dof_x]).collect();
+            let y_m: Vec<f64> = run.nodes.iter().map(|n| s.x[n.dof_y]).collect();
             let msg = Samples {
                 time_s: s.t,
                 omega_rad_s: s.omega,
-                x_m: run.nodes.iter().map(|n| s.x[n.dof_x]).collect(),
-                y_m: run.nodes.iter().map(|n| s.x[n.dof_y]).collect(),
+                x_um: to_micrometres(&x_m),
+                y_um: to_micrometres(&y_m),
+                x_m,
+                y_m,
             };
             if let Err(e) = sink.write_samples(&msg) {
                 failure = Some(e.into());
@@ -475,19 +480,25 @@ fn drive(
             peak.push(dx.hypot(dy));
         }
         let states = sys.bearing_states(s.omega, ts, s.x, s.temp);
+        let delta_v_m: Vec<f64> = states.iter().map(|b| b.delta_v_m).collect();
+        let effective_clearance_m: Vec<f64> = states
+            .iter()
+            .zip(&clearances0)
+            .map(|(b, c0)| c0 + b.delta_v_m)
+            .collect();
         let msg = Revolution {
             index: revolution,
             time_s: s.t,
             omega_rad_s: s.omega,
+            amplitude_rms_um: to_micrometres(&rms),
+            amplitude_max_um: to_micrometres(&peak),
+            delta_v_um: to_micrometres(&delta_v_m),
+            effective_clearance_um: to_micrometres(&effective_clearance_m),
             amplitude_rms_m: rms,
             amplitude_max_m: peak,
             temperature_c: run.thermal_nodes.iter().map(|n| s.temp[n.dof]).collect(),
-            delta_v_m: states.iter().map(|b| b.delta_v_m).collect(),
-            effective_clearance_m: states
-                .iter()
-                .zip(&clearances0)
-                .map(|(b, c0)| c0 + b.delta_v_m)
-                .collect(),
+            delta_v_m,
+            effective_clearance_m,
             bearing_load_n: states.iter().map(|b| b.fb_n).collect(),
             bearing_load_max_n: history
                 .back()

@@ -300,6 +300,23 @@ pub struct PointMessages {
     pub floquet: Option<pb::Floquet>,
 }
 
+/// Micrometres per metre: the `_um` fields that viewers plot (their axes round metres of
+/// µm-size vibration to zero).
+pub const UM_PER_M: f64 = 1e6;
+
+/// `values` (m) in micrometres.
+pub fn to_micrometres(values: &[f64]) -> Vec<f64> {
+    micrometres(values, true)
+}
+
+/// `values` (m) in micrometres where `keep`, NaN (no point drawn) elsewhere.
+fn micrometres(values: &[f64], keep: bool) -> Vec<f64> {
+    values
+        .iter()
+        .map(|v| if keep { v * UM_PER_M } else { f64::NAN })
+        .collect()
+}
+
 /// Splits a point into its topic messages.
 pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
     let (index, omega_rad_s) = (p.index, p.omega_rad_s);
@@ -310,6 +327,9 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
         omega_rad_s,
         arc_length: p.arc_length,
         amplitude_rms_m: p.amplitude_rms_m.clone(),
+        amplitude_rms_um: micrometres(&p.amplitude_rms_m, true),
+        amplitude_rms_stable_um: micrometres(&p.amplitude_rms_m, p.stable == Some(true)),
+        amplitude_rms_unstable_um: micrometres(&p.amplitude_rms_m, p.stable == Some(false)),
         stability: stability as i32,
         bifurcation: bifurcation_to_pb(p.bifurcation) as i32,
         residual_mech: p.residual_mech,
@@ -375,6 +395,8 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
                 ui_m: c.ui_m,
                 uo_m: c.uo_m,
                 effective_m: c.effective_m,
+                delta_v_um: c.delta_v_m * UM_PER_M,
+                effective_um: c.effective_m * UM_PER_M,
             })
             .collect(),
     });
@@ -705,18 +727,83 @@ pub fn named_log_to_pb(time_ns: u64, level: fg::log::Level, text: &str, name: &s
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneOptions {
     /// Factor applied to displacements so that µm-size orbits are visible next to a
-    /// metre-long shaft. Default 1000 (1 mm of whirl is drawn as 1 m).
-    pub displacement_scale: f64,
-    /// Frame id of the entities. Default `"rotor"`.
+    /// metre-long shaft. `None` (the default): [`automatic_scale`] of the run.
+    pub displacement_scale: Option<f64>,
+    /// Frame id of the entities. Default `"rotor"` (published on `/tf` as a child of
+    /// `"world"` by [`frame_transform_to_pb`]).
     pub frame_id: String,
 }
 
 impl Default for SceneOptions {
     fn default() -> Self {
         Self {
-            displacement_scale: 1000.0,
+            displacement_scale: None,
             frame_id: "rotor".into(),
         }
+    }
+}
+
+impl SceneOptions {
+    /// The displacement factor for `run`: the one set, or [`automatic_scale`].
+    pub fn scale_for(&self, run: &RunInfo) -> f64 {
+        self.displacement_scale
+            .filter(|s| s.is_finite() && *s > 0.0)
+            .unwrap_or_else(|| automatic_scale(run))
+    }
+}
+
+/// The scene's displacement factor when none is set: the largest of 1, 2 or 5 × 10ᵏ that
+/// draws the largest bearing clearance (the scale of a rolling-element rotor's whirl) at
+/// no more than 5 % of the dynamic nodes' axial span, so that orbits are visible loops
+/// and neighbouring ones do not overlap; 1000 for a run without bearings or span. The
+/// built-in dual rotor: span 1.97 m, largest clearance 5 µm → 10 000 (its RMS amplitudes
+/// of 1–10 µm are drawn 1–10 cm).
+pub fn automatic_scale(run: &RunInfo) -> f64 {
+    let (lo, hi) = run
+        .nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), n| {
+            (lo.min(n.axial_position_m), hi.max(n.axial_position_m))
+        });
+    let clearance = run
+        .bearings
+        .iter()
+        .map(|b| b.initial_clearance_m)
+        .filter(|c| c.is_finite() && *c > 0.0)
+        .fold(0.0f64, f64::max);
+    let span = hi - lo;
+    if !(span.is_finite() && span > 0.0 && clearance > 0.0) {
+        return 1000.0;
+    }
+    let target = 0.05 * span / clearance;
+    let decade = 10f64.powf(target.log10().floor());
+    [5.0, 2.0, 1.0]
+        .into_iter()
+        .map(|m| m * decade)
+        .find(|v| *v <= target)
+        .unwrap_or(decade)
+        .max(1.0)
+}
+
+/// The static transform that places the scene's frame: `frame_id` as a child of
+/// `"world"`, identity, published once on `/tf` at time 0 so that 3D viewers find the
+/// frame the entities are drawn in.
+pub fn frame_transform_to_pb(frame_id: &str) -> fg::FrameTransform {
+    fg::FrameTransform {
+        timestamp: Some(timestamp(0)),
+        parent_frame_id: "world".into(),
+        child_frame_id: frame_id.into(),
+        translation: Some(fg::Vector3 {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        }),
+        rotation: Some(fg::Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }),
     }
 }
 
@@ -736,25 +823,35 @@ fn point3(x: f64, y: f64, z: f64) -> fg::Point3 {
 
 /// Whirl orbits of a point as a `foxglove.SceneUpdate` (paper Fig. 12): one entity per
 /// dynamic node with its orbit as a closed line strip in the plane normal to the shaft,
-/// placed at the node's axial position; scene x = axial position (m), scene y = horizontal
-/// displacement y, scene z = vertical displacement x (both times
-/// [`SceneOptions::displacement_scale`]), so the vertical stays up in the viewer. One more
-/// entity draws the undeformed shaft axis of each rotor.
+/// drawn about the node's undeformed position on the shaft axis (the orbit minus its mean
+/// over the period, so that the static sag, scaled with it, does not move the loops off
+/// the axis); scene x = axial position (m), scene y = horizontal displacement y, scene
+/// z = vertical displacement x (both times [`SceneOptions::scale_for`]), so the vertical
+/// stays up in the viewer. One more entity draws the undeformed shaft axis of each rotor,
+/// and one a caption stating the factor.
 pub fn scene_to_pb(
     run: &RunInfo,
     p: &PointRecord,
     time_ns: u64,
     options: &SceneOptions,
 ) -> fg::SceneUpdate {
-    let s = options.displacement_scale;
+    let s = options.scale_for(run);
     let ts = Some(timestamp(time_ns));
-    let mut entities = Vec::with_capacity(run.nodes.len() + 1);
+    let mut entities = Vec::with_capacity(run.nodes.len() + 2);
+    let mean = |v: &[f64]| {
+        if v.is_empty() {
+            0.0
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
     for (n, o) in run.nodes.iter().zip(&p.orbits) {
+        let (mx, my) = (mean(&o.x_m), mean(&o.y_m));
         let mut points: Vec<fg::Point3> = o
             .x_m
             .iter()
             .zip(&o.y_m)
-            .map(|(x, y)| point3(n.axial_position_m, s * y, s * x))
+            .map(|(x, y)| point3(n.axial_position_m, s * (y - my), s * (x - mx)))
             .collect();
         if let Some(first) = points.first().cloned() {
             points.push(first);
@@ -776,6 +873,14 @@ pub fn scene_to_pb(
                     key: "displacement_scale".into(),
                     value: format!("{s}"),
                 },
+                fg::KeyValuePair {
+                    key: "mean_x_m".into(),
+                    value: format!("{mx}"),
+                },
+                fg::KeyValuePair {
+                    key: "mean_y_m".into(),
+                    value: format!("{my}"),
+                },
             ],
             lines: vec![fg::LinePrimitive {
                 r#type: fg::line_primitive::Type::LineStrip as i32,
@@ -787,6 +892,15 @@ pub fn scene_to_pb(
                 colors: Vec::new(),
                 indices: Vec::new(),
             }],
+            ..Default::default()
+        });
+    }
+    if let Some(caption) = scene_caption(run, p, s) {
+        entities.push(fg::SceneEntity {
+            timestamp: ts,
+            frame_id: options.frame_id.clone(),
+            id: "caption".into(),
+            texts: vec![caption],
             ..Default::default()
         });
     }
@@ -830,6 +944,48 @@ pub fn scene_to_pb(
         deletions: Vec::new(),
         entities,
     }
+}
+
+/// The scene's caption: the displacement factor, placed above the middle of the shaft.
+fn scene_caption(run: &RunInfo, p: &PointRecord, scale: f64) -> Option<fg::TextPrimitive> {
+    let (lo, hi) = run
+        .nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), n| {
+            (lo.min(n.axial_position_m), hi.max(n.axial_position_m))
+        });
+    if !(lo.is_finite() && hi.is_finite()) {
+        return None;
+    }
+    let height = 0.15 * (hi - lo).max(0.1);
+    Some(fg::TextPrimitive {
+        pose: Some(fg::Pose {
+            position: Some(fg::Vector3 {
+                x: 0.5 * (lo + hi),
+                y: 0.0,
+                z: height,
+            }),
+            orientation: Some(fg::Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                w: 1.0,
+            }),
+        }),
+        billboard: true,
+        font_size: 14.0,
+        scale_invariant: true,
+        color: Some(fg::Color {
+            r: 0.9,
+            g: 0.9,
+            b: 0.9,
+            a: 1.0,
+        }),
+        text: format!(
+            "whirl orbits ×{scale} about each node's mean position, ω = {:.2} rad/s",
+            p.omega_rad_s
+        ),
+    })
 }
 
 /// The `/truncation` message.
@@ -1084,7 +1240,77 @@ mod tests {
                 .iter()
                 .all(|q| q.x == data.run.nodes[0].axial_position_m)
         );
-        assert_eq!(line.points[0].z, 1000.0 * p.orbits[0].x_m[0]);
-        assert_eq!(line.points[0].y, 1000.0 * p.orbits[0].y_m[0]);
+        // about the orbit's mean, at the automatic factor (stated in the metadata)
+        let s = automatic_scale(&data.run);
+        let o = &p.orbits[0];
+        let (mx, my) = (
+            o.x_m.iter().sum::<f64>() / o.x_m.len() as f64,
+            o.y_m.iter().sum::<f64>() / o.y_m.len() as f64,
+        );
+        assert!((line.points[0].z - s * (o.x_m[0] - mx)).abs() <= 1e-12 * s);
+        assert!((line.points[0].y - s * (o.y_m[0] - my)).abs() <= 1e-12 * s);
+        let meta = &scene.entities[0].metadata;
+        assert!(
+            meta.iter()
+                .any(|kv| kv.key == "displacement_scale" && kv.value == format!("{s}"))
+        );
+        let caption = scene.entities.iter().find(|e| e.id == "caption");
+        let text = &caption.expect("a caption entity").texts[0].text;
+        assert!(text.contains(&format!("×{s}")), "{text}");
+        // a set factor wins
+        let set = SceneOptions {
+            displacement_scale: Some(250.0),
+            ..SceneOptions::default()
+        };
+        let scene = scene_to_pb(&data.run, p, 7, &set);
+        assert!((scene.entities[0].lines[0].points[0].z - 250.0 * (o.x_m[0] - mx)).abs() < 1e-9);
+    }
+
+    #[test]
+    fn automatic_scale_draws_the_largest_clearance_at_most_five_percent_of_the_span() {
+        let mut run = synthetic::generate(&SyntheticOptions::default()).run;
+        while run.nodes.len() < 5 {
+            let extra = run.nodes[0].clone();
+            run.nodes.push(extra);
+        }
+        for (k, n) in run.nodes.iter_mut().enumerate() {
+            n.axial_position_m = 0.25 * k as f64;
+        }
+        let span = 0.25 * (run.nodes.len() - 1) as f64;
+        for b in &mut run.bearings {
+            b.initial_clearance_m = 5e-6;
+        }
+        let s = automatic_scale(&run);
+        assert!(s * 5e-6 <= 0.05 * span, "{s}");
+        // the next step of the 1-2-5 ladder would exceed it
+        let next = if (s / 10f64.powf(s.log10().floor()) - 5.0).abs() < 1e-9 {
+            2.0 * s
+        } else {
+            2.5 * s
+        };
+        assert!(next * 5e-6 > 0.05 * span, "{s} {next}");
+        run.bearings.clear();
+        assert_eq!(automatic_scale(&run), 1000.0);
+    }
+
+    #[test]
+    fn summary_splits_the_amplitudes_by_stability_in_micrometres() {
+        let data = synthetic::generate(&SyntheticOptions::default());
+        let mut p = data.points[2].clone();
+        for (stable, expect_stable) in [(Some(true), true), (Some(false), false), (None, false)] {
+            p.stable = stable;
+            let m = point_to_pb(&data.run, &p).summary;
+            for (k, a) in p.amplitude_rms_m.iter().enumerate() {
+                assert_eq!(m.amplitude_rms_um[k], a * 1e6);
+                assert_eq!(m.amplitude_rms_stable_um[k].is_nan(), !expect_stable);
+                let unstable = stable == Some(false);
+                assert_eq!(m.amplitude_rms_unstable_um[k].is_nan(), !unstable);
+            }
+        }
+        let tf = frame_transform_to_pb("rotor");
+        assert_eq!(
+            (tf.parent_frame_id.as_str(), tf.child_frame_id.as_str()),
+            ("world", "rotor")
+        );
     }
 }

@@ -40,8 +40,8 @@ use prost::Message;
 
 use super::RecordError;
 use super::convert::{
-    AUDIT_LOG_NAME, SceneOptions, bifurcation_record_to_pb, log_to_pb, named_log_to_pb,
-    point_to_pb, run_info_to_pb, scene_to_pb, sha256_hex,
+    AUDIT_LOG_NAME, SceneOptions, bifurcation_record_to_pb, frame_transform_to_pb, log_to_pb,
+    named_log_to_pb, point_to_pb, run_info_to_pb, scene_to_pb, sha256_hex,
 };
 use super::pb::foxglove::log::Level;
 use super::schema::{self, Topic, names};
@@ -419,6 +419,10 @@ impl Sink for McapSink {
     fn begin_run(&mut self, run: &RunInfo) -> Result<(), RecordError> {
         self.start(run, "branch clock: point i at (i+1) ms")?;
         self.publish(schema::TOPIC_RUN_INFO, 0, &run_info_to_pb(run))?;
+        if self.options.scene {
+            let frame = frame_transform_to_pb(&self.options.scene_options.frame_id);
+            self.publish(schema::TOPIC_TF, 0, &frame)?;
+        }
         let text = format!(
             "run started: {} {}, model {}, {} nodes, {} thermal nodes, {} bearings",
             run.tool_name,

@@ -69,9 +69,11 @@ pub const REVOLUTION: SchemaEntry = schema!("tmrotor.v1.Revolution", "tmrotor/v1
 pub const SAMPLES: SchemaEntry = schema!("tmrotor.v1.Samples", "tmrotor/v1/transient.proto");
 pub const SCENE_UPDATE: SchemaEntry = schema!("foxglove.SceneUpdate", "foxglove/SceneUpdate.proto");
 pub const LOG: SchemaEntry = schema!("foxglove.Log", "foxglove/Log.proto");
+pub const FRAME_TRANSFORM: SchemaEntry =
+    schema!("foxglove.FrameTransform", "foxglove/FrameTransform.proto");
 
 /// Every schema a recording or an operating map may contain.
-pub const ALL_SCHEMAS: [SchemaEntry; 21] = [
+pub const ALL_SCHEMAS: [SchemaEntry; 22] = [
     RUN_INFO,
     POINT_SUMMARY,
     HARMONICS,
@@ -85,6 +87,7 @@ pub const ALL_SCHEMAS: [SchemaEntry; 21] = [
     BRANCH_INFO,
     SCENE_UPDATE,
     LOG,
+    FRAME_TRANSFORM,
     MAP_INFO,
     MAP_CURVE,
     MAP_PAIR_END,
@@ -168,6 +171,11 @@ pub const TOPIC_SCENE: Topic = Topic {
     schema: SCENE_UPDATE,
     meaning: "whirl orbits as line strips along the shaft axis (Foxglove 3D panel)",
 };
+pub const TOPIC_TF: Topic = Topic {
+    name: "/tf",
+    schema: FRAME_TRANSFORM,
+    meaning: "the scene's frame `rotor` under `world` (static, once at time 0)",
+};
 pub const TOPIC_LOG: Topic = Topic {
     name: "/log",
     schema: LOG,
@@ -175,7 +183,7 @@ pub const TOPIC_LOG: Topic = Topic {
 };
 
 /// All topics, in the order they are registered.
-pub const ALL_TOPICS: [Topic; 14] = [
+pub const ALL_TOPICS: [Topic; 15] = [
     TOPIC_RUN_INFO,
     TOPIC_SUMMARY,
     TOPIC_HARMONICS,
@@ -189,6 +197,7 @@ pub const ALL_TOPICS: [Topic; 14] = [
     TOPIC_TRUNCATION,
     TOPIC_BRANCHES,
     TOPIC_SCENE,
+    TOPIC_TF,
     TOPIC_LOG,
 ];
 
