@@ -68,6 +68,14 @@ def sweep_rec(tmrotor_bin: Path, recdir: Path) -> Path:
 
 
 @pytest.fixture(scope="session")
+def transient_rec(tmrotor_bin: Path, recdir: Path) -> Path:
+    """The dual rotor at 400 rad/s from a cold start, 0.3 s (19 revolutions)."""
+    out = recdir / "transient.mcap"
+    run(tmrotor_bin, "transient", "--speed", "400", "--duration", "0.3", "-q", "-o", out)
+    return out
+
+
+@pytest.fixture(scope="session")
 def synthetic_rec(replay_bin: Path, recdir: Path) -> Path:
     """Closed-form 2-DoF rotor: two saddle-nodes, unstable points between them."""
     out = recdir / "synthetic.mcap"

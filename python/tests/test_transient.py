@@ -5,18 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
-from conftest import run
-
 import tmrotor
-
-
-@pytest.fixture(scope="session")
-def transient_rec(tmrotor_bin: Path, recdir: Path) -> Path:
-    """The dual rotor at 400 rad/s from a cold start, 0.3 s (19 revolutions)."""
-    out = recdir / "transient.mcap"
-    run(tmrotor_bin, "transient", "--speed", "400", "--duration", "0.3", "-q", "-o", out)
-    return out
 
 
 def test_revolutions_and_samples_are_read(transient_rec: Path) -> None:

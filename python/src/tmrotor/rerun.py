@@ -2,7 +2,7 @@
 
 Command line (console script of the package, or ``python -m tmrotor.rerun``)::
 
-    tmrotor-rerun REC.mcap -o OUT.rrd [--scale 1000] [--samples 128]
+    tmrotor-rerun REC.mcap -o OUT.rrd [--scale S] [--samples 128]
     rerun OUT.rrd
 
 Rerun's own MCAP import shows our protobuf topics as opaque structs and does not draw
@@ -10,19 +10,20 @@ Rerun's own MCAP import shows our protobuf topics as opaque structs and does not
 instead. Needs the optional dependency ``rerun-sdk`` (``pip install 'tmrotor[rerun]'``).
 
 Timelines
-    ``point`` (sequence): the point index along the branch — the default timeline.
-    ``omega_mrad_s`` (sequence): omega in mrad/s, rounded. Select it in the time panel to
-    see the amplitude–frequency curves against omega; where the branch folds back (a
-    saddle-node pair) several points share an omega range and the lines there zig-zag
-    between the branch's segments, so the ``point`` timeline is the faithful one.
+    ``omega_mrad_s`` (sequence): omega in mrad/s, rounded — the timeline the blueprint
+    opens on, so the plots are amplitude–frequency curves over the whole omega range.
+    The branch's values are drawn as points, not lines: where it folds back (a
+    saddle-node pair) several points share an omega range, and lines joined in omega
+    order would zig-zag between its segments.
+    ``point`` (sequence): the point index along the branch, the order of continuation.
 
 Entities (all scalars logged on both timelines)
     ``info``                                  run description (markdown), static
     ``branch/omega_rad_s``                    omega, rad/s
-    ``branch/amplitude_um/<rotor>/node<id>``  RMS radial amplitude (Eq. 35), µm, a line per
-                                              dynamic node, shades of the rotor's colour
+    ``branch/amplitude_um/<rotor>/node<id>``  RMS radial amplitude (Eq. 35), µm, points per
+                                              dynamic node, a distinct colour per node
     ``branch/unstable_um/<rotor>/node<id>``   the same values at unstable points only, red
-                                              crosses over the lines
+                                              crosses over the points
     ``branch/stability/spectral_radius``      largest multiplier modulus
     ``branch/stability/unstable_count``       multipliers outside the unit circle
     ``temperatures/<group>/tnode<id>``        mean temperature over the period, °C; groups:
@@ -40,14 +41,30 @@ Entities (all scalars logged on both timelines)
                                               bifurcations, warnings, end status), at the
                                               point they follow
 
-3D layout (as ``/scene``): x = axial position along the shaft (m), y = scale · horizontal
-displacement y, z = scale · vertical displacement x, z up; scale 1000 by default, so 1 µm
-of whirl is drawn as 1 mm. LP blue, HP orange.
+3D layout (as ``/scene``): x = axial position along the shaft (m), y = scale · (y − ȳ),
+z = scale · (x − x̄), z up: each orbit about its node's mean position over the period
+(the static sag is left out, so scaled orbits stay on the shaft axis). The scale is
+:func:`automatic_scale` of the run unless given, the rule the recording's ``/scene``
+follows (10 000 for the built-in rotor); the 3D view's title states it. LP blue, HP
+orange.
+
+A recording of ``tmrotor transient`` is exported on a ``time`` timeline (simulated
+time) instead: ``transient/omega_rad_s``, ``transient/amplitude_um/<rotor>/node<id>``
+(per revolution), ``transient/temperatures/<group>/tnode<id>``,
+``transient/clearance_um/<bearing>``, ``transient/load_max_n/<bearing>`` and the
+decimated displacements ``transient/samples_um/<rotor>/node<id>/{x,y}``, with a
+blueprint of their own.
+
+Colours: within a plot every series has its own colour from a 20-colour qualitative
+palette; a bearing has the same colour in the clearance, load and heat plots. Legends
+are shown at a corner for plots of up to six series and hidden above that (hover a
+series for its name), so they do not cover the data.
 """
 
 from __future__ import annotations
 
 import argparse
+import colorsys
 import math
 import re
 import sys
@@ -70,14 +87,56 @@ except ImportError as _e:  # pragma: no cover - exercised when rerun-sdk is miss
     rrb = None  # type: ignore[assignment]
     _IMPORT_ERROR = _e
 
-#: Displacement scale of the 3D orbits (as the recording's /scene).
+#: Displacement scale of the 3D orbits without bearings to size it from.
 DEFAULT_SCALE = 1000.0
 #: Samples per period of the 3D orbits.
 DEFAULT_SAMPLES = 128
+#: Plots with more series than this hide their legend.
+MAX_LEGEND_SERIES = 6
 
 _ROTOR_COLOURS = {"lp": (31, 119, 180), "hp": (255, 127, 14)}
 _GREY = (128, 128, 128)
 _RED = (214, 39, 40)
+#: A qualitative palette (matplotlib's tab20, dark shades first, then the light ones).
+_PALETTE = [
+    (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
+    (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
+    (174, 199, 232), (255, 187, 120), (152, 223, 138), (255, 152, 150), (197, 176, 213),
+    (196, 156, 148), (247, 182, 210), (199, 199, 199), (219, 219, 141), (158, 218, 229),
+]
+
+
+def palette_colour(j: int) -> tuple[int, int, int]:
+    """The ``j``-th colour: the palette's first, then hues spaced by the golden angle
+    (a thermal group of a shaft can hold more than 20 nodes)."""
+    if j < len(_PALETTE):
+        return _PALETTE[j]
+    k = j - len(_PALETTE)
+    hue = (0.11 + 0.6180339887 * k) % 1.0
+    value = 0.95 if k % 2 == 0 else 0.7
+    r, g, b = colorsys.hsv_to_rgb(hue, 0.7, value)
+    return (round(255 * r), round(255 * g), round(255 * b))
+
+
+def automatic_scale(run_info) -> float:
+    """The 3D orbits' displacement scale when none is given: the largest of 1, 2 or
+    5 × 10^k that draws the largest bearing clearance at no more than 5 % of the dynamic
+    nodes' axial span; :data:`DEFAULT_SCALE` without bearings or span. The rule of the
+    recording's ``/scene`` (its entities carry the factor in their metadata)."""
+    zs = [n.axial_position_m for n in run_info.nodes]
+    clearances = [
+        b.initial_clearance_m
+        for b in run_info.bearings
+        if math.isfinite(b.initial_clearance_m) and b.initial_clearance_m > 0
+    ]
+    if len(zs) < 2 or not clearances or not max(zs) > min(zs):
+        return DEFAULT_SCALE
+    target = 0.05 * (max(zs) - min(zs)) / max(clearances)
+    decade = 10.0 ** math.floor(math.log10(target))
+    for m in (5.0, 2.0, 1.0):
+        if m * decade <= target:
+            return max(m * decade, 1.0)
+    return max(decade, 1.0)
 
 
 def _require_rerun() -> None:
@@ -96,15 +155,6 @@ def _path_part(text: str, fallback: str) -> str:
 
 def _rotor_colour(rotor: str) -> tuple[int, int, int]:
     return _ROTOR_COLOURS.get(rotor.lower(), _GREY)
-
-
-def _shade(base: tuple[int, int, int], j: int, n: int) -> tuple[int, int, int]:
-    """The ``j``-th of ``n`` shades of ``base``, from darker to lighter."""
-    f = 0.0 if n <= 1 else j / (n - 1)
-    dark = np.array(base) * 0.55
-    light = np.array(base) + 0.6 * (255 - np.array(base))
-    c = dark + f * (light - dark)
-    return (int(c[0]), int(c[1]), int(c[2]))
 
 
 def thermal_groups(rec: Recording) -> dict[str, list[int]]:
@@ -179,20 +229,26 @@ def export(
     recording: Recording | str | Path,
     out: str | Path,
     *,
-    scale: float = DEFAULT_SCALE,
+    scale: float | None = None,
     samples: int = DEFAULT_SAMPLES,
     application_id: str = "tmrotor",
 ) -> Path:
     """Writes ``recording`` (a :class:`~tmrotor.Recording` or the path of an MCAP file)
     as a Rerun recording with a default blueprint to ``out`` (``.rrd``); returns ``out``.
 
-    ``scale`` multiplies the displacements of the 3D whirl orbits; ``samples`` is the
-    number of samples per period of each orbit. See the module docstring for the entities
-    and timelines."""
+    ``scale`` multiplies the displacements of the 3D whirl orbits (default
+    :func:`automatic_scale`); ``samples`` is the number of samples per period of each
+    orbit. See the module docstring for the entities and timelines."""
     _require_rerun()
     rec = recording if isinstance(recording, Recording) else read(recording)
     out = Path(out)
     run = rec.run_info
+    if scale is None:
+        scale = automatic_scale(run)
+    if not (math.isfinite(scale) and scale > 0):
+        raise ValueError(f"scale {scale}: must be positive and finite")
+    if rec.transient_info is not None:
+        return _export_transient(rec, out, application_id)
     b = rec.branch
     points = np.asarray(b["index"], dtype=np.int64)
     omega = np.asarray(b["omega_rad_s"], dtype=float)
@@ -229,7 +285,9 @@ def export(
 
     # the branch
     stream.log(
-        "branch/omega_rad_s", rr.SeriesLines(names="ω (rad/s)", colors=[80, 80, 80]), static=True
+        "branch/omega_rad_s",
+        rr.SeriesPoints(names="ω (rad/s)", colors=[80, 80, 80], marker_sizes=1.5),
+        static=True,
     )
     series("branch/omega_rad_s", omega)
     unstable = np.asarray(b["stable"].eq(False).fillna(False), dtype=bool)
@@ -238,12 +296,17 @@ def export(
         for j, i in enumerate(members):
             n = run.nodes[i]
             key = f"node{n.id}"
-            colour = _shade(_rotor_colour(n.rotor), j, len(members))
+            colour = palette_colour(j)
             amp_um = np.asarray(b[f"amp_rms_{key}_m"], dtype=float) * 1e6
             label = f"node {n.id}" + (f" ({n.name})" if n.name and n.name != f"node {n.id}" else "")
             stream.log(
                 f"branch/amplitude_um/{rotor}/{key}",
-                rr.SeriesLines(names=label, colors=colour),
+                rr.SeriesPoints(
+                    names=label,
+                    colors=colour,
+                    markers=rr.components.MarkerShape.Circle,
+                    marker_sizes=1.5,
+                ),
                 static=True,
             )
             series(f"branch/amplitude_um/{rotor}/{key}", amp_um)
@@ -254,20 +317,20 @@ def export(
                         names=f"{label} unstable",
                         colors=_RED,
                         markers=rr.components.MarkerShape.Cross,
-                        marker_sizes=4.0,
+                        marker_sizes=3.0,
                     ),
                     static=True,
                 )
                 series(f"branch/unstable_um/{rotor}/{key}", amp_um, mask=unstable)
     stream.log(
         "branch/stability/spectral_radius",
-        rr.SeriesLines(names="spectral radius", colors=[44, 160, 44]),
+        rr.SeriesPoints(names="spectral radius", colors=[44, 160, 44], marker_sizes=1.5),
         static=True,
     )
     series("branch/stability/spectral_radius", b["spectral_radius"].to_numpy(dtype=float))
     stream.log(
         "branch/stability/unstable_count",
-        rr.SeriesLines(names="multipliers outside the unit circle", colors=_RED),
+        rr.SeriesPoints(names="multipliers outside the unit circle", colors=_RED, marker_sizes=1.5),
         static=True,
     )
     series(
@@ -278,12 +341,18 @@ def export(
     # temperatures, bearings
     temps = rec.temperatures
     for group, members in groups.items():
-        for pos in members:
+        for j, pos in enumerate(members):
             tn = run.thermal_nodes[pos]
             path = f"temperatures/{group}/tnode{tn.id}"
-            stream.log(path, rr.SeriesLines(names=tn.name or f"tnode{tn.id}"), static=True)
+            stream.log(
+                path,
+                rr.SeriesPoints(
+                    names=tn.name or f"tnode{tn.id}", colors=palette_colour(j), marker_sizes=1.5
+                ),
+                static=True,
+            )
             series(path, temps[f"tnode{tn.id}_mean_c"])
-    for key, bearing in zip(bearing_keys, run.bearings):
+    for k, (key, bearing) in enumerate(zip(bearing_keys, run.bearings)):
         for path, values, label in (
             (f"clearance/delta_v_um/{key}", rec.clearances[f"{key}_delta_v_m"] * 1e6, "δv"),
             (f"bearing_loads/mean_n/{key}", rec.bearing_loads[f"{key}_mean_n"], "mean load"),
@@ -293,7 +362,13 @@ def export(
                 "friction heat",
             ),
         ):
-            stream.log(path, rr.SeriesLines(names=f"{label} {bearing.name}"), static=True)
+            stream.log(
+                path,
+                rr.SeriesPoints(
+                    names=f"{label} {bearing.name}", colors=palette_colour(k), marker_sizes=1.5
+                ),
+                static=True,
+            )
             series(path, values)
 
     # the rotor in 3D
@@ -321,6 +396,7 @@ def export(
         for i, n in enumerate(run.nodes):
             x = orbit[f"node{n.id}_x_m"].to_numpy()
             y = orbit[f"node{n.id}_y_m"].to_numpy()
+            x, y = x - x.mean(), y - y.mean()  # about the mean position
             strip = np.column_stack([np.full(len(x), n.axial_position_m), scale * y, scale * x])
             strip = np.vstack([strip, strip[:1]])  # closed
             stream.log(
@@ -350,44 +426,235 @@ def export(
     return out
 
 
+def _export_transient(rec: Recording, out: Path, application_id: str) -> Path:
+    """A recording of ``tmrotor transient``: everything on a ``time`` timeline (the
+    simulated time, s), per revolution the RMS amplitude of every node, the speed, the
+    temperatures, clearances and largest bearing loads, and the decimated displacement
+    samples of every node; the blueprint opens on them with the whole run in view."""
+    run = rec.run_info
+    revs = rec.revolutions
+    samples = rec.samples
+    rotor_of = [_path_part(n.rotor, "shaft") for n in run.nodes]
+    rotors = list(dict.fromkeys(rotor_of))
+    groups = thermal_groups(rec)
+    keys = rec.bearing_columns
+
+    stream = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
+    stream.save(out, default_blueprint=_transient_blueprint(rec, rotors, groups))
+    stream.set_log_time_enabled(False)
+    if hasattr(stream, "send_recording_name"):
+        stream.send_recording_name(rec.path.name)
+
+    def series(path: str, times: Any, values: Any, style: Any) -> None:
+        v = np.asarray(values, dtype=float)
+        t = np.asarray(times, dtype=float)
+        keep = np.isfinite(v) & np.isfinite(t)
+        stream.log(path, style, static=True)
+        if keep.any():
+            stream.send_columns(
+                path,
+                indexes=[rr.TimeColumn("time", duration=t[keep])],
+                columns=rr.Scalars.columns(scalars=v[keep]),
+            )
+
+    def lines(name: str, j: int) -> Any:
+        return rr.SeriesLines(names=name, colors=palette_colour(j))
+
+    info = rec.transient_info or {}
+    text = _info_markdown(rec) + "\n## Transient run\n\n" + "".join(
+        f"- {k}: {v}\n" for k, v in info.items()
+    )
+    stream.log("info", rr.TextDocument(text, media_type=rr.MediaType.MARKDOWN), static=True)
+    t_rev = revs["time_s"]
+    series("transient/omega_rad_s", t_rev, revs["omega_rad_s"], lines("ω (rad/s)", 7))
+    for rotor in rotors:
+        members = [i for i, r in enumerate(rotor_of) if r == rotor]
+        for j, i in enumerate(members):
+            n = run.nodes[i]
+            col = f"amp_rms_node{n.id}_m"
+            if col in revs:
+                series(
+                    f"transient/amplitude_um/{rotor}/node{n.id}",
+                    t_rev,
+                    revs[col] * 1e6,
+                    lines(f"node {n.id}", j),
+                )
+    for g, members in groups.items():
+        for j, pos in enumerate(members):
+            tn = run.thermal_nodes[pos]
+            col = f"tnode{tn.id}_c"
+            if col in revs:
+                series(
+                    f"transient/temperatures/{g}/tnode{tn.id}",
+                    t_rev,
+                    revs[col],
+                    lines(tn.name or f"tnode{tn.id}", j),
+                )
+    for k, (key, bearing) in enumerate(zip(keys, run.bearings)):
+        for path, col, scale_by, label in (
+            ("clearance_um", f"{key}_clearance_m", 1e6, "effective clearance"),
+            ("load_max_n", f"{key}_load_max_n", 1.0, "largest load"),
+        ):
+            if col in revs:
+                series(
+                    f"transient/{path}/{key}",
+                    t_rev,
+                    revs[col] * scale_by,
+                    lines(f"{label} {bearing.name}", k),
+                )
+    if len(samples):
+        t_s = samples["time_s"]
+        for i, n in enumerate(run.nodes):
+            for axis, j in (("x", 0), ("y", 1)):
+                col = f"node{n.id}_{axis}_m"
+                if col in samples:
+                    series(
+                        f"transient/samples_um/{rotor_of[i]}/node{n.id}/{axis}",
+                        t_s,
+                        samples[col] * 1e6,
+                        lines(f"node {n.id} {axis}", j),
+                    )
+    for e in rec.log_entries:
+        stream.set_time("time", duration=e.time_ns * 1e-9)
+        level = {"WARNING": "WARN", "FATAL": "CRITICAL"}.get(e.level, e.level)
+        stream.log("log", rr.TextLog(e.message, level=level))
+    stream.flush()
+    stream.disconnect()
+    return out
+
+
+def _transient_blueprint(rec: Recording, rotors: list[str], groups: dict[str, list[int]]):
+    run = rec.run_info
+    rotor_of = [_path_part(n.rotor, "shaft") for n in run.nodes]
+    everything = rrb.VisibleTimeRange(
+        "time", start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
+    )
+
+    def plot(name: str, origin: str, n_series: int):
+        return rrb.TimeSeriesView(
+            name=name if n_series <= MAX_LEGEND_SERIES else f"{name} (hover for names)",
+            origin=origin,
+            time_ranges=[everything],
+            plot_legend=rrb.PlotLegend(
+                corner=rrb.Corner2D.RightBottom, visible=n_series <= MAX_LEGEND_SERIES
+            ),
+        )
+
+    amplitude = [
+        plot(
+            f"RMS amplitude {r} (µm)",
+            f"/transient/amplitude_um/{r}",
+            sum(1 for x in rotor_of if x == r),
+        )
+        for r in rotors
+    ]
+    nb = len(rec.bearing_columns)
+    right: list[Any] = [plot("ω (rad/s)", "/transient/omega_rad_s", 1)]
+    if groups:
+        right.append(
+            rrb.Tabs(
+                *[
+                    plot(f"T {g} (°C)", f"/transient/temperatures/{g}", len(v))
+                    for g, v in groups.items()
+                ],
+                name="temperatures",
+            )
+        )
+    if nb:
+        right.append(
+            rrb.Tabs(
+                plot("effective clearance (µm)", "/transient/clearance_um", nb),
+                plot("largest bearing load (N)", "/transient/load_max_n", nb),
+                name="bearings",
+            )
+        )
+    right.append(
+        rrb.Tabs(
+            rrb.TextDocumentView(name="run", origin="/info"),
+            rrb.TextLogView(name="log", origin="/log"),
+            name="run",
+        )
+    )
+    samples = rrb.Tabs(
+        *[
+            plot(f"displacement samples {r} (µm)", f"/transient/samples_um/{r}", 99)
+            for r in rotors
+        ],
+        name="samples",
+    )
+    return rrb.Blueprint(
+        rrb.Horizontal(rrb.Vertical(*amplitude, samples), rrb.Vertical(*right)),
+        rrb.TimePanel(timeline="time"),
+        collapse_panels=False,
+    )
+
+
+def _plot(name: str, origin: str, n_series: int, contents: Any = None):
+    """A time series view over the whole of every timeline, its legend at a corner or,
+    for more than :data:`MAX_LEGEND_SERIES` series, hidden."""
+    everything = [
+        rrb.VisibleTimeRange(
+            timeline,
+            start=rrb.TimeRangeBoundary.infinite(),
+            end=rrb.TimeRangeBoundary.infinite(),
+        )
+        for timeline in ("omega_mrad_s", "point")
+    ]
+    legend = rrb.PlotLegend(
+        corner=rrb.Corner2D.RightBottom, visible=n_series <= MAX_LEGEND_SERIES
+    )
+    kwargs: dict[str, Any] = {"contents": contents} if contents is not None else {}
+    return rrb.TimeSeriesView(
+        name=name if n_series <= MAX_LEGEND_SERIES else f"{name} (hover for names)",
+        origin=origin,
+        time_ranges=everything,
+        plot_legend=legend,
+        **kwargs,
+    )
+
+
 def _blueprint(rec: Recording, rotors: list[str], groups: dict[str, list[int]], scale: float):
+    run = rec.run_info
+    rotor_of = [_path_part(n.rotor, "shaft") for n in run.nodes]
     series = []
     for rotor in rotors:
+        n_nodes = sum(1 for r in rotor_of if r == rotor)
         series.append(
-            rrb.TimeSeriesView(
-                name=f"RMS amplitude {rotor} (µm); red: unstable",
-                origin="/branch",
+            _plot(
+                f"RMS amplitude {rotor} (µm); red: unstable",
+                "/branch",
+                n_nodes,
                 contents=[f"/branch/amplitude_um/{rotor}/**", f"/branch/unstable_um/{rotor}/**"],
             )
         )
     branch = rrb.Vertical(
         *series,
         rrb.Horizontal(
-            rrb.TimeSeriesView(name="ω (rad/s)", origin="/branch/omega_rad_s"),
-            rrb.TimeSeriesView(name="stability", origin="/branch/stability"),
+            _plot("ω (rad/s)", "/branch/omega_rad_s", 1),
+            _plot("stability", "/branch/stability", 2),
         ),
         name="branch",
     )
     right: list[Any] = [
-        rrb.Spatial3DView(name=f"whirl orbits (displacements ×{scale:g})", origin="/rotor")
+        rrb.Spatial3DView(
+            name=f"whirl orbits about their mean, displacements ×{scale:g}", origin="/rotor"
+        )
     ]
     if groups:
         right.append(
             rrb.Tabs(
-                *[
-                    rrb.TimeSeriesView(name=f"T {g} (°C)", origin=f"/temperatures/{g}")
-                    for g in groups
-                ],
+                *[_plot(f"T {g} (°C)", f"/temperatures/{g}", len(v)) for g, v in groups.items()],
                 name="temperatures",
             )
         )
     bottom: list[Any] = []
     if rec.bearing_columns:
+        nb = len(rec.bearing_columns)
         bottom.append(
             rrb.Tabs(
-                rrb.TimeSeriesView(name="δv (µm)", origin="/clearance/delta_v_um"),
-                rrb.TimeSeriesView(name="mean bearing load (N)", origin="/bearing_loads/mean_n"),
-                rrb.TimeSeriesView(name="friction heat (W)", origin="/thermal_forces/generation_w"),
+                _plot("δv (µm)", "/clearance/delta_v_um", nb),
+                _plot("mean bearing load (N)", "/bearing_loads/mean_n", nb),
+                _plot("friction heat (W)", "/thermal_forces/generation_w", nb),
                 name="bearings",
             )
         )
@@ -401,7 +668,7 @@ def _blueprint(rec: Recording, rotors: list[str], groups: dict[str, list[int]], 
     right.append(rrb.Horizontal(*bottom))
     return rrb.Blueprint(
         rrb.Horizontal(branch, rrb.Vertical(*right, name="rotor")),
-        rrb.TimePanel(timeline="point"),
+        rrb.TimePanel(timeline="omega_mrad_s"),
         collapse_panels=False,
     )
 
@@ -426,8 +693,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--scale",
         type=float,
-        default=DEFAULT_SCALE,
-        help=f"displacement scale of the 3D orbits (default {DEFAULT_SCALE:g})",
+        default=None,
+        help="displacement scale of the 3D orbits (default: the recording's own, the "
+        "largest 1, 2 or 5 x 10^k that draws the largest bearing clearance at 5 %% of the "
+        f"rotor's length; {DEFAULT_SCALE:g} without bearings)",
     )
     parser.add_argument(
         "--samples",
@@ -438,6 +707,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.samples < 2:
         parser.error("--samples must be at least 2")
+    if args.scale is not None and not (math.isfinite(args.scale) and args.scale > 0):
+        parser.error(f"--scale {args.scale}: must be positive and finite")
     try:
         _require_rerun()
         rec = read(args.recording)
@@ -447,7 +718,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = args.output or _default_output(args.recording)
     export(rec, out, scale=args.scale, samples=args.samples)
     state = "complete" if rec.info["complete"] else "INCOMPLETE: " + "; ".join(rec.info["notes"])
-    print(f"wrote {out} ({len(rec.points)} points; recording {state})")
+    what = (
+        f"{len(rec.revolutions)} revolutions"
+        if rec.transient_info is not None
+        else f"{len(rec.points)} points"
+    )
+    print(f"wrote {out} ({what}; recording {state})")
     print(f"open it with: rerun {out}")
     return 0
 
