@@ -47,10 +47,12 @@ pub struct TruncationOptions {
     /// Target speeds in rad/s (default points A–D: 400, 484, 530, 584).
     pub omegas_rad_s: Vec<f64>,
     /// Dynamic nodes (model ids) whose amplitude and residual are reported (default 8 =
-    /// 3# inter-shaft bearing, 14 = HPC disk).
+    /// 3# inter-shaft bearing, 14 = HPC disk). Empty: the model's own
+    /// ([`default_dynamic_nodes`]).
     pub dynamic_nodes: Vec<u32>,
     /// Thermal nodes (1-based) whose temperature and residual are reported (default 41 =
     /// HPC disk, 58 = 3# rolling elements); ignored for a model without thermal network.
+    /// Empty: the model's own ([`default_thermal_nodes`]).
     pub thermal_nodes: Vec<u32>,
     /// Residual samples per period; default `None`:
     /// [`crate::hb::time_residual::DEFAULT_OVERSAMPLING`] × the AFT's default sample
@@ -157,6 +159,8 @@ pub struct TruncationReport {
     pub missed: Vec<MissedCrossing>,
     /// `(order, ω)` of target speeds the branch never reached (it stopped early).
     pub unreached: Vec<(u32, f64)>,
+    /// Dynamic nodes reported (model ids): the ones asked for, or the model's defaults.
+    pub dynamic_nodes: Vec<u32>,
     /// Thermal nodes reported (empty without thermal network).
     pub thermal_nodes: Vec<u32>,
 }
@@ -258,17 +262,75 @@ fn same_solution(a: &HbSolution, b: &HbSolution) -> bool {
 }
 
 struct Nodes {
+    /// The model ids of `dynamic`.
+    dynamic_ids: Vec<u32>,
     dynamic: Vec<(usize, usize)>,
     thermal: Vec<usize>,
     thermal_ids: Vec<u32>,
+}
+
+/// Whether `model` is the paper's dual rotor (the built-in model, with its calibrated or
+/// its literature values), whose node numbering the paper's defaults use.
+fn is_dual_rotor(model: &crate::model::Model) -> bool {
+    model.source == crate::model::BUILTIN_NAME || model.source == crate::model::LITERATURE_NAME
+}
+
+/// The dynamic nodes reported when none are named: the paper's 8 and 14 for the dual
+/// rotor; for another model its disks' nodes, then its bearings' shaft-side nodes, each
+/// once, in the file's order (where unbalance acts and where the nonlinearity sits).
+pub fn default_dynamic_nodes(model: &crate::model::Model) -> Vec<u32> {
+    if is_dual_rotor(model) {
+        return vec![8, 14];
+    }
+    let spec = &model.spec;
+    let mut ids: Vec<u32> = Vec::new();
+    for id in spec
+        .disks
+        .iter()
+        .map(|d| d.node)
+        .chain(spec.bearings.iter().map(|b| b.inner_node))
+    {
+        if !ids.contains(&id) && model.node_index(id).is_some() {
+            ids.push(id);
+        }
+    }
+    if ids.is_empty() {
+        ids.extend(model.node_ids().first().copied());
+    }
+    ids
+}
+
+/// The thermal nodes reported when none are named: the paper's 41 and 58 for the dual
+/// rotor, none for another model (its network's numbering is its own; name them with
+/// `--thermal-nodes`).
+pub fn default_thermal_nodes(model: &crate::model::Model) -> Vec<u32> {
+    if is_dual_rotor(model) {
+        vec![41, 58]
+    } else {
+        Vec::new()
+    }
 }
 
 fn resolve_nodes(
     problem: &SweepProblem,
     opts: &TruncationOptions,
 ) -> Result<Nodes, TruncationError> {
+    let named_dynamic;
+    let dynamic_ids = if opts.dynamic_nodes.is_empty() {
+        named_dynamic = default_dynamic_nodes(&problem.model);
+        &named_dynamic
+    } else {
+        &opts.dynamic_nodes
+    };
+    let named_thermal;
+    let thermal_ids_asked = if opts.thermal_nodes.is_empty() {
+        named_thermal = default_thermal_nodes(&problem.model);
+        &named_thermal
+    } else {
+        &opts.thermal_nodes
+    };
     let mut dynamic = Vec::new();
-    for &id in &opts.dynamic_nodes {
+    for &id in dynamic_ids {
         match (problem.model.dof(id, Dir::X), problem.model.dof(id, Dir::Y)) {
             (Some(x), Some(y)) => dynamic.push((x, y)),
             _ => {
@@ -289,7 +351,7 @@ fn resolve_nodes(
     let mut thermal = Vec::new();
     let mut thermal_ids = Vec::new();
     if n_therm > 0 {
-        for &id in &opts.thermal_nodes {
+        for &id in thermal_ids_asked {
             if id == 0 || id as usize > n_therm {
                 return Err(option_error(
                     format!("--thermal-nodes: thermal node {id}"),
@@ -303,6 +365,7 @@ fn resolve_nodes(
         }
     }
     Ok(Nodes {
+        dynamic_ids: dynamic_ids.clone(),
         dynamic,
         thermal,
         thermal_ids,
@@ -327,6 +390,7 @@ pub fn run(
     let mut missed = Vec::new();
     let mut unreached = Vec::new();
     let mut thermal_ids = Vec::new();
+    let mut dynamic_ids = Vec::new();
     let span = (settings.sweep.omega_end - settings.sweep.omega_start).abs();
     for (oi, &order) in opts.orders.iter().enumerate() {
         let start = std::time::Instant::now();
@@ -336,6 +400,7 @@ pub fn run(
         let problem = SweepProblem::new(&study)?;
         let nodes = resolve_nodes(&problem, opts)?;
         thermal_ids.clone_from(&nodes.thermal_ids);
+        dynamic_ids.clone_from(&nodes.dynamic_ids);
         let mut cont = problem.continuation(None)?;
         // per target: crossings seen, and the distinct solutions in branch order
         let mut seen = vec![0usize; targets.len()];
@@ -457,6 +522,7 @@ pub fn run(
         orders: summaries,
         missed,
         unreached,
+        dynamic_nodes: dynamic_ids,
         thermal_nodes: thermal_ids,
     })
 }
@@ -532,15 +598,15 @@ fn row(
 /// The report as a markdown table: amplitudes in µm, temperatures in °C, residuals as
 /// `RMS / max` over the period in N (mechanical) and W (thermal); a nudged speed shows as
 /// `target → solved`.
-pub fn markdown(report: &TruncationReport, opts: &TruncationOptions) -> String {
+pub fn markdown(report: &TruncationReport) -> String {
     let mut head = vec!["ω (rad/s)".to_string(), "order".into(), "solution".into()];
-    for id in &opts.dynamic_nodes {
+    for id in &report.dynamic_nodes {
         head.push(format!("amp. node {id} (µm)"));
     }
     for id in &report.thermal_nodes {
         head.push(format!("T{id} (°C)"));
     }
-    for id in &opts.dynamic_nodes {
+    for id in &report.dynamic_nodes {
         head.push(format!("r node {id} (N)"));
     }
     for id in &report.thermal_nodes {
@@ -578,7 +644,7 @@ pub fn markdown(report: &TruncationReport, opts: &TruncationOptions) -> String {
 }
 
 /// The report as CSV with SI units (m, °C, N, W), one row per solution.
-pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
+pub fn csv(report: &TruncationReport) -> String {
     let mut head = vec![
         "target_rad_s".to_string(),
         "omega_rad_s".to_string(),
@@ -587,13 +653,13 @@ pub fn csv(report: &TruncationReport, opts: &TruncationOptions) -> String {
         "solutions".into(),
         "crossings".into(),
     ];
-    for id in &opts.dynamic_nodes {
+    for id in &report.dynamic_nodes {
         head.push(format!("amplitude_node{id}_m"));
     }
     for id in &report.thermal_nodes {
         head.push(format!("temp_tnode{id}_c"));
     }
-    for id in &opts.dynamic_nodes {
+    for id in &report.dynamic_nodes {
         head.push(format!("residual_node{id}_rms_n"));
         head.push(format!("residual_node{id}_max_n"));
         head.push(format!("nonlinear_force_node{id}_rms_n"));

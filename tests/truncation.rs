@@ -59,14 +59,14 @@ fn dual_rotor_residual_falls_from_order_one_to_two() {
     // the response itself barely changes between the orders at this speed
     assert!((r1.amplitude_m[0] - r2.amplitude_m[0]).abs() < 0.05 * r2.amplitude_m[0]);
 
-    let md = truncation::markdown(&report, &opts);
+    let md = truncation::markdown(&report);
     assert_eq!(md.lines().count(), 4, "{md}");
     assert!(
         md.lines()
             .next()
             .is_some_and(|h| h.contains("r node 8 (N)"))
     );
-    let csv = truncation::csv(&report, &opts);
+    let csv = truncation::csv(&report);
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines.len(), 3);
     let cols = lines[0].split(',').count();
@@ -86,8 +86,9 @@ fn command_line_defaults_are_the_paper_points() {
     let (s, o) = resolve(&[]).expect("defaults");
     assert_eq!(o.orders, vec![1, 2, 3, 4]);
     assert_eq!(o.omegas_rad_s, vec![400.0, 484.0, 530.0, 584.0]);
-    assert_eq!(o.dynamic_nodes, vec![8, 14]);
-    assert_eq!(o.thermal_nodes, vec![41, 58]);
+    // no nodes named: the model's own (8, 14 and 41, 58 for the dual rotor, see
+    // default_nodes_come_from_the_model_at_hand)
+    assert!(o.dynamic_nodes.is_empty() && o.thermal_nodes.is_empty());
     assert_eq!(
         (s.operating.flow_l_min, s.operating.cooling_temp_c),
         (2.0, 25.0)
@@ -199,6 +200,28 @@ fn a_stalled_target_is_reported_at_the_nearest_converged_speed() {
     // the fallback is exercised here (should the model become smooth at this point, the
     // test needs another stalled speed to cover it)
     assert_ne!(r.omega_rad_s, 484.0, "Newton no longer stalls at 484 rad/s");
-    let md = truncation::markdown(&report, &opts);
+    let md = truncation::markdown(&report);
     assert!(md.contains("484 → "), "{md}");
+}
+
+/// A model of the user's own gets its own default nodes: its disks, then its bearings'
+/// shaft-side nodes (the paper's 8 and 14 belong to the dual rotor's numbering).
+#[test]
+fn default_nodes_come_from_the_model_at_hand() {
+    use tmrotor::model::Model;
+    use tmrotor::truncation::{default_dynamic_nodes, default_thermal_nodes};
+    let builtin = Model::builtin().expect("the built-in model");
+    assert_eq!(default_dynamic_nodes(&builtin), vec![8, 14]);
+    assert_eq!(default_thermal_nodes(&builtin), vec![41, 58]);
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/rotors/two_disk_ball_bearings.toml"
+    );
+    let own = Model::from_file(path).expect("the example model");
+    let disks: Vec<u32> = own.spec.disks.iter().map(|d| d.node).collect();
+    let bearings: Vec<u32> = own.spec.bearings.iter().map(|b| b.inner_node).collect();
+    let nodes = default_dynamic_nodes(&own);
+    assert_eq!(&nodes[..disks.len()], &disks[..]);
+    assert!(bearings.iter().all(|b| nodes.contains(b)), "{nodes:?}");
+    assert!(default_thermal_nodes(&own).is_empty());
 }

@@ -31,12 +31,14 @@ pub struct TruncationArgs {
     /// Target speeds (rad/s), comma-separated; default: points A–D of the paper.
     #[arg(long, default_value = "400,484,530,584")]
     pub omega: String,
-    /// Dynamic nodes (model ids), comma-separated.
-    #[arg(long, default_value = "8,14")]
-    pub nodes: String,
-    /// Thermal nodes (1-based), comma-separated.
-    #[arg(long, default_value = "41,58")]
-    pub thermal_nodes: String,
+    /// Dynamic nodes (model ids), comma-separated [default: 8,14 for the dual rotor; for
+    /// another model its disks' nodes, then its bearings' shaft-side nodes].
+    #[arg(long)]
+    pub nodes: Option<String>,
+    /// Thermal nodes (1-based), comma-separated [default: 41,58 for the dual rotor; none
+    /// for another model].
+    #[arg(long)]
+    pub thermal_nodes: Option<String>,
     /// Report every distinct solution on the branch at a target speed, not only the first.
     #[arg(long)]
     pub all_solutions: bool,
@@ -114,8 +116,15 @@ impl TruncationArgs {
         let opts = TruncationOptions {
             orders,
             omegas_rad_s: omegas,
-            dynamic_nodes: parse_list("--nodes", &self.nodes, "a node id")?,
-            thermal_nodes: parse_list("--thermal-nodes", &self.thermal_nodes, "a node number")?,
+            // empty: the model's own defaults (`truncation::default_dynamic_nodes`)
+            dynamic_nodes: match &self.nodes {
+                Some(text) => parse_list("--nodes", text, "a node id")?,
+                None => Vec::new(),
+            },
+            thermal_nodes: match &self.thermal_nodes {
+                Some(text) => parse_list("--thermal-nodes", text, "a node number")?,
+                None => Vec::new(),
+            },
             residual_samples: self.samples,
             all_solutions: self.all_solutions,
         };
@@ -182,8 +191,10 @@ pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Resu
                 o.order, o.points, o.rejected_steps, o.seconds, o.finish
             );
         }
-        if report.thermal_nodes.is_empty() && !opts.thermal_nodes.is_empty() {
-            eprintln!("no thermal network in this study: thermal columns omitted");
+        if report.thermal_nodes.is_empty() {
+            eprintln!(
+                "no thermal columns: the study has no thermal network, or names none of its nodes (--thermal-nodes)"
+            );
         }
     }
     for m in &report.missed {
@@ -195,15 +206,15 @@ pub fn run(args: &TruncationArgs, out: &mut impl std::io::Write) -> anyhow::Resu
     for (order, w) in &report.unreached {
         eprintln!("warning: order {order}: the branch never reached ω = {w} rad/s");
     }
-    let csv = truncation::csv(&report, &opts);
+    let csv = truncation::csv(&report);
     match &args.csv {
         Some(path) if path.as_os_str() == "-" => write!(out, "{csv}")?,
         Some(path) => {
             std::fs::write(path, &csv)
                 .with_context(|| format!("--csv: writing {}", path.display()))?;
-            write!(out, "{}", truncation::markdown(&report, &opts))?;
+            write!(out, "{}", truncation::markdown(&report))?;
         }
-        None => write!(out, "{}", truncation::markdown(&report, &opts))?,
+        None => write!(out, "{}", truncation::markdown(&report))?,
     }
     Ok(())
 }
