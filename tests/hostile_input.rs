@@ -184,7 +184,13 @@ fn linear_analyses_take_set_and_truncation_names_its_node_flags() {
     // a node the model does not have: the flag, the node and the model's nodes named
     // (without --nodes the model's own disks and bearings are the default)
     refused(
-        &tmrotor(&["truncation", "--model", f.to_str().expect("path"), "--nodes", "8"]),
+        &tmrotor(&[
+            "truncation",
+            "--model",
+            f.to_str().expect("path"),
+            "--nodes",
+            "8",
+        ]),
         &["--nodes", "dynamic node 8", "its nodes: 1–5"],
     );
     // the tour's study file ships

@@ -54,8 +54,8 @@ use faer::Mat;
 use num_complex::Complex;
 use thiserror::Error;
 
-use crate::model::Assembly;
 use crate::model::assembly::to_faer;
+use crate::model::{Assembly, DOF_PER_NODE};
 
 /// Errors of the linear analyses.
 #[derive(Debug, Error)]
@@ -117,7 +117,9 @@ pub struct Mode {
     /// The eigenvalue `λ` (1/s).
     pub eigenvalue: Complex<f64>,
     pub whirl: Whirl,
-    /// Displacement part of the eigenvector (length `n_dof`), largest entry 1.
+    /// Displacement part of the eigenvector (length `n_dof`, node-major `[x, y, θx, θy]`),
+    /// scaled by [`shape_pivot`]: the largest translation is 1 (phase 0), and the slopes
+    /// carry the same factor (rad per unit of that translation).
     pub shape: Vec<Complex<f64>>,
 }
 
@@ -137,6 +139,22 @@ impl Mode {
 /// Logarithmic decrement of the eigenvalue `λ`: `−2π Re λ / Im λ`.
 pub fn log_decrement(lambda: Complex<f64>) -> f64 {
     -2.0 * std::f64::consts::PI * lambda.re / lambda.im
+}
+
+/// The entry a mode shape is divided by: its largest translation (`x` or `y` of a node;
+/// metres and radians are not compared), or its largest slope when it has no translation
+/// (a pure tilt mode).
+pub fn shape_pivot(shape: &[Complex<f64>]) -> Complex<f64> {
+    let largest = |kind: std::ops::Range<usize>| {
+        shape
+            .chunks_exact(DOF_PER_NODE)
+            .flat_map(|node| node[kind.clone()].iter().copied())
+            .max_by(|a, b| a.norm().total_cmp(&b.norm()))
+    };
+    match largest(0..2) {
+        Some(t) if t.norm() > 0.0 => t,
+        _ => largest(2..4).unwrap_or(Complex::new(1.0, 0.0)),
+    }
 }
 
 /// `Σ |X|² + |Y|²` of the translations (`off = 0`) or the slopes (`off = 2`) of a shape.
@@ -229,11 +247,7 @@ pub fn modes(asm: &Assembly, speed_rad_s: f64, count: usize) -> Result<Vec<Mode>
         let mut shape: Vec<Complex<f64>> = (0..n)
             .map(|i| Complex::new(re[(i, 0)], im[(i, 0)]))
             .collect();
-        let pivot = shape
-            .iter()
-            .copied()
-            .max_by(|a, b| a.norm().total_cmp(&b.norm()))
-            .unwrap_or(Complex::new(1.0, 0.0));
+        let pivot = shape_pivot(&shape);
         if pivot.norm() > 0.0 {
             shape.iter_mut().for_each(|v| *v /= pivot);
         }
@@ -723,4 +737,33 @@ pub fn campbell(asm: &Assembly, speeds: &[f64], count: usize) -> Result<Campbell
         critical_speeds,
         lines,
     })
+}
+
+#[cfg(test)]
+mod shape_scaling_tests {
+    use super::*;
+
+    #[test]
+    fn shapes_are_scaled_on_their_largest_translation_not_a_slope() {
+        // node 1: small translations, a slope ten times larger in number (rad, not m)
+        let shape = vec![
+            Complex::new(0.001, 0.0),
+            Complex::new(0.0, 0.002),
+            Complex::new(0.02, 0.0),
+            Complex::new(0.0, 0.0),
+            Complex::new(0.0, -0.004),
+            Complex::new(0.003, 0.0),
+            Complex::new(0.0, 0.0),
+            Complex::new(0.01, 0.0),
+        ];
+        assert_eq!(shape_pivot(&shape), Complex::new(0.0, -0.004));
+        // a pure tilt mode: the largest slope
+        let tilt = vec![
+            Complex::new(0.0, 0.0),
+            Complex::new(0.0, 0.0),
+            Complex::new(0.3, 0.0),
+            Complex::new(0.0, 0.5),
+        ];
+        assert_eq!(shape_pivot(&tilt), Complex::new(0.0, 0.5));
+    }
 }
