@@ -30,6 +30,38 @@ pub fn bifurcation_label(kind: crate::stability::BifurcationKind, number: u32) -
     format!("{}{}", kind.abbreviation(), number + 1)
 }
 
+/// What a figure says about a located bifurcation beyond its kind: `?` a fold the orbits'
+/// multipliers do not confirm, `~` one that moved at a higher truncation order, `!` one
+/// found at some orders and not at the highest (the verdicts `replay info` lists); `None`
+/// for a result that holds. Vanished ones are not results and are not drawn at all.
+pub fn bifurcation_flag(
+    rec: &crate::record::reader::Recording,
+    b: &crate::record::BifurcationRecord,
+) -> Option<char> {
+    use crate::record::types::TruncationVerdict;
+    match rec.truncation_of(b).map(|c| c.verdict()) {
+        Some(TruncationVerdict::Unsettled { .. }) => Some('!'),
+        Some(TruncationVerdict::Moved { .. }) => Some('~'),
+        _ if !b.confirmed => Some('?'),
+        _ => None,
+    }
+}
+
+/// The legend text explaining the flags of [`bifurcation_flag`] that occur in `flags`.
+pub fn flag_legend_text(flags: impl IntoIterator<Item = char>) -> Option<String> {
+    let flags: Vec<char> = flags.into_iter().collect();
+    let parts: Vec<&str> = [
+        ('?', "? not confirmed by the multipliers"),
+        ('~', "~ moved at a higher order"),
+        ('!', "! unsettled at a higher order"),
+    ]
+    .into_iter()
+    .filter(|(f, _)| flags.contains(f))
+    .map(|(_, t)| t)
+    .collect();
+    (!parts.is_empty()).then(|| parts.join("; "))
+}
+
 /// Creates the output directory `dir` (with its parents) for figures or tables. A path
 /// that exists but is not a directory (a file, `/dev/full`) is named as such, where
 /// `create_dir_all` says only "File exists".

@@ -116,11 +116,22 @@ struct PointData {
 struct BifurcationData {
     kind: BifurcationKind,
     number: u32,
+    /// [`figure::bifurcation_flag`]: `?`, `~`, `!` or none.
+    flag: Option<char>,
     omega_rad_s: f64,
     amplitude_m: Vec<f64>,
     /// Mean temperature per thermal node at the located point (from its coefficients, else
     /// interpolated between the points on either side); empty when unknown.
     temp_c: Vec<f64>,
+}
+
+impl BifurcationData {
+    /// Its label on a figure: kind and number, then its flag.
+    fn label(&self) -> String {
+        let mut label = figure::bifurcation_label(self.kind, self.number);
+        label.extend(self.flag);
+        label
+    }
 }
 
 /// One run, reduced to what the figures use (a recording holds far more).
@@ -313,6 +324,7 @@ fn load_run(
             .map(|b| BifurcationData {
                 kind: b.kind,
                 number: b.number,
+                flag: figure::bifurcation_flag(&rec, b),
                 omega_rad_s: b.omega_rad_s,
                 amplitude_m: b.amplitude_rms_m.clone(),
                 temp_c: bifurcation_temperatures(&rec, b, nc),
@@ -427,6 +439,16 @@ fn style_legend(runs: &[RunData], with_markers: bool) -> Vec<LegendEntry> {
             sample: LegendSample::Marker(BLACK),
             text: format!("bifurcation: {}", kinds.join(", ")),
         });
+        let flags = runs
+            .iter()
+            .flat_map(|r| &r.bifurcations)
+            .filter_map(|b| b.flag);
+        if let Some(text) = figure::flag_legend_text(flags) {
+            entries.push(LegendEntry {
+                sample: LegendSample::None,
+                text,
+            });
+        }
     }
     entries
 }
@@ -673,7 +695,7 @@ fn amplitude_figures(
                 Some(Marker {
                     x: b.omega_rad_s,
                     y: b.amplitude_m.get(k)? * 1e6,
-                    label: figure::bifurcation_label(b.kind, b.number),
+                    label: b.label(),
                     colour: r.colour,
                 })
             }));
@@ -875,7 +897,7 @@ fn thermal_node_figures(sink: &mut FigureSink, runs: &[RunData]) -> Result<(), C
                         Some(Marker {
                             x: b.omega_rad_s,
                             y: *b.temp_c.get(t)?,
-                            label: figure::bifurcation_label(b.kind, b.number),
+                            label: b.label(),
                             colour: r.colour,
                         })
                     }));

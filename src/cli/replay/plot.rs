@@ -4,7 +4,7 @@
 //!
 //! | figure | what |
 //! |---|---|
-//! | `amplitude_node<id>` | RMS amplitude of each dynamic node against ω: stable parts blue, unstable red, not assessed grey; bifurcations circled and labelled SN / PD / NS; period-doubled points ([`PERIOD_DOUBLED_SHARE`]) dotted in purple |
+//! | `amplitude_node<id>` | RMS amplitude of each dynamic node against ω: stable parts blue, unstable red, not assessed grey; bifurcations circled and labelled SN / PD / NS, in grey with `?` (a fold the multipliers do not confirm), `~` (moved at a higher truncation order) or `!` (unsettled at a higher order), those that vanished at a higher order left out; period-doubled points ([`PERIOD_DOUBLED_SHARE`]) dotted in purple |
 //! | `clearance` | RC variation δv of every bearing against ω (unstable parts dashed) |
 //! | `temperatures` | mean temperatures against ω, a panel per bearing (its rolling elements, rings, lubricant, housing, named in the legend) and one of the shafts and disks |
 //! | `temperature_node<id>` | mean temperature of one thermal node against ω in the stability colours, bifurcations circled |
@@ -109,6 +109,21 @@ fn bifurcation_label(b: &BifurcationRecord) -> String {
     crate::figure::bifurcation_label(b.kind, b.number)
 }
 
+/// Grey: the circle of a bifurcation the figure flags.
+const FLAGGED: RGBColor = RGBColor(140, 140, 140);
+
+/// The legend entry explaining the flags that occur among `bifs`.
+fn flag_entry(rec: &Recording, bifs: &[BifurcationRecord]) -> Option<LegendEntry> {
+    let text = crate::figure::flag_legend_text(
+        bifs.iter()
+            .filter_map(|b| crate::figure::bifurcation_flag(rec, b)),
+    )?;
+    Some(LegendEntry {
+        sample: LegendSample::Marker(FLAGGED),
+        text,
+    })
+}
+
 /// The legend entry of the bifurcation circles, naming the kinds that occur.
 fn bifurcation_entry(bifs: &[BifurcationRecord]) -> Option<LegendEntry> {
     let mut kinds: Vec<String> = Vec::new();
@@ -168,11 +183,16 @@ fn branch_figure(
     let markers = results
         .iter()
         .filter_map(|b| {
+            let flag = crate::figure::bifurcation_flag(rec, b);
             Some(Marker {
                 x: b.omega_rad_s,
                 y: marker_y(b)?,
-                label: bifurcation_label(b),
-                colour: BLACK,
+                label: format!(
+                    "{}{}",
+                    bifurcation_label(b),
+                    flag.map(String::from).unwrap_or_default()
+                ),
+                colour: if flag.is_some() { FLAGGED } else { BLACK },
             })
         })
         .collect::<Vec<_>>();
@@ -185,6 +205,7 @@ fn branch_figure(
     let mut legend = Figure::legend_from_series(std::slice::from_ref(&chart));
     if !markers.is_empty() {
         legend.extend(bifurcation_entry(&results));
+        legend.extend(flag_entry(rec, &results));
     }
     Figure {
         title,
@@ -991,7 +1012,34 @@ pub fn run(
 
 #[cfg(test)]
 mod tests {
-    use super::resonant_peaks;
+    use super::{BLACK, FLAGGED, branch_figure, resonant_peaks};
+    use crate::record::reader::read_recording;
+    use crate::record::synthetic::{SyntheticOptions, write_mcap};
+
+    #[test]
+    fn amplitude_figures_flag_unconfirmed_bifurcations() {
+        let dir = tempfile::tempdir().expect("a temporary directory");
+        let path = dir.path().join("s.mcap");
+        write_mcap(&path, &SyntheticOptions::default(), true).expect("a synthetic recording");
+        let mut rec = read_recording(&path).expect("it reads back");
+        assert!(rec.bifurcations.len() >= 2, "{}", rec.bifurcations.len());
+        rec.bifurcations[0].confirmed = false;
+        let y = |p: &crate::record::PointRecord| p.amplitude_rms_m.first().copied();
+        let fig = branch_figure(&rec, "t".into(), "y".into(), y, |b| {
+            Some(b.omega_rad_s * 0.0)
+        });
+        let markers = &fig.panels[0].markers;
+        assert_eq!(markers.len(), rec.bifurcations.len());
+        assert!(markers[0].label.ends_with('?') && markers[0].colour == FLAGGED);
+        assert!(!markers[1].label.ends_with('?') && markers[1].colour == BLACK);
+        assert!(
+            fig.legend
+                .iter()
+                .any(|e| e.text.contains("? not confirmed by the multipliers")),
+            "{:?}",
+            fig.legend.iter().map(|e| &e.text).collect::<Vec<_>>()
+        );
+    }
 
     #[test]
     fn peaks_are_prominent_local_maxima() {
