@@ -387,7 +387,7 @@ fn a_corpus_of_mutated_campaign_files_is_checked_without_a_panic() {
     assert!(refused_n > 10, "only {refused_n} of 80 mutations refused");
 }
 
-/// The linear analyses say what they leave out and blame the right thing, and their CSVs
+/// The linear analyses say how they take the nonlinear elements and blame the right thing, and their CSVs
 /// carry numbers at full precision (the shortest form that reads back exactly).
 #[test]
 fn linear_analyses_name_what_they_leave_out_and_write_full_precision() {
@@ -400,7 +400,8 @@ fn linear_analyses_name_what_they_leave_out_and_write_full_precision() {
     assert!(o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        err.contains("1 [[nonlinear]] element") && err.contains("left out of the linear analyses"),
+        err.contains("1 [[nonlinear]] element")
+            && err.contains("linearised about the undeflected position"),
         "{err}"
     );
     let csv = String::from_utf8_lossy(&o.stdout);

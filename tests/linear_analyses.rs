@@ -311,3 +311,33 @@ fn a_part_that_does_not_spin() {
     let c = linear::campbell(&asm, &speeds, 4).expect("campbell");
     assert!(c.critical_speeds.is_empty());
 }
+
+/// The linear analyses include the `[[nonlinear]]` elements linearised about the
+/// undeflected position: the Jeffcott rotor on polynomial supports `[k1, 0, k3]` has the
+/// modes of the same rotor on linear supports `k1` (the cubic term's tangent is zero
+/// there), and a rub with its gap open adds nothing.
+#[test]
+fn nonlinear_elements_enter_the_linear_analyses_by_their_tangent() {
+    let text = std::fs::read_to_string(example("jeffcott_midspan_disk.toml")).expect("example");
+    let cut = text.find("[[supports]]").expect("the example's supports");
+    let head = &text[..cut];
+    let polynomial = format!(
+        "{head}\n[[nonlinear]]\nid = \"left\"\nkind = \"polynomial\"\nnode = 1\n\
+         coefficients = [1e12, 0.0, 1e15]\n\n[[nonlinear]]\nid = \"right\"\n\
+         kind = \"polynomial\"\nnode = 5\ncoefficients = [1e12, 0.0, 1e15]\n\n\
+         [[nonlinear]]\nid = \"stator\"\nkind = \"rub\"\nnode = 3\ngap_m = 5e-4\n\
+         stiffness_n_m = 1e6\n"
+    );
+    let linear = Model::from_file(example("jeffcott_midspan_disk.toml")).expect("model");
+    let nonlinear = Model::from_str(&polynomial, "polynomial supports").expect("model");
+    let a = linear::modes(&Assembly::new(&linear).expect("assembles"), 300.0, 4).expect("modes");
+    let b = linear::modes(&Assembly::new(&nonlinear).expect("assembles"), 300.0, 4).expect("modes");
+    for (ma, mb) in a.iter().zip(&b) {
+        assert!(
+            (ma.frequency_rad_s - mb.frequency_rad_s).abs() <= 1e-9 * ma.frequency_rad_s,
+            "{} against {}",
+            ma.frequency_rad_s,
+            mb.frequency_rad_s
+        );
+    }
+}

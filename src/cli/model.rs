@@ -71,7 +71,8 @@ pub fn load_with(file: Option<&PathBuf>, set: &[(String, toml::Value)]) -> anyho
 }
 
 /// [`load_with`] for the linear analyses (`modes`, `campbell`, `unbalance`), which say on
-/// stderr when the model's `[[nonlinear]]` elements are left out of them.
+/// stderr how the model's `[[nonlinear]]` elements enter them (their tangent at the
+/// undeflected position, `Assembly`'s `element_springs`).
 pub fn load_for_linear(
     file: Option<&PathBuf>,
     set: &[(String, toml::Value)],
@@ -80,12 +81,11 @@ pub fn load_for_linear(
     let n = model.spec.nonlinear.len();
     if n > 0 {
         eprintln!(
-            "note: {}: {n} [[nonlinear]] element{} (rub, stops, gaps, polynomial supports) \
-             {} left out of the linear analyses, their linear terms too; only the bearings are \
-             linearised. The sweep includes them.",
+            "note: {}: {n} [[nonlinear]] element{} linearised about the undeflected position \
+             (a polynomial support's linear term; a rub or a stop only where in contact there); \
+             their nonlinear terms are the sweep's.",
             model.source,
             if n == 1 { "" } else { "s" },
-            if n == 1 { "is" } else { "are" }
         );
     }
     Ok(model)

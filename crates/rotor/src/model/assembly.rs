@@ -198,6 +198,62 @@ fn add_spring(target: &mut DenseMatrix, a: usize, b: Option<usize>, k: f64) {
     }
 }
 
+/// The `[[nonlinear]]` elements linearised about the undeflected position (relative
+/// displacement zero), as `(dof_x of node, dof_x of to_node, 2×2 tangent)`: a polynomial
+/// support's linear term `c_1` (isotropic), a unilateral spring's `k n nᵀ` where it is
+/// already in contact there (a negative gap, i.e. preloaded), nothing for a rub or a spring
+/// with its gap open. The linear analyses add these to the rotor (`coupled::elements` has
+/// the laws; this is their tangent at zero, written out because the model layer sits below
+/// them). The tangent at the static sag would differ only for a polynomial support with
+/// higher terms, which the docs name.
+fn element_springs(
+    model: &Model,
+) -> Result<Vec<(usize, Option<usize>, [[f64; 2]; 2])>, ModelError> {
+    use super::file::NonlinearKind;
+    let mut out = Vec::new();
+    for (k, e) in model.spec.nonlinear.iter().enumerate() {
+        let node = |id: u32| {
+            model.node_index(id).ok_or_else(|| ModelError::Numerical {
+                file: model.source.clone(),
+                what: format!("nonlinear[{k}] ({}): node {id}", e.id),
+            })
+        };
+        let a = dof(node(e.node)?, Dir::X);
+        let b = match e.to_node {
+            Some(id) => Some(dof(node(id)?, Dir::X)),
+            None => None,
+        };
+        let tangent = match e.kind {
+            NonlinearKind::Polynomial => {
+                let c1 = e
+                    .coefficients
+                    .as_deref()
+                    .and_then(|c| c.first().copied())
+                    .unwrap_or(0.0);
+                [[c1, 0.0], [0.0, c1]]
+            }
+            NonlinearKind::Unilateral => {
+                let (gap, kk) = (e.gap_m.unwrap_or(0.0), e.stiffness_n_m.unwrap_or(0.0));
+                if gap < 0.0 {
+                    let t = e.direction_deg.unwrap_or(0.0).to_radians();
+                    let n = [t.cos(), t.sin()];
+                    [
+                        [kk * n[0] * n[0], kk * n[0] * n[1]],
+                        [kk * n[1] * n[0], kk * n[1] * n[1]],
+                    ]
+                } else {
+                    [[0.0; 2]; 2]
+                }
+            }
+            NonlinearKind::Rub => [[0.0; 2]; 2],
+        };
+        if tangent.iter().flatten().any(|v| *v != 0.0) {
+            out.push((a, b, tangent));
+        }
+    }
+    Ok(out)
+}
+
 /// Adds a 2×2 stiffness between the (x, y) DoFs of node a (and b, if any).
 fn add_spring2(target: &mut DenseMatrix, ax: usize, bx: Option<usize>, k: &[[f64; 2]; 2]) {
     for r in 0..2 {
@@ -469,6 +525,7 @@ impl Assembly {
                 clearance_m: b.initial_clearance_m,
             });
         }
+        let element_springs = element_springs(model)?;
         // Fixed bearings first.
         let mut fixed: Vec<Option<LinearBearing>> = Vec::new();
         for (k, b) in spec.bearings.iter().enumerate() {
@@ -497,6 +554,9 @@ impl Assembly {
             let mut base = self.stiffness_at(0.0);
             for lb in fixed.iter().flatten() {
                 add_spring2(&mut base, lb.inner_dof_x, lb.outer_dof_x, &lb.stiffness_n_m);
+            }
+            for (a, b, k2) in &element_springs {
+                add_spring2(&mut base, *a, *b, k2);
             }
             // Start: a stiff isotropic spring of the order of a rolling bearing.
             let mut ksec: Vec<f64> = vec![1e8; spec.bearings.len()];
@@ -577,6 +637,9 @@ impl Assembly {
                 &lb.stiffness_n_m,
             );
             bearings.push(lb);
+        }
+        for (a, b, k2) in &element_springs {
+            add_spring2(&mut self.bearing_stiffness, *a, *b, k2);
         }
         self.bearings = bearings;
         Ok(())
