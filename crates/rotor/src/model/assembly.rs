@@ -198,6 +198,10 @@ fn add_spring(target: &mut DenseMatrix, a: usize, b: Option<usize>, k: f64) {
     }
 }
 
+/// A linearised `[[nonlinear]]` element: the x DoF of its node, that of its other node
+/// (`None`: ground), its 2×2 tangent stiffness (N/m).
+type ElementSpring = (usize, Option<usize>, [[f64; 2]; 2]);
+
 /// The `[[nonlinear]]` elements linearised about the undeflected position (relative
 /// displacement zero), as `(dof_x of node, dof_x of to_node, 2×2 tangent)`: a polynomial
 /// support's linear term `c_1` (isotropic), a unilateral spring's `k n nᵀ` where it is
