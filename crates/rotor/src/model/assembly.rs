@@ -210,9 +210,7 @@ type ElementSpring = (usize, Option<usize>, [[f64; 2]; 2]);
 /// the laws; this is their tangent at zero, written out because the model layer sits below
 /// them). The tangent at the static sag would differ only for a polynomial support with
 /// higher terms, which the docs name.
-fn element_springs(
-    model: &Model,
-) -> Result<Vec<(usize, Option<usize>, [[f64; 2]; 2])>, ModelError> {
+fn element_springs(model: &Model) -> Result<Vec<ElementSpring>, ModelError> {
     use super::file::NonlinearKind;
     let mut out = Vec::new();
     for (k, e) in model.spec.nonlinear.iter().enumerate() {
