@@ -81,10 +81,10 @@ fn by_hand() -> ((f64, f64), (f64, f64, f64)) {
     )
 }
 
-/// `model check`'s linearised bearings: `(load, kxx, kyy)` of each.
-fn checked_bearings(model: &str) -> Vec<(f64, f64, f64)> {
+/// `tmrotor args`, which must succeed: its stdout and stderr, one after the other.
+fn tmrotor(args: &[&str]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
-        .args(["model", "check", model])
+        .args(args)
         .output()
         .expect("tmrotor runs");
     assert!(
@@ -92,8 +92,12 @@ fn checked_bearings(model: &str) -> Vec<(f64, f64, f64)> {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text =
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr);
+    String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr)
+}
+
+/// `model check`'s linearised bearings: `(load, kxx, kyy)` of each.
+fn checked_bearings(model: &str) -> Vec<(f64, f64, f64)> {
+    let text = tmrotor(&["model", "check", model]);
     let number = |line: &str, key: &str| -> f64 {
         let rest = &line[line.find(key).expect(key) + key.len()..];
         rest.split_whitespace()
@@ -113,21 +117,12 @@ fn first_critical_speeds_agree_with_a_hand_calculation() {
         env!("CARGO_MANIFEST_DIR"),
         "/examples/rotors/two_disk_ball_bearings.toml"
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
-        .args([
-            "modes", "--model", model, "--speed", "0", "--count", "2", "--csv",
-        ])
-        .output()
-        .expect("tmrotor runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
+    let text = tmrotor(&[
+        "modes", "--model", model, "--speed", "0", "--count", "2", "--csv",
+    ]);
     let freqs: Vec<f64> = text
         .lines()
-        .skip(1)
+        .filter(|l| l.starts_with(|c: char| c.is_ascii_digit()))
         .filter_map(|l| l.split(',').nth(1)?.parse().ok())
         .collect();
     assert_eq!(freqs.len(), 2, "{text}");

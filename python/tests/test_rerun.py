@@ -142,15 +142,21 @@ def static_batches(rrd: Path, prefix: str) -> dict[str, dict]:
     }
 
 
-def test_blueprint_opens_on_omega_with_distinct_colours(sweep_rec: Path, sweep_rrd: Path) -> None:
-    reader = RrdReader(sweep_rrd)
+def time_panel_timeline(rrd: Path) -> list:
+    """The timeline(s) the blueprint's time panel opens on."""
+    reader = RrdReader(rrd)
     (bp,) = reader.blueprints()
-    timeline = [
+    return [
         c.to_record_batch().to_pydict()["TimePanelBlueprint:timeline"][0]
         for c in reader.stream(store=bp)
         if c.entity_path == "/time_panel"
     ]
-    assert timeline == [["omega_mrad_s"]]
+
+
+def test_blueprint_opens_on_omega_with_distinct_colours(sweep_rec: Path, sweep_rrd: Path) -> None:
+    reader = RrdReader(sweep_rrd)
+    (bp,) = reader.blueprints()
+    assert time_panel_timeline(sweep_rrd) == [["omega_mrad_s"]]
     # the plots show the whole range of both timelines, not a window about the cursor
     ranges = [
         c.entity_path
@@ -291,11 +297,4 @@ def test_transient_recording_exports_on_a_time_timeline(transient_rec: Path, tmp
     batch = chunk.to_record_batch().to_pydict()
     values = next(v for k, v in batch.items() if k.endswith("Scalars:scalars"))
     assert values[-1][0] == pytest.approx(rec.revolutions["amp_rms_node14_m"].iloc[-1] * 1e6)
-    reader = RrdReader(out)
-    (bp,) = reader.blueprints()
-    timeline = [
-        c.to_record_batch().to_pydict()["TimePanelBlueprint:timeline"][0]
-        for c in reader.stream(store=bp)
-        if c.entity_path == "/time_panel"
-    ]
-    assert timeline == [["time"]]
+    assert time_panel_timeline(out) == [["time"]]

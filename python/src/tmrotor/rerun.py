@@ -526,19 +526,9 @@ def _export_transient(rec: Recording, out: Path, application_id: str) -> Path:
 def _transient_blueprint(rec: Recording, rotors: list[str], groups: dict[str, list[int]]):
     run = rec.run_info
     rotor_of = [_path_part(n.rotor, "shaft") for n in run.nodes]
-    everything = rrb.VisibleTimeRange(
-        "time", start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
-    )
 
     def plot(name: str, origin: str, n_series: int):
-        return rrb.TimeSeriesView(
-            name=name if n_series <= MAX_LEGEND_SERIES else f"{name} (hover for names)",
-            origin=origin,
-            time_ranges=[everything],
-            plot_legend=rrb.PlotLegend(
-                corner=rrb.Corner2D.RightBottom, visible=n_series <= MAX_LEGEND_SERIES
-            ),
-        )
+        return _plot(name, origin, n_series, timelines=("time",))
 
     amplitude = [
         plot(
@@ -568,13 +558,7 @@ def _transient_blueprint(rec: Recording, rotors: list[str], groups: dict[str, li
                 name="bearings",
             )
         )
-    right.append(
-        rrb.Tabs(
-            rrb.TextDocumentView(name="run", origin="/info"),
-            rrb.TextLogView(name="log", origin="/log"),
-            name="run",
-        )
-    )
+    right.append(_run_tabs())
     samples = rrb.Tabs(
         *[
             plot(f"displacement samples {r} (µm)", f"/transient/samples_um/{r}", 99)
@@ -589,16 +573,31 @@ def _transient_blueprint(rec: Recording, rotors: list[str], groups: dict[str, li
     )
 
 
-def _plot(name: str, origin: str, n_series: int, contents: Any = None):
-    """A time series view over the whole of every timeline, its legend at a corner or,
-    for more than :data:`MAX_LEGEND_SERIES` series, hidden."""
+def _run_tabs():
+    """The run's description and its log, as tabs."""
+    return rrb.Tabs(
+        rrb.TextDocumentView(name="run", origin="/info"),
+        rrb.TextLogView(name="log", origin="/log"),
+        name="run",
+    )
+
+
+def _plot(
+    name: str,
+    origin: str,
+    n_series: int,
+    contents: Any = None,
+    timelines: Sequence[str] = ("omega_mrad_s", "point"),
+):
+    """A time series view over the whole of each of ``timelines``, its legend at a corner
+    or, for more than :data:`MAX_LEGEND_SERIES` series, hidden."""
     everything = [
         rrb.VisibleTimeRange(
             timeline,
             start=rrb.TimeRangeBoundary.infinite(),
             end=rrb.TimeRangeBoundary.infinite(),
         )
-        for timeline in ("omega_mrad_s", "point")
+        for timeline in timelines
     ]
     legend = rrb.PlotLegend(
         corner=rrb.Corner2D.RightBottom, visible=n_series <= MAX_LEGEND_SERIES
@@ -658,13 +657,7 @@ def _blueprint(rec: Recording, rotors: list[str], groups: dict[str, list[int]], 
                 name="bearings",
             )
         )
-    bottom.append(
-        rrb.Tabs(
-            rrb.TextDocumentView(name="run", origin="/info"),
-            rrb.TextLogView(name="log", origin="/log"),
-            name="run",
-        )
-    )
+    bottom.append(_run_tabs())
     right.append(rrb.Horizontal(*bottom))
     return rrb.Blueprint(
         rrb.Horizontal(branch, rrb.Vertical(*right, name="rotor")),
