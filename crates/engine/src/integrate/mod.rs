@@ -39,6 +39,7 @@ pub use transient::{
 };
 pub use variational::{
     FlowSensitivity, ShootingOptions, flow_with_sensitivity, monodromy_along_orbit, shoot_periodic,
+    shoot_periodic_segments,
 };
 
 use thiserror::Error;

@@ -140,14 +140,47 @@ pub fn shoot_periodic(
     period: f64,
     opts: &ShootingOptions,
 ) -> Result<FlowSensitivity, IntegrateError> {
+    shoot_periodic_segments(system, omega, &[y0.to_vec()], period, opts)
+}
+
+/// [`shoot_periodic`] by multiple shooting: the period split into `starts.len()` equal
+/// segments, segment `k` from `t_k = kP/S` started from `starts[k]` (e.g. the states of a
+/// harmonic-balance orbit there), integrated in parallel. Newton solves
+/// `y_k(t_{k+1}; y_k) − y_{k+1} = 0` (indices mod S) for all the segments' starts at once;
+/// the monodromy is the product of the segments' sensitivities, `Φ_{S−1} ⋯ Φ_0`, and the
+/// returned state the orbit's at `t = 0`. With one segment this is single shooting.
+pub fn shoot_periodic_segments(
+    system: &dyn System,
+    omega: f64,
+    starts: &[Vec<f64>],
+    period: f64,
+    opts: &ShootingOptions,
+) -> Result<FlowSensitivity, IntegrateError> {
     use faer::linalg::solvers::Solve;
+    use rayon::prelude::*;
     let space = StateSpace::new(system, omega)?;
     let d = space.dim();
+    let n_seg = starts.len().max(1);
+    if starts.iter().any(|y| y.len() != d) || starts.is_empty() {
+        return Err(IntegrateError::Dimension {
+            what: "shooting segment start",
+            expected: d,
+            found: starts.iter().map(Vec::len).find(|&l| l != d).unwrap_or(0),
+        });
+    }
+    let h = period / n_seg as f64;
     let full = opts.integrator;
-    let mut y = y0.to_vec();
+    let mut ys: Vec<Vec<f64>> = starts.to_vec();
     let mut residual = f64::INFINITY;
     // the next integration's relative tolerance
     let mut rtol = LOOSE_RTOL.max(full.rtol);
+    let monodromy = |flows: &[FlowSensitivity]| {
+        let mut phi = flows[0].phi.clone();
+        for f in &flows[1..] {
+            phi = &f.phi * &phi;
+        }
+        phi
+    };
     for _ in 0..opts.max_iterations {
         let integrator = Dopri5Options {
             rtol,
@@ -155,12 +188,25 @@ pub fn shoot_periodic(
             ..full
         };
         let exact = rtol <= full.rtol;
-        let flow = flow_with_sensitivity(&space, 0.0, &y, period, &integrator)?;
-        let r: Vec<f64> = flow.y.iter().zip(&y).map(|(a, b)| a - b).collect();
+        let flows: Vec<FlowSensitivity> = ys
+            .par_iter()
+            .enumerate()
+            .map(|(k, y)| flow_with_sensitivity(&space, k as f64 * h, y, h, &integrator))
+            .collect::<Result<_, _>>()?;
+        // r_k = y_k(t_{k+1}) − y_{k+1}
+        let r: Vec<f64> = (0..n_seg)
+            .flat_map(|k| {
+                let next = &ys[(k + 1) % n_seg];
+                flows[k].y.iter().zip(next).map(|(a, b)| a - b)
+            })
+            .collect();
         residual = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let scale = 1.0 + y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let scale = 1.0 + ys.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         if exact && residual <= opts.tol * scale {
-            return Ok(FlowSensitivity { y, phi: flow.phi });
+            return Ok(FlowSensitivity {
+                phi: monodromy(&flows),
+                y: ys.swap_remove(0),
+            });
         }
         // every later integration at the full tolerance (the next residual is about the
         // square of this one, and the step it gives is only as good as its measurement)
@@ -169,24 +215,39 @@ pub fn shoot_periodic(
             // the residual is the loose integration's own error: measure it properly
             continue;
         }
-        let jac = Mat::from_fn(d, d, |i, j| {
-            flow.phi[(i, j)] - if i == j { 1.0 } else { 0.0 }
-        });
-        let rhs = Mat::from_fn(d, 1, |i, _| -r[i]);
+        // ∂r_k/∂y_k = Φ_k, ∂r_k/∂y_{k+1} = −I
+        let n = n_seg * d;
+        let mut jac = Mat::<f64>::zeros(n, n);
+        for k in 0..n_seg {
+            let next = (k + 1) % n_seg;
+            for i in 0..d {
+                for j in 0..d {
+                    jac[(k * d + i, k * d + j)] += flows[k].phi[(i, j)];
+                }
+                jac[(k * d + i, next * d + i)] -= 1.0;
+            }
+        }
+        let rhs = Mat::from_fn(n, 1, |i, _| -r[i]);
         let delta = jac.partial_piv_lu().solve(rhs);
         let mut step = 0.0f64;
-        for i in 0..d {
-            y[i] += delta[(i, 0)];
-            step = step.max(delta[(i, 0)].abs());
+        for k in 0..n_seg {
+            for i in 0..d {
+                ys[k][i] += delta[(k * d + i, 0)];
+                step = step.max(delta[(k * d + i, 0)].abs());
+            }
         }
-        if y.iter().any(|v| !v.is_finite()) {
+        if ys.iter().flatten().any(|v| !v.is_finite()) {
             break;
         }
-        // a Newton correction below the tolerance: the corrected state is converged (the
+        // a Newton correction below the tolerance: the corrected states are converged (the
         // next residual would be of the order of its square), and the monodromy at the
-        // state before it differs from the one after by O(correction) ≤ tol
+        // states before it differs from the one after by O(correction) ≤ tol
         if exact && step <= opts.tol * scale {
-            return Ok(FlowSensitivity { y, phi: flow.phi });
+            let phi = monodromy(&flows);
+            return Ok(FlowSensitivity {
+                y: ys.swap_remove(0),
+                phi,
+            });
         }
     }
     Err(IntegrateError::Shooting {
