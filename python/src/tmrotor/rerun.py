@@ -55,8 +55,9 @@ time) instead: ``transient/omega_rad_s``, ``transient/amplitude_um/<rotor>/node<
 decimated displacements ``transient/samples_um/<rotor>/node<id>/{x,y}``, with a
 blueprint of their own.
 
-Colours: within a plot every series has its own colour from a 20-colour qualitative
-palette; a bearing has the same colour in the clearance, load and heat plots. Legends
+Colours: within a plot every series has its own colour from an 18-colour qualitative
+palette without its reds (red marks unstable points); a bearing has the same colour in the
+clearance, load and heat plots. Legends
 are shown at a corner for plots of up to six series and hidden above that (hover a
 series for its name), so they do not cover the data.
 """
@@ -97,18 +98,19 @@ MAX_LEGEND_SERIES = 6
 _ROTOR_COLOURS = {"lp": (31, 119, 180), "hp": (255, 127, 14)}
 _GREY = (128, 128, 128)
 _RED = (214, 39, 40)
-#: A qualitative palette (matplotlib's tab20, dark shades first, then the light ones).
+#: A qualitative palette: matplotlib's tab20, dark shades first, then the light ones,
+#: without its reds, which mark unstable points (``_RED``).
 _PALETTE = [
-    (31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189),
+    (31, 119, 180), (255, 127, 14), (44, 160, 44), (148, 103, 189),
     (140, 86, 75), (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207),
-    (174, 199, 232), (255, 187, 120), (152, 223, 138), (255, 152, 150), (197, 176, 213),
+    (174, 199, 232), (255, 187, 120), (152, 223, 138), (197, 176, 213),
     (196, 156, 148), (247, 182, 210), (199, 199, 199), (219, 219, 141), (158, 218, 229),
 ]
 
 
 def palette_colour(j: int) -> tuple[int, int, int]:
     """The ``j``-th colour: the palette's first, then hues spaced by the golden angle
-    (a thermal group of a shaft can hold more than 20 nodes)."""
+    (a thermal group of a shaft can hold more than 18 nodes)."""
     if j < len(_PALETTE):
         return _PALETTE[j]
     k = j - len(_PALETTE)
@@ -603,10 +605,17 @@ def _plot(
         corner=rrb.Corner2D.RightBottom, visible=n_series <= MAX_LEGEND_SERIES
     )
     kwargs: dict[str, Any] = {"contents": contents} if contents is not None else {}
+    # the data of the whole timeline (time_ranges) and an x axis that shows all of it
+    # (without axis_x the viewer shows about 1000 steps of the timeline around its cursor:
+    # 1 rad/s on omega_mrad_s, seen in Rerun 0.41's own screenshot)
+    whole = rrb.TimeRange(
+        start=rrb.TimeRangeBoundary.infinite(), end=rrb.TimeRangeBoundary.infinite()
+    )
     return rrb.TimeSeriesView(
         name=name if n_series <= MAX_LEGEND_SERIES else f"{name} (hover for names)",
         origin=origin,
         time_ranges=everything,
+        axis_x=rrb.TimeAxis(view_range=whole),
         plot_legend=legend,
         **kwargs,
     )
