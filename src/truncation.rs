@@ -315,22 +315,18 @@ fn resolve_nodes(
     problem: &SweepProblem,
     opts: &TruncationOptions,
 ) -> Result<Nodes, TruncationError> {
-    let named_dynamic;
-    let dynamic_ids = if opts.dynamic_nodes.is_empty() {
-        named_dynamic = default_dynamic_nodes(&problem.model);
-        &named_dynamic
-    } else {
-        &opts.dynamic_nodes
+    // nodes named, else the model's own
+    let or_default = |named: &[u32], default: fn(&crate::model::Model) -> Vec<u32>| {
+        if named.is_empty() {
+            default(&problem.model)
+        } else {
+            named.to_vec()
+        }
     };
-    let named_thermal;
-    let thermal_ids_asked = if opts.thermal_nodes.is_empty() {
-        named_thermal = default_thermal_nodes(&problem.model);
-        &named_thermal
-    } else {
-        &opts.thermal_nodes
-    };
+    let dynamic_ids = or_default(&opts.dynamic_nodes, default_dynamic_nodes);
+    let thermal_ids_asked = or_default(&opts.thermal_nodes, default_thermal_nodes);
     let mut dynamic = Vec::new();
-    for &id in dynamic_ids {
+    for &id in &dynamic_ids {
         match (problem.model.dof(id, Dir::X), problem.model.dof(id, Dir::Y)) {
             (Some(x), Some(y)) => dynamic.push((x, y)),
             _ => {
@@ -351,7 +347,7 @@ fn resolve_nodes(
     let mut thermal = Vec::new();
     let mut thermal_ids = Vec::new();
     if n_therm > 0 {
-        for &id in thermal_ids_asked {
+        for &id in &thermal_ids_asked {
             if id == 0 || id as usize > n_therm {
                 return Err(option_error(
                     format!("--thermal-nodes: thermal node {id}"),
@@ -365,7 +361,7 @@ fn resolve_nodes(
         }
     }
     Ok(Nodes {
-        dynamic_ids: dynamic_ids.clone(),
+        dynamic_ids,
         dynamic,
         thermal,
         thermal_ids,

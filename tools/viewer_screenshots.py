@@ -50,7 +50,7 @@ def skip(reason: str) -> int:
 
 
 def palette() -> list[tuple[int, int, int]]:
-    sys.path.insert(0, str(ROOT / "python" / "src"))
+    """The exporter's first colours (the installed package's, as the export)."""
     from tmrotor.rerun import palette_colour
 
     return [palette_colour(j) for j in range(8)]

@@ -160,12 +160,17 @@ pub fn shoot_periodic_segments(
     use rayon::prelude::*;
     let space = StateSpace::new(system, omega)?;
     let d = space.dim();
-    let n_seg = starts.len().max(1);
-    if starts.iter().any(|y| y.len() != d) || starts.is_empty() {
+    let n_seg = starts.len();
+    if let Some(found) = starts
+        .iter()
+        .map(Vec::len)
+        .find(|&l| l != d)
+        .or((n_seg == 0).then_some(0))
+    {
         return Err(IntegrateError::Dimension {
             what: "shooting segment start",
             expected: d,
-            found: starts.iter().map(Vec::len).find(|&l| l != d).unwrap_or(0),
+            found,
         });
     }
     let h = period / n_seg as f64;

@@ -752,6 +752,18 @@ impl SceneOptions {
     }
 }
 
+/// The lowest and highest axial position of the run's dynamic nodes (`None` without
+/// nodes).
+fn axial_extent(run: &RunInfo) -> Option<(f64, f64)> {
+    let (lo, hi) = run
+        .nodes
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), n| {
+            (lo.min(n.axial_position_m), hi.max(n.axial_position_m))
+        });
+    (lo.is_finite() && hi.is_finite()).then_some((lo, hi))
+}
+
 /// The scene's displacement factor when none is set: the largest of 1, 2 or 5 × 10ᵏ that
 /// draws the largest bearing clearance (the scale of a rolling-element rotor's whirl) at
 /// no more than 5 % of the dynamic nodes' axial span, so that orbits are visible loops
@@ -759,12 +771,9 @@ impl SceneOptions {
 /// built-in dual rotor: span 1.97 m, largest clearance 5 µm → 10 000 (its RMS amplitudes
 /// of 1–10 µm are drawn 1–10 cm).
 pub fn automatic_scale(run: &RunInfo) -> f64 {
-    let (lo, hi) = run
-        .nodes
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), n| {
-            (lo.min(n.axial_position_m), hi.max(n.axial_position_m))
-        });
+    let Some((lo, hi)) = axial_extent(run) else {
+        return 1000.0;
+    };
     let clearance = run
         .bearings
         .iter()
@@ -948,15 +957,7 @@ pub fn scene_to_pb(
 
 /// The scene's caption: the displacement factor, placed above the middle of the shaft.
 fn scene_caption(run: &RunInfo, p: &PointRecord, scale: f64) -> Option<fg::TextPrimitive> {
-    let (lo, hi) = run
-        .nodes
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), n| {
-            (lo.min(n.axial_position_m), hi.max(n.axial_position_m))
-        });
-    if !(lo.is_finite() && hi.is_finite()) {
-        return None;
-    }
+    let (lo, hi) = axial_extent(run)?;
     let height = 0.15 * (hi - lo).max(0.1);
     Some(fg::TextPrimitive {
         pose: Some(fg::Pose {
