@@ -958,6 +958,7 @@ impl SweepProblem {
         if let Some(f) = &p.stability {
             rec.multipliers.clone_from(&f.multipliers);
             rec.slow_exponents.clone_from(&f.slow_exponents);
+            rec.superseded.clone_from(&f.superseded);
             rec.floquet_counts = Some(FloquetCounts::of(f));
         }
         Ok(rec)

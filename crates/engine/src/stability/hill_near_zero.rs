@@ -67,10 +67,16 @@ pub struct HillOptions {
 }
 
 impl Default for HillOptions {
-    /// `extra = 2`, disk up to `0.4 ω_b`, tolerance 1e-10, at most 400 Krylov vectors.
+    /// `extra = 4`, disk up to `0.4 ω_b`, tolerance 1e-10, at most 400 Krylov vectors.
+    ///
+    /// Four fast exponents beyond the thermal ones: with two, the disk's edge fell among
+    /// the modes the thermal coupling reorders near a fast fold, and the joined count
+    /// ([`super::join`]) had to guess across it (the single-shaft rotor of
+    /// `examples/rotors/two_disk_ball_bearings.toml`: one unlocated change of stability
+    /// left with two, none with four; see `docs/stability.md`).
     fn default() -> Self {
         Self {
-            extra: 2,
+            extra: 4,
             max_radius_fraction: 0.4,
             tol: 1e-10,
             max_dim: 400,
@@ -87,8 +93,71 @@ pub struct NearZero {
     /// `exponents`; the fast multipliers of a monodromy product with `|ln μ|/P` below it
     /// are superseded by these.
     pub radius: f64,
+    /// How far the edge may move out (1/s): the modulus of the nearest converged exponent
+    /// left out of `exponents`, or the largest radius asked for. Any edge between the
+    /// largest kept modulus and this one bounds the same set.
+    pub outer: f64,
+    /// How many of `exponents` belong to the thermal equations (one per thermal state;
+    /// 0 when not known): the rest are the mechanical exponents a monodromy product of
+    /// the frozen-temperature problem also estimates.
+    pub thermal: usize,
     /// Arnoldi steps taken (solves with `T(σ)`).
     pub steps: usize,
+}
+
+impl NearZero {
+    /// The disk's edge placed where the set and a frozen-temperature monodromy product
+    /// with multipliers `fast` (orbit period `period`, s) agree on how many mechanical
+    /// exponents lie inside: `exponents.len() − thermal` of the product's exponents
+    /// `|ln μ|/P` below the edge, the next one above it.
+    ///
+    /// The same mode has two estimates, the set's coupled exponent and the product's
+    /// frozen one, which differ by the thermal coupling. An edge that falls between the
+    /// two loses the mode (the product's estimate is superseded, the coupled one is not
+    /// in the set) or counts it twice; it happens wherever the edge, halfway to the next
+    /// converged exponent, meets the product's estimate. The current `radius` is kept
+    /// when it agrees already, or when no edge between the largest kept modulus and
+    /// [`Self::outer`] (at most twice the radius) does, or when the two counts differ by
+    /// more than one mode (the set then lacks thermal exponents that decay faster than it
+    /// reaches, and its mechanical count is not known).
+    pub fn edge_agreeing_with(&self, fast: &[Complex64], period: f64) -> f64 {
+        let Some(mech) = self.exponents.len().checked_sub(self.thermal) else {
+            return self.radius;
+        };
+        if self.thermal == 0 {
+            return self.radius;
+        }
+        let mut p: Vec<f64> = fast
+            .iter()
+            .filter(|m| m.norm() > 0.0)
+            .map(|m| m.ln().norm() / period)
+            .collect();
+        p.sort_by(f64::total_cmp);
+        // a count off by more than one mode: not every thermal exponent is in the set
+        if p.iter()
+            .filter(|x| **x < self.radius)
+            .count()
+            .abs_diff(mech)
+            > 1
+        {
+            return self.radius;
+        }
+        let inner = self.exponents.iter().map(|l| l.norm()).fold(0.0, f64::max);
+        let lo = inner.max(if mech > 0 {
+            p.get(mech - 1).copied().unwrap_or(f64::INFINITY)
+        } else {
+            0.0
+        });
+        let hi = self
+            .outer
+            .min(2.0 * self.radius)
+            .min(p.get(mech).copied().unwrap_or(f64::INFINITY));
+        if lo >= hi || (lo < self.radius && self.radius < hi) {
+            self.radius
+        } else {
+            0.5 * (lo + hi)
+        }
+    }
 }
 
 /// A Floquet mode of the truncated balance near zero: the exponent `λ` and the harmonic
@@ -418,7 +487,10 @@ pub fn near_zero_exponents(
     jacobian: Option<&JacobianParts>,
     options: &HillOptions,
 ) -> Result<NearZero, StabilityError> {
-    HillPencil::new(hb, solution, jacobian)?.near_zero(hb.n_therm() + options.extra, options)
+    let mut nz = HillPencil::new(hb, solution, jacobian)?
+        .near_zero(hb.n_therm() + options.extra, options)?;
+    nz.thermal = hb.n_therm();
+    Ok(nz)
 }
 
 fn scaled(m: &DenseMatrix, f: f64) -> DenseMatrix {
@@ -607,6 +679,8 @@ fn ritz_check(
         NearZero {
             exponents: inside.into_iter().map(|(l, _)| l).collect(),
             radius,
+            outer: edge_out.max(edge_in),
+            thermal: 0,
             steps: m,
         },
         modes,

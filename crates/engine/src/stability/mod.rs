@@ -44,6 +44,7 @@ pub mod variational;
 pub use exp_sip::{ExpSip, IntervalMap, MeanSplit, panel_kernel_isa};
 pub use expm::expm;
 pub use frozen::{FrozenOrbit, FrozenTemperature};
+mod join;
 pub use hill_near_zero::{HillMode, HillOptions, HillPencil, NearZero, near_zero_exponents};
 pub use locate::{Crossing, bisect_crossing};
 pub use reduced::{CraigBampton, Reduced, ReducedOrbit, ReducedSystem, ReductionSettings};
@@ -85,6 +86,12 @@ pub struct FloquetResult {
     /// the balance, exactly (Hill's eigenproblem, [`hill_near_zero`]); `None` when they
     /// come from the quasi-static reduction or there are none.
     pub near_zero: Option<NearZeroDisk>,
+    /// With a near-zero disk, one flag per entry of `multipliers`: set where the
+    /// multiplier is the frozen-temperature estimate of an exponent the disk holds, and
+    /// is superseded by it ([`NearZero::superseded`]); empty without a disk (or in a
+    /// result rebuilt from a recording that predates the flags, where the disk's radius
+    /// decides).
+    pub superseded: Vec<bool>,
     /// Set when the parity of the number of real multipliers above +1 disagrees with the
     /// number of folds the branch has passed (see [`FloquetResult::with_branch_parity`]):
     /// the harmonic balance that defines the branch then has one real Floquet exponent
@@ -142,6 +149,12 @@ pub struct Counted {
 pub struct NearZeroDisk {
     pub radius: f64,
     pub period: f64,
+    /// How far the disk's set reaches (1/s): no exponent of the balance lies between the
+    /// radius and this ([`NearZero::outer`]); the radius itself when unknown.
+    pub outer: f64,
+    /// How many of the set's exponents are the thermal equations' ([`NearZero::thermal`];
+    /// 0 when unknown).
+    pub thermal: usize,
 }
 
 impl NearZeroDisk {
@@ -178,6 +191,7 @@ impl FloquetResult {
             intervals: None,
             fast_gap: None,
             near_zero: None,
+            superseded: Vec::new(),
             fold_parity_mismatch: false,
         }
     }
@@ -187,26 +201,38 @@ impl FloquetResult {
     /// fast multipliers there, and `stable` is decided again on the joint set.
     pub fn with_near_zero(self, nz: NearZero, period: f64) -> Self {
         let gamma = slow::fast_gap(&self.multipliers, period);
+        let disk = NearZeroDisk {
+            radius: nz.edge_agreeing_with(&self.multipliers, period),
+            period,
+            outer: nz.outer,
+            thermal: nz.thermal,
+        };
+        let superseded = join::superseded(&self.multipliers, &nz.exponents, &disk, None);
         let mut r = Self {
+            superseded,
             fast_gap: Some(gamma),
             slow_exponents: nz.exponents,
-            near_zero: Some(NearZeroDisk {
-                radius: nz.radius,
-                period,
-            }),
+            near_zero: Some(disk),
             ..self
         };
         r.stable = r.unstable_count() == 0;
         r
     }
 
-    /// The fast multipliers that count: all of them, or with a near-zero disk those
-    /// outside it.
+    /// The fast multipliers that count: all of them, or with a near-zero disk those it
+    /// does not supersede ([`FloquetResult::superseded`]).
     pub fn counted_multipliers(&self) -> impl Iterator<Item = &Complex64> {
         let disk = self.near_zero;
+        let flags = (self.superseded.len() == self.multipliers.len()).then_some(&self.superseded);
         self.multipliers
             .iter()
-            .filter(move |m| !disk.is_some_and(|d| d.holds(**m)))
+            .enumerate()
+            .filter(move |(i, m)| match (disk, flags) {
+                (Some(_), Some(f)) => !f[*i],
+                (Some(d), None) => !d.holds(**m),
+                (None, _) => true,
+            })
+            .map(|(_, m)| m)
     }
 
     /// The exponents of the near-zero disk with positive real part (empty without a disk).
@@ -304,9 +330,19 @@ impl FloquetResult {
     /// resolve (the truncated balance and the orbit's linearisation disagree there, see
     /// `docs/stability.md`): it is counted, and the disagreement recorded
     /// ([`FloquetResult::fold_parity_mismatch`]).
+    ///
+    /// With a near-zero disk the superseded multipliers are chosen again knowing the
+    /// parity ([`join`]).
     pub fn with_branch_parity(self, odd_folds: bool) -> Self {
+        let superseded = match &self.near_zero {
+            Some(d) => {
+                join::superseded(&self.multipliers, &self.slow_exponents, d, Some(odd_folds))
+            }
+            None => self.superseded.clone(),
+        };
         let base = Self {
             fold_parity_mismatch: false,
+            superseded,
             ..self
         };
         let mismatch = (base.product_real_above_one() % 2 == 1) != odd_folds;

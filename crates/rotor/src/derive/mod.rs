@@ -260,6 +260,7 @@ pub fn point_from_coefficients(
         thermal_forces: Vec::new(),
         multipliers: Vec::new(),
         slow_exponents: Vec::new(),
+        superseded: Vec::new(),
         floquet_counts: None,
     })
 }

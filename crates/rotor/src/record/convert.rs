@@ -447,6 +447,7 @@ pub fn point_to_pb(run: &RunInfo, p: &PointRecord) -> PointMessages {
         split_ratio: p.floquet_counts.map_or(0.0, |c| c.split_ratio),
         near_zero_radius_per_s: p.floquet_counts.map_or(0.0, |c| c.near_zero_radius),
         slow_angles_rad: p.slow_exponents.iter().map(|l| l.im * p.period_s).collect(),
+        superseded: p.superseded.clone(),
     });
     PointMessages {
         summary,
@@ -595,6 +596,11 @@ pub fn point_from_pb(run: &RunInfo, parts: &PointParts) -> Result<PointRecord, S
             .floquet
             .as_ref()
             .map(|f| f.slow_exponents.iter().map(complex_from_pb).collect())
+            .unwrap_or_default(),
+        superseded: parts
+            .floquet
+            .as_ref()
+            .map(|f| f.superseded.clone())
             .unwrap_or_default(),
         floquet_counts: parts.floquet.as_ref().map(|f| FloquetCounts {
             unstable: f.unstable_count,

@@ -378,6 +378,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
                 ))
             }),
             multipliers,
+            superseded: Vec::new(),
             slow_exponents: Vec::new(),
         });
     }

@@ -195,6 +195,10 @@ pub struct PointRecord {
     /// Slow (thermal) Floquet exponents, 1/s (empty when not computed or without a
     /// thermal field).
     pub slow_exponents: Vec<Complex64>,
+    /// One flag per entry of `multipliers`: set where the coupled exponents nearest zero
+    /// supersede it ([`crate::stability::FloquetResult::superseded`]); empty without them
+    /// or in a recording that predates the flags (the disk's radius then decides).
+    pub superseded: Vec<bool>,
     /// The count of multipliers outside the unit circle, real multipliers above +1, the
     /// fold-parity mismatch and the split ratio (see `proto/tmrotor/v1/floquet.proto`);
     /// `None` when stability was not computed.
@@ -237,13 +241,21 @@ impl PointRecord {
             .map(|c| crate::stability::NearZeroDisk {
                 radius: c.near_zero_radius,
                 period: p,
+                outer: c.near_zero_radius,
+                thermal: 0,
             })
             .filter(|d| d.radius > 0.0 && p > 0.0);
+        let flags = (self.superseded.len() == self.multipliers.len()).then_some(&self.superseded);
         let mut out: Vec<Complex64> = self
             .multipliers
             .iter()
-            .filter(|m| !disk.is_some_and(|d| d.holds(**m)))
-            .copied()
+            .enumerate()
+            .filter(|(i, m)| match (disk, flags) {
+                (Some(_), Some(f)) => !f[*i],
+                (Some(d), None) => !d.holds(**m),
+                (None, _) => true,
+            })
+            .map(|(_, m)| *m)
             .collect();
         if disk.is_some() {
             out.extend(self.slow_exponents.iter().map(|l| (l * p).exp()));

@@ -1,0 +1,255 @@
+//! Which fast multipliers the coupled exponents nearest zero supersede.
+//!
+//! A point of a model with a thermal field has two estimates of its exponents near zero:
+//! the monodromy product of the frozen-temperature problem (every mechanical exponent,
+//! without the thermal coupling) and Hill's eigenproblem of the coupled balance in a disk
+//! around zero (exact, thermal and mechanical together, [`super::hill_near_zero`]). The
+//! verdict counts the disk's exponents and the product's multipliers that are not
+//! estimates of one of them: the disk holds `exponents.len() − thermal` mechanical
+//! exponents, so that many of the product's multipliers are superseded.
+//!
+//! By default those with `|ln μ|/P` below the disk's radius. Where the coupling reorders
+//! the modes by modulus the radius cannot tell them apart: a frozen real pair `μ₁, μ₂ > 1`
+//! that the coupling turns into the disk's complex pair (the thermo-mechanical
+//! Neimark–Sacker mechanism, `docs/stability.md`) may have a third, stable multiplier
+//! between them in modulus, and a mode whose two estimates lie on both sides of the edge
+//! is lost or counted twice. Two rules decide instead:
+//!
+//! Both rest on the disk holding every thermal exponent; where the radius's count is off
+//! by more than one mode it does not (a thermal node of small capacity decays faster
+//! than the disk reaches), and the radius decides.
+//!
+//! - **The sum.** The coupling moves each exponent but keeps their sum nearly (a trace):
+//!   of the multipliers with `|ln μ|/P` below the disk's reach (the next exponent of the
+//!   balance beyond it, at most twice its radius), the superseded ones are
+//!   those whose `Σ Re ln μ / P` is nearest the sum of the disk's mechanical exponents
+//!   (the disk's exponents but its `thermal` nearest zero). It overrides the radius only
+//!   when it matches the sum less than half as well and worse by more than the target's
+//!   own uncertainty (four times the largest modulus of the `thermal` exponents: a slow
+//!   mechanical exponent taken for a thermal one moves the target by up to twice that).
+//! - **The fold parity.** A branch of the balance that has passed an odd number of folds
+//!   has an odd number of real exponents above zero (`det J` changes sign at each fold).
+//!   When the choice above gives the other parity and another choice that matches the
+//!   sum within the same uncertainty gives the branch's, that one is taken: the counts
+//!   agree with the branch without a parity correction.
+
+use num_complex::Complex64;
+
+use super::{BifurcationKind, NearZeroDisk, UNIT_CIRCLE_TOL};
+
+/// More candidates than this and the radius decides (2^12 subsets at most).
+const MAX_CANDIDATES: usize = 12;
+
+/// The superseded flags (one per entry of `fast`) for the disk `disk` holding the
+/// exponents `near` (sorted by modulus); with `odd_folds`, the fold parity of the branch.
+pub(super) fn superseded(
+    fast: &[Complex64],
+    near: &[Complex64],
+    disk: &NearZeroDisk,
+    odd_folds: Option<bool>,
+) -> Vec<bool> {
+    let rate = |m: Complex64| m.ln() / disk.period;
+    let by_radius: Vec<bool> = fast.iter().map(|m| disk.holds(*m)).collect();
+    let Some(mech) = near.len().checked_sub(disk.thermal) else {
+        return by_radius;
+    };
+    if disk.thermal == 0 {
+        return by_radius;
+    }
+    let target: f64 = near.iter().skip(disk.thermal).map(|l| l.re).sum();
+    let slack = 4.0
+        * near
+            .iter()
+            .take(disk.thermal)
+            .map(|l| l.norm())
+            .fold(0.0, f64::max);
+    // the thermal equations' exponents are not all in the disk (a thermal node of small
+    // capacity decays fast) when the radius's count is off by more than one mode: the
+    // mechanical count is then unknown and the radius decides
+    if by_radius.iter().filter(|f| **f).count().abs_diff(mech) > 1 {
+        return by_radius;
+    }
+    // the product's estimates of the disk's modes lie within twice its radius
+    let reach = disk.outer.max(disk.radius).min(2.0 * disk.radius);
+    let candidates: Vec<usize> = (0..fast.len())
+        .filter(|&i| fast[i].norm() > 0.0 && rate(fast[i]).norm() < reach)
+        .collect();
+    if candidates.len() > MAX_CANDIDATES || candidates.len() < mech {
+        return by_radius;
+    }
+    let flags_of = |mask: u32| {
+        let mut f = vec![false; fast.len()];
+        for (k, &i) in candidates.iter().enumerate() {
+            f[i] = mask >> k & 1 == 1;
+        }
+        f
+    };
+    let mismatch = |flags: &[bool]| {
+        let sum: f64 = (0..fast.len())
+            .filter(|&i| flags[i])
+            .map(|i| rate(fast[i]).re)
+            .sum();
+        (sum - target).abs()
+    };
+    // the real exponents above zero of the joint set, for the parity
+    let real_unstable = |flags: &[bool]| {
+        let fast_real = (0..fast.len())
+            .filter(|&i| !flags[i])
+            .filter(|&i| {
+                BifurcationKind::of_multiplier(fast[i]) == BifurcationKind::SaddleNode
+                    && fast[i].norm() > 1.0 + UNIT_CIRCLE_TOL
+            })
+            .count();
+        let near_real = near
+            .iter()
+            .filter(|l| BifurcationKind::of_exponent(**l) == BifurcationKind::SaddleNode)
+            .filter(|l| l.re > disk.tol())
+            .count();
+        fast_real + near_real
+    };
+    let subsets: Vec<(f64, Vec<bool>)> = (0u32..(1 << candidates.len()))
+        .filter(|mask| mask.count_ones() as usize == mech)
+        .map(|mask| {
+            let f = flags_of(mask);
+            (mismatch(&f), f)
+        })
+        .collect();
+    let Some(best) = subsets.iter().min_by(|a, b| a.0.total_cmp(&b.0)) else {
+        return by_radius;
+    };
+    let base = if by_radius.iter().filter(|f| **f).count() == mech {
+        mismatch(&by_radius)
+    } else {
+        f64::INFINITY
+    };
+    let (chosen_d, chosen) = if best.0 < 0.5 * base && base - best.0 > slack {
+        (best.0, best.1.clone())
+    } else {
+        (base.min(best.0 + slack), by_radius)
+    };
+    let Some(odd) = odd_folds else {
+        return chosen;
+    };
+    if (real_unstable(&chosen) % 2 == 1) == odd {
+        return chosen;
+    }
+    subsets
+        .into_iter()
+        .filter(|(d, f)| *d <= chosen_d + slack && (real_unstable(f) % 2 == 1) == odd)
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map_or(chosen, |(_, f)| f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn c(re: f64, im: f64) -> Complex64 {
+        Complex64::new(re, im)
+    }
+
+    /// 27 thermal exponents near zero and the disk's mechanical ones, sorted by modulus.
+    fn disk_set(mech: &[Complex64]) -> Vec<Complex64> {
+        let mut v: Vec<Complex64> = (1..=27).map(|k| c(-0.03 * k as f64, 0.0)).collect();
+        v.extend_from_slice(mech);
+        v
+    }
+
+    fn disk(omega: f64, radius: f64) -> NearZeroDisk {
+        NearZeroDisk {
+            radius,
+            period: std::f64::consts::TAU / omega,
+            outer: 26.0,
+            thermal: 27,
+        }
+    }
+
+    /// The two-disk rotor at 603.92 rad/s (`examples/rotors/two_disk_ball_bearings.toml`,
+    /// order 3): the frozen real pair 1.0399, 1.2340 became the disk's pair 13.14 ± 9.15i;
+    /// the stable 0.8201 lies between them in modulus, so the radius alone supersedes the
+    /// stable one and counts the unstable 1.2340 besides the pair.
+    #[test]
+    fn a_pair_the_coupling_formed_supersedes_its_frozen_origins_not_a_bystander() {
+        let fast = [
+            c(1.0399, 0.0),
+            c(0.8201, 0.0),
+            c(1.2340, 0.0),
+            c(0.7024, 0.0),
+        ];
+        let near = disk_set(&[c(13.144, -9.151), c(13.144, 9.151)]);
+        let d = disk(603.9207, 19.635);
+        assert_eq!(
+            fast.iter().map(|m| d.holds(*m)).collect::<Vec<_>>(),
+            [true, true, false, false]
+        );
+        assert_eq!(
+            superseded(&fast, &near, &d, None),
+            [true, false, true, false]
+        );
+    }
+
+    /// A choice that the sum cannot tell from the radius's (within the thermal
+    /// exponents' uncertainty) keeps the radius's.
+    #[test]
+    fn a_close_call_keeps_the_radius() {
+        // 670.41 rad/s: the radius supersedes 1.0062 and 0.8585 (sum −15.6 1/s); the
+        // pair 0.8263 ± 0.4091i sums to −17.3 1/s, the disk's mechanical pair to −16.8
+        let fast = [
+            c(1.0062, 0.0),
+            c(0.8585, 0.0),
+            c(0.8263, 0.4091),
+            c(0.8263, -0.4091),
+        ];
+        let near = disk_set(&[c(-0.984, 0.0), c(-15.787, 0.0)]);
+        let mut d = disk(670.4061, 32.835);
+        d.outer = 60.0;
+        assert_eq!(
+            superseded(&fast, &near, &d, None),
+            [true, true, false, false]
+        );
+    }
+
+    /// A frozen real pair turned complex: at 604.83 rad/s the frozen 0.9689 and 0.8802
+    /// have met in the stable pair 0.9228 ± 0.0386i, while the disk still holds the
+    /// coupled pair 11.32 ± 8.47i they and 1.2474 formed. The radius supersedes the stable
+    /// pair and counts 1.2474 beside the disk's pair; the sum supersedes 1.2474 and one
+    /// of the stable pair (the other stays counted, inside the circle).
+    #[test]
+    fn a_frozen_pair_turned_complex_does_not_leave_its_partner_counted() {
+        let fast = [
+            c(0.9228, 0.0386),
+            c(0.9228, -0.0386),
+            c(1.2474, 0.0),
+            c(0.6930, 0.0),
+        ];
+        let near = disk_set(&[c(11.316, -8.468), c(11.316, 8.468)]);
+        let d = disk(604.8337, 19.565);
+        let flags = superseded(&fast, &near, &d, None);
+        assert!(flags[2] && !flags[3], "{flags:?}");
+        assert_eq!(flags.iter().filter(|f| **f).count(), 2);
+    }
+
+    /// The fold parity decides among choices the sum cannot tell apart: the close call
+    /// above on a branch that has passed an odd number of folds supersedes the complex
+    /// pair and counts 1.0062 as the real multiplier above +1 the parity asks for.
+    #[test]
+    fn the_fold_parity_decides_what_the_sum_cannot() {
+        let fast = [
+            c(1.0062, 0.0),
+            c(0.8585, 0.0),
+            c(0.8263, 0.4091),
+            c(0.8263, -0.4091),
+        ];
+        let near = disk_set(&[c(-0.984, 0.0), c(-15.787, 0.0)]);
+        let mut d = disk(670.4061, 32.835);
+        d.outer = 60.0;
+        assert_eq!(
+            superseded(&fast, &near, &d, Some(false)),
+            [true, true, false, false]
+        );
+        assert_eq!(
+            superseded(&fast, &near, &d, Some(true)),
+            [false, false, true, true]
+        );
+    }
+}
