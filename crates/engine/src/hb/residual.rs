@@ -120,6 +120,9 @@ pub struct HarmonicBalance<'a> {
     events: bool,
     /// The event quadrature's uniform panels.
     rule: PanelRule,
+    /// The basis at the rule's nodes, built at the first event evaluation
+    /// ([`NodeTable`]).
+    node_table: std::sync::OnceLock<NodeTable>,
     /// Per-sample evaluation buffers of earlier residuals, reused: allocating and zeroing
     /// them (128 × 13 kB on the dual rotor) was about a tenth of a residual.
     eval_pool: std::sync::Mutex<Vec<Vec<NonlinearEval>>>,
@@ -134,6 +137,68 @@ impl std::fmt::Debug for HarmonicBalance<'_> {
             .field("aft", &self.aft)
             .finish()
     }
+}
+
+/// The basis functions at the panel rule's nodes, as rows of the coefficients' layout
+/// (`1 + 2H` per DoF): node `i`'s value row `[1, cos m_h θ_i, sin m_h θ_i]` and rate row
+/// `[0, −m_h sin m_h θ_i, m_h cos m_h θ_i]` (times the base frequency). A state at a node
+/// is then two contiguous dot products, which vectorise; read through the complex rows
+/// `e^{−ikθ}` by multiple it was a gather per harmonic and a tenth of the contact
+/// benchmark's time.
+struct NodeTable {
+    nc: usize,
+    /// Node-major, `2 nc` per node: the value row, then the rate row.
+    rows: Vec<f64>,
+}
+
+impl NodeTable {
+    fn new(rule: &PanelRule, multiples: &[usize]) -> Self {
+        let nh = multiples.len();
+        let nc = 1 + 2 * nh;
+        let n = rule.theta().len();
+        let mut rows = vec![0.0; n * 2 * nc];
+        for (i, r) in rows.chunks_mut(2 * nc).enumerate() {
+            let phases = rule.row(i);
+            let (value, rate) = r.split_at_mut(nc);
+            value[0] = 1.0;
+            for (h, &m) in multiples.iter().enumerate() {
+                let (cs, sn) = (phases[m].re, -phases[m].im);
+                let mf = m as f64;
+                value[1 + h] = cs;
+                value[1 + nh + h] = sn;
+                rate[1 + h] = -mf * sn;
+                rate[1 + nh + h] = mf * cs;
+            }
+        }
+        Self { nc, rows }
+    }
+
+    /// The value and rate (per unit base frequency) of the DoF with coefficients `c` at
+    /// node `i`.
+    fn eval(&self, i: usize, c: &[f64]) -> (f64, f64) {
+        let r = &self.rows[i * 2 * self.nc..(i + 1) * 2 * self.nc];
+        let (value, rate) = r.split_at(self.nc);
+        (dot_lanes(value, c), dot_lanes(rate, c))
+    }
+}
+
+/// `Σ aᵢ bᵢ` in four interleaved partial sums (which the compiler vectorises; a single
+/// running sum it may not reorder).
+fn dot_lanes(a: &[f64], b: &[f64]) -> f64 {
+    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ac
+        .remainder()
+        .iter()
+        .zip(bc.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    let mut acc = [0.0; 4];
+    for (x, y) in ac.zip(bc) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// Nonlinear DoFs' state width (`2p + q`) from which the event nodes are evaluated in
@@ -293,6 +358,7 @@ impl<'a> HarmonicBalance<'a> {
             system,
             events: system.n_switching() > 0,
             rule: PanelRule::new((aft.n_samples() / 8).max(8 * (m_max + 1)), 2 * m_max),
+            node_table: std::sync::OnceLock::new(),
             aft,
             nl,
             n_mech,
@@ -331,8 +397,19 @@ impl<'a> HarmonicBalance<'a> {
         let wb = self.aft.base_frequency(omega);
         let theta = self.rule.theta();
         let mut states = vec![0.0; theta.len() * width];
+        let table = self
+            .node_table
+            .get_or_init(|| NodeTable::new(&self.rule, self.aft.multiples()));
+        let nc = self.n_coeffs();
         let one = |st: &mut NodeState, (i, out): (usize, &mut [f64])| {
-            self.state_from_row(coeffs, wb, self.rule.row(i), st);
+            for (k, &d) in self.nl.mech.iter().enumerate() {
+                let (x, v) = table.eval(i, &coeffs[d * nc..(d + 1) * nc]);
+                (st.x[k], st.v[k]) = (x, wb * v);
+            }
+            for (k, &d) in self.nl.therm.iter().enumerate() {
+                let g = self.n_mech + d;
+                st.temp[k] = table.eval(i, &coeffs[g * nc..(g + 1) * nc]).0;
+            }
             st.write(out);
         };
         if width >= PARALLEL_WIDTH {
