@@ -118,10 +118,117 @@ fn a_generated_network_too_fine_to_compute_is_refused_with_its_size() {
         &[
             "thermal.segment_length_m",
             "shaft segment nodes",
-            "above the limit of 2000",
+            "above the limit of 600",
         ],
     );
     assert!(start.elapsed().as_secs() < 5, "{:?}", start.elapsed());
+    // just under the segment limit, the whole network (segments, disks, bearings) is over
+    // its own: 1 899 segment nodes took 6.7 GB without finishing a point
+    for (length, needles) in [
+        (
+            "0.0017",
+            ["thermal.segment_length_m", "above the limit of 600"],
+        ),
+        ("0.0055", ["thermal.n_nodes", "above the limit of 600"]),
+    ] {
+        let set = format!("thermal.segment_length_m={length}");
+        refused(&tmrotor(&["model", "check", f, "--set", &set]), &needles);
+    }
+}
+
+/// The thermal network's bearings are the mechanical ones: a different element count or
+/// diameter is a second bearing modelled as one; a pitch circle outside the raceways is no
+/// bearing at all.
+#[test]
+fn a_thermal_bearing_that_is_not_its_mechanical_bearing_is_refused() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let (path, _) = builtin(dir.path());
+    let f = path.to_str().expect("path");
+    for (set, needles) in [
+        (
+            "thermal.bearings[1#].n_elements=23",
+            vec!["thermal.bearings[0].n_elements", "element_count = 22"],
+        ),
+        (
+            "thermal.bearings[1#].element_diameter_m=0.03",
+            vec!["thermal.bearings[0].element_diameter_m", "0.01905"],
+        ),
+        (
+            "thermal.bearings[1#].pitch_diameter_m=0.3",
+            vec!["thermal.bearings[0].pitch_diameter_m", "outer raceway"],
+        ),
+    ] {
+        refused(&tmrotor(&["model", "check", f, "--set", set]), &needles);
+    }
+}
+
+/// Negative values written without `=` are values of their flag, refused by name (not
+/// clap's "unexpected argument"); settings refused before anything is written.
+#[test]
+fn negative_values_and_bad_settings_are_refused_by_flag_before_writing() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let out = dir.path().join("o.mcap");
+    let o = out.to_str().expect("path");
+    for (args, flag) in [
+        (vec!["sweep", "--flow", "-2"], "--flow"),
+        (vec!["sweep", "--omega", "-300:700"], "--omega"),
+        (vec!["sweep", "--order", "-1"], "--order"),
+        (vec!["sweep", "--ds-max", "-0.1"], "--ds-max"),
+        (vec!["transient", "--ramp", "-100:300"], "--ramp"),
+        (
+            vec!["transient", "--speed", "300", "--rtol", "-1"],
+            "--rtol",
+        ),
+        (
+            vec!["transient", "--speed", "300", "--alpha", "-0.5"],
+            "--alpha",
+        ),
+    ] {
+        let mut a = args.clone();
+        a.extend(["-o", o]);
+        refused(&tmrotor(&a), &[flag]);
+        assert!(!out.exists(), "{args:?} wrote {o}");
+    }
+    // a campaign's dry run refuses the output directory a real run would
+    let campaign = dir.path().join("c.toml");
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/paper_campaign.toml"),
+    )
+    .expect("campaign");
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("output_dir") {
+                "output_dir = \"/dev/null\"".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    std::fs::write(&campaign, text).expect("write");
+    let c = campaign.to_str().expect("path");
+    refused(
+        &tmrotor(&["campaign", c, "--dry-run"]),
+        &["output_dir", "/dev/null", "not a directory"],
+    );
+    // replay's audit with more intervals than a study allows names its flag, not the
+    // recording's model
+    let rec = dir.path().join("r.mcap");
+    let r = rec.to_str().expect("path");
+    let made = tmrotor(&["sweep", "--omega", "300:305", "--no-verify", "-q", "-o", r]);
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_replay"))
+        .args(["stability", r, "--sip-intervals", "1000000000"])
+        .output()
+        .expect("runs");
+    refused(&o, &["--sip-intervals", "at most 200000"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("embedded"));
 }
 
 #[test]

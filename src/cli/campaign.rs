@@ -327,6 +327,15 @@ fn dry_run(
     out: &mut impl std::io::Write,
 ) -> anyhow::Result<()> {
     let (planned, dir) = campaign::plan(file, shard)?;
+    // the output directory a real run would refuse, refused here too
+    if dir.exists() && !dir.is_dir() {
+        anyhow::bail!(
+            "{}: output_dir {}: it exists and is not a directory (the output is a directory \
+             of files)",
+            file.display(),
+            dir.display()
+        );
+    }
     let which = match shard {
         Some((i, n)) => format!("shard {i}/{n}: "),
         None => String::new(),

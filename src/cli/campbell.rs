@@ -23,7 +23,7 @@ pub struct CampbellArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub speeds: String,
     /// Number of modes followed (lowest first).
-    #[arg(long, default_value_t = 10, value_parser = super::positive_count)]
+    #[arg(long, default_value_t = 10, value_parser = super::positive_count, allow_negative_numbers = true)]
     pub count: usize,
     /// Write the diagram as CSV to this file (speed_rad_s, mode, frequency_rad_s,
     /// frequency_hz, damping_ratio, log_decrement, whirl, forward_share, mac), one row per
@@ -65,7 +65,7 @@ pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
             "--speeds count {count}: at most {MAX_SPEEDS} speeds (each is an eigenproblem of the whole rotor)"
         );
     }
-    Ok(linear::speed_grid(start, end, count)?)
+    linear::speed_grid(start, end, count).map_err(|e| anyhow::anyhow!("--speeds: {e}"))
 }
 
 /// Runs `tmrotor campbell`, writing the critical speeds to `out`.

@@ -23,7 +23,7 @@ pub struct ModesArgs {
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub speed: f64,
     /// Number of modes (lowest first).
-    #[arg(long, default_value_t = 10, value_parser = super::positive_count)]
+    #[arg(long, default_value_t = 10, value_parser = super::positive_count, allow_negative_numbers = true)]
     pub count: usize,
     /// Write CSV (mode, frequency_rad_s, frequency_hz, damping_ratio, whirl,
     /// undamped_rad_s, log_decrement, forward_share) instead of a table.

@@ -26,7 +26,7 @@ pub struct StudyArgs {
     #[arg(long)]
     pub study: Option<PathBuf>,
     /// Lubricant flow rate per bearing q_l (L/min) [default: 2].
-    #[arg(long = "flow", value_name = "L_MIN")]
+    #[arg(long = "flow", value_name = "L_MIN", allow_negative_numbers = true)]
     pub flow_l_min: Option<f64>,
     /// Lubricant cooling temperature (°C) [default: 25].
     #[arg(long = "cooling-temp", value_name = "C", allow_negative_numbers = true)]
@@ -72,16 +72,16 @@ pub struct SweepArgs {
     #[command(flatten)]
     pub base: StudyArgs,
     /// Truncation order of the harmonic basis (paper Eq. 34) [default: 3].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub order: Option<u32>,
     /// Sweep range START:END in rad/s [default: 300:700].
-    #[arg(long, value_name = "START:END")]
+    #[arg(long, value_name = "START:END", allow_hyphen_values = true)]
     pub omega: Option<String>,
     /// Largest continuation step (scaled arclength) [default: 0.15].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub ds_max: Option<f64>,
     /// Maximum number of points [default: 2000].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub max_points: Option<usize>,
     /// Mechanical model only (no thermal network, clearances fixed at δ0).
     #[arg(long)]
@@ -117,7 +117,7 @@ pub struct SweepArgs {
     pub stability_method: Option<StabilityChoice>,
     /// SIP intervals per period (exp-sip: the start, extrapolated with half as many and
     /// doubled up to 4096 where a multiplier is close to the unit circle) [default: 512].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub sip_intervals: Option<usize>,
     /// Interval map of the exp-sip product: exponential (default; exact for the
     /// quasi-static response of stiff modes) or strang (the midpoint split of earlier
@@ -126,7 +126,7 @@ pub struct SweepArgs {
     pub interval_map: Option<IntervalMap>,
     /// Cut-off (rad/s) of the Craig–Bampton reduction used for stability; 0 = full model
     /// [default: 20000].
-    #[arg(long, value_name = "RAD_S")]
+    #[arg(long, value_name = "RAD_S", allow_negative_numbers = true)]
     pub reduction_cutoff: Option<f64>,
     /// Output recording.
     #[arg(short, long, default_value = "sweep.mcap")]

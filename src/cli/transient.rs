@@ -14,6 +14,7 @@ use super::sweep::{StudyArgs, parse_range};
 use crate::cli::interrupt::install_interrupt_flag;
 use crate::derive::CoupledRederive;
 use crate::hb::HarmonicBalance;
+use crate::integrate::IntegrateError;
 use crate::integrate::{SpeedProfile, ThermalStepping, TransientOptions};
 use crate::record::output::check_target;
 use crate::record::{McapOptions, read_recording};
@@ -28,7 +29,7 @@ pub struct TransientArgs {
     pub base: StudyArgs,
     /// Truncation order of the harmonic basis: sets the recording's basis and the window of
     /// the RMS amplitudes (the basis's period) [default: 3].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub order: Option<u32>,
     /// Mechanical model only (no thermal network, clearances fixed at δ0).
     #[arg(long)]
@@ -37,7 +38,12 @@ pub struct TransientArgs {
     #[arg(long, value_name = "RAD_S", allow_negative_numbers = true)]
     pub speed: Option<f64>,
     /// A linear run-up (START < END) or coast-down (START > END), rad/s, at --accel.
-    #[arg(long, value_name = "START:END", conflicts_with = "speed")]
+    #[arg(
+        long,
+        value_name = "START:END",
+        conflicts_with = "speed",
+        allow_hyphen_values = true
+    )]
     pub ramp: Option<String>,
     /// Magnitude of the ramp's acceleration, rad/s² [default: 10].
     #[arg(
@@ -60,7 +66,12 @@ pub struct TransientArgs {
     #[arg(long, value_name = "RECORDING", requires = "point")]
     pub from: Option<PathBuf>,
     /// Index of the recorded point to start from.
-    #[arg(long, value_name = "I", requires = "from")]
+    #[arg(
+        long,
+        value_name = "I",
+        requires = "from",
+        allow_negative_numbers = true
+    )]
     pub point: Option<u64>,
     /// Scale the start's vibration (displacements about their mean, and velocities) by
     /// 1 + F, e.g. 0.05 for a 5 % larger orbit.
@@ -75,7 +86,12 @@ pub struct TransientArgs {
     /// of scaling the vibration (Hill's eigenproblem; 0 = the mode with the largest real
     /// part of its exponent, the most unstable or least stable), by --perturb times the
     /// orbit's largest vibration amplitude (its sign the direction).
-    #[arg(long, value_name = "K", requires = "from")]
+    #[arg(
+        long,
+        value_name = "K",
+        requires = "from",
+        allow_negative_numbers = true
+    )]
     pub perturb_mode: Option<usize>,
     /// Add K kelvin to every start temperature.
     #[arg(
@@ -86,7 +102,7 @@ pub struct TransientArgs {
     )]
     pub perturb_temp: f64,
     /// Relative local error tolerance of the mechanical integrator [default: 1e-4].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rtol: Option<f64>,
     /// HHT-α parameter in [−1/3, 0]: 0 is the trapezoidal rule (no numerical damping),
     /// below 0 damps the unresolved upper modes [default: −0.05].
@@ -97,10 +113,10 @@ pub struct TransientArgs {
     #[arg(long)]
     pub single_rate: bool,
     /// Most revolutions in one thermal macro step [default: 50].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub max_thermal_revolutions: Option<u32>,
     /// Displacement samples per revolution on /transient/samples; 0 for none [default: 16].
-    #[arg(long, value_name = "N", default_value_t = crate::transient::DEFAULT_SAMPLES_PER_REVOLUTION)]
+    #[arg(long, value_name = "N", default_value_t = crate::transient::DEFAULT_SAMPLES_PER_REVOLUTION, allow_negative_numbers = true)]
     pub samples_per_rev: u32,
     /// Output recording.
     #[arg(short, long, default_value = "transient.mcap")]
@@ -212,6 +228,12 @@ impl TransientArgs {
         if self.samples_per_rev > 4096 {
             bail!("--samples-per-rev {}: at most 4096", self.samples_per_rev);
         }
+        // the integrator's own checks, before the output is opened
+        o.check().map_err(|e| match e {
+            IntegrateError::Setting { field: "rtol", .. } => anyhow::anyhow!("--rtol: {e}"),
+            IntegrateError::Setting { field: "alpha", .. } => anyhow::anyhow!("--alpha: {e}"),
+            e => anyhow::anyhow!("{e}"),
+        })?;
         Ok(o)
     }
 }

@@ -22,7 +22,7 @@ pub struct TruncationArgs {
     #[command(flatten)]
     pub base: StudyArgs,
     /// Range START:END (rad/s) traced from START for every order [default: 300:700].
-    #[arg(long, value_name = "START:END")]
+    #[arg(long, value_name = "START:END", allow_hyphen_values = true)]
     pub range: Option<String>,
     /// Truncation orders to compare, comma-separated (a study file's `order` is ignored;
     /// stability is not computed).
@@ -43,7 +43,7 @@ pub struct TruncationArgs {
     #[arg(long)]
     pub all_solutions: bool,
     /// Residual samples per period [default: 16 × the AFT's default].
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     pub samples: Option<usize>,
     /// CSV (SI units, RMS and max columns, the nonlinear force per node): `--csv` prints
     /// it instead of the markdown table, `--csv FILE` writes it to FILE as well.

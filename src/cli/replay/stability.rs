@@ -89,6 +89,12 @@ pub fn run(
              is extrapolated from N and N/2 intervals)"
         );
     }
+    if let Some(n) = sip_intervals.filter(|&n| n > crate::study::MAX_SIP_INTERVALS) {
+        anyhow::bail!(
+            "--sip-intervals {n}: must be at most {} (the product keeps a state per interval)",
+            crate::study::MAX_SIP_INTERVALS
+        );
+    }
     // a recording with several branches: each on its own basis, compared in turn
     if method.is_none() && !rec.branches.is_empty() {
         let mut total = StabilityComparison {

@@ -256,6 +256,14 @@ pub struct TransientOptions {
     pub max_steps: u64,
 }
 
+impl TransientOptions {
+    /// Checks the settings as an integration would before it starts, so that a caller
+    /// can refuse them before it opens its outputs.
+    pub fn check(&self) -> Result<(), IntegrateError> {
+        check_options(self)
+    }
+}
+
 impl Default for TransientOptions {
     fn default() -> Self {
         Self {

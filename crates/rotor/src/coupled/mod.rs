@@ -201,6 +201,83 @@ fn same_contact_laws(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledErr
     Ok(())
 }
 
+/// A thermal bearing's geometry must be that of the mechanical bearing of the same name:
+/// its element count, and each diameter the mechanical bearing gives (element, pitch,
+/// raceways, bore, outside). The heat and the contact resistances (Eqs. 10–17) use the
+/// thermal side's, the dynamics the mechanical side's: two different bearings would be
+/// modelled as one.
+fn same_geometry(model: &Model, spec: &ThermalSpec) -> Result<(), CoupledError> {
+    for (i, t) in spec.bearings.iter().enumerate() {
+        let Some(b) = model.spec.bearings.iter().find(|b| b.id == t.name) else {
+            continue;
+        };
+        let field = |f: &str| format!("thermal.bearings[{i}].{f}");
+        if t.n_elements != b.element_count as usize {
+            return Err(mismatch(
+                model,
+                &field("n_elements"),
+                format!(
+                    "{} elements for {:?}, but its [[bearings]] entry has element_count = {}",
+                    t.n_elements, t.name, b.element_count
+                ),
+            ));
+        }
+        let pairs = [
+            (
+                "element_diameter_m",
+                t.element_diameter_m,
+                b.element_diameter_m,
+                "element_diameter_m",
+            ),
+            (
+                "pitch_diameter_m",
+                t.pitch_diameter_m,
+                b.pitch_diameter_m,
+                "pitch_diameter_m",
+            ),
+            (
+                "inner_raceway_m",
+                t.inner_raceway_m,
+                Some(b.inner_race_diameter_m),
+                "inner_race_diameter_m",
+            ),
+            (
+                "outer_raceway_m",
+                t.outer_raceway_m,
+                Some(b.outer_race_diameter_m),
+                "outer_race_diameter_m",
+            ),
+            (
+                "bore_diameter_m",
+                t.bore_diameter_m,
+                b.bore_diameter_m,
+                "bore_diameter_m",
+            ),
+            (
+                "outer_diameter_m",
+                t.outer_diameter_m,
+                b.outside_diameter_m,
+                "outside_diameter_m",
+            ),
+        ];
+        for (key, thermal, mech, mech_key) in pairs {
+            if let Some(m) = mech
+                && (thermal - m).abs() > 1e-9 * m.abs().max(thermal.abs())
+            {
+                return Err(mismatch(
+                    model,
+                    &field(key),
+                    format!(
+                        "{thermal} m for {:?}, but its [[bearings]] entry has {mech_key} = {m} m",
+                        t.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// The thermal network's speed ratios against the rotors': every `[[thermal.shafts]]`
 /// segment of chain `c` turns with the rotor whose id is `c`, and every thermal bearing's
 /// inner (outer) ring with the rotor of its mechanical bearing's inner (outer) node, or not
@@ -351,6 +428,7 @@ impl CoupledRotor {
             Some(mut spec) => {
                 apply_overrides(&mut spec, study)?;
                 same_contact_laws(model, &spec)?;
+                same_geometry(model, &spec)?;
                 same_speed_ratios(model, &spec)?;
                 Some(ThermalNetwork::new(&spec)?)
             }

@@ -986,7 +986,7 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Required,
         default: "",
-        range: "> 0; every node 1..=n_nodes is used exactly once by the shafts, disks, housings and bearings",
+        range: "> 0 and at most 600 (the stability's memory grows with the square of the count); every node 1..=n_nodes is used exactly once by the shafts, disks, housings and bearings",
         meaning: "Number of nodes of the thermal network (the size of T in Eq. 19).",
     },
     Key {
@@ -1635,7 +1635,7 @@ pub const KEYS: &[Key] = &[
         unit: "",
         need: Need::Required,
         default: "",
-        range: "> 0",
+        range: "> 0; equal to element_count of the [[bearings]] entry of the same name",
         meaning: "Number of rolling elements N_ball / N_roller (Table A.1/A.2), in the heat capacity and the lubricant-wetted area of the elements.",
     },
     Key {
@@ -1671,7 +1671,7 @@ pub const KEYS: &[Key] = &[
         unit: "m",
         need: Need::Required,
         default: "",
-        range: "> 0",
+        range: "> 0; between inner_raceway_m and outer_raceway_m, and equal to pitch_diameter_m of the [[bearings]] entry of the same name where that gives it (so are element, raceway, bore and outer diameters)",
         meaning: "Pitch diameter D_m (D_bm / D_rm of Table A.1/A.2), in the friction torques of Eqs. 10–11 and the lubricant speeds.",
     },
     Key {
@@ -1843,7 +1843,7 @@ pub const KEYS: &[Key] = &[
         unit: "m",
         need: Need::Optional,
         default: "0.11",
-        range: "> 0",
+        range: "> 0; the shaft segments it makes at most 600, and the whole generated network at most 600 nodes",
         meaning: "Longest shaft segment: each [[shafts]] element becomes ceil(L / segment_length_m) equal thermal nodes (the built-in network's rule: 37 shaft nodes for its 16 elements).",
     },
     Key {

@@ -257,10 +257,10 @@ impl Numbering {
     }
 }
 
-/// The most shaft segment nodes a generated network may have: 2 000 (the dual rotor's
-/// generated network makes 37 at the default segment length; a network of 353 nodes
-/// already costs 4.6 s of stability a point, docs/stability.md).
-pub const MAX_SEGMENT_NODES: usize = 2000;
+/// The most shaft segment nodes a generated network may have: the limit of a whole
+/// network ([`super::spec::MAX_THERMAL_NODES`]; the dual rotor's generated network makes
+/// 37 at the default segment length), checked before anything is allocated.
+pub const MAX_SEGMENT_NODES: usize = super::spec::MAX_THERMAL_NODES;
 
 /// Checks the per-kind and per-bearing settings; errors name `thermal.…`.
 fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalError> {

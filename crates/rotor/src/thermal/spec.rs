@@ -13,6 +13,14 @@ use super::ThermalError;
 use crate::bearing::ContactLaw;
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
+/// The most nodes a thermal network may have, written node by node or generated: 600.
+/// The stability's Hill problem holds every thermal exponent (its Krylov space is twice
+/// their count, each vector as long as the balance's unknowns), so memory grows with the
+/// square of the node count and time faster: 353 nodes cost 4.6 s of stability a point
+/// (docs/stability.md), 591 about 20 s and 1.4 GB, 1 899 took 6.7 GB without finishing one
+/// (2-core VM, 2026-12-05).
+pub const MAX_THERMAL_NODES: usize = 600;
+
 /// The largest lubricant flow rate per bearing accepted (L/min), from a file, `--set` or
 /// `--flow`: a bound of sanity, some fifty times the jet flow of the largest bearings the
 /// model describes (the paper's campaign runs 1–20 L/min); beyond it the lubricant would
@@ -446,6 +454,20 @@ impl ThermalSpec {
         if self.n_nodes == 0 {
             return Err(invalid(file, p("n_nodes"), "must be > 0"));
         }
+        if self.n_nodes > MAX_THERMAL_NODES {
+            return Err(invalid(
+                file,
+                p("n_nodes"),
+                format!(
+                    "{} nodes, above the limit of {MAX_THERMAL_NODES}: the stability's Hill \
+                     problem holds every thermal exponent, so its memory grows with the square \
+                     of the node count (591 nodes: 1.4 GB and about 20 s a point; 1 899 took \
+                     6.7 GB without finishing one); merge nodes, or for a generated network use a longer \
+                     segment_length_m",
+                    self.n_nodes
+                ),
+            ));
+        }
         found.extend(temperature(file, p("ambient_temp_c"), self.ambient_temp_c).err());
         found.extend(temperature(file, p("cooling_temp_c"), self.cooling_temp_c).err());
         // the bound of `--flow` and of a study file: no lubricant flow leaves the bearings'
@@ -672,6 +694,18 @@ impl ThermalSpec {
                     file,
                     q("inner_raceway_m"),
                     "need bore < inner raceway < outer raceway < outer diameter",
+                ));
+            }
+            // the rolling elements' centres lie between the raceways, and the elements fill
+            // the gap between them
+            if !(b.inner_raceway_m < b.pitch_diameter_m && b.pitch_diameter_m < b.outer_raceway_m) {
+                return Err(invalid(
+                    file,
+                    q("pitch_diameter_m"),
+                    format!(
+                        "{} m: need inner raceway ({} m) < pitch diameter < outer raceway ({} m)",
+                        b.pitch_diameter_m, b.inner_raceway_m, b.outer_raceway_m
+                    ),
                 ));
             }
             match b.kind {
