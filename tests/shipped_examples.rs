@@ -44,3 +44,43 @@ fn every_shipped_rotor_sweeps_without_a_panic() {
     }
     assert!(failures.is_empty(), "{failures:#?}");
 }
+
+/// Every shipped campaign plans without a panic (`--dry-run`: its runs, settings and
+/// outputs checked, nothing computed), and the shipped study file sweeps.
+#[test]
+fn every_shipped_campaign_plans_and_the_study_file_sweeps() {
+    let dir = tempfile::tempdir().expect("tempdir");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files: Vec<_> = std::fs::read_dir(root.join("examples"))
+        .expect("examples")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .filter(|p| p.file_name().is_some_and(|n| n != "study.toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 5, "{files:?}");
+    for f in &files {
+        let o = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
+            .args(["campaign", "--dry-run"])
+            .arg(f)
+            .output()
+            .expect("runs");
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        println!("{}: exit {:?}", f.display(), o.status.code());
+        assert!(o.status.success(), "{}: {text}", f.display());
+        assert!(text.contains("dry run"), "{}: {text}", f.display());
+    }
+    let out = dir.path().join("study.mcap");
+    let o = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
+        .args(["sweep", "--max-points", "12", "-q", "--no-verify", "--study"])
+        .arg(root.join("examples/study.toml"))
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .expect("runs");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
