@@ -76,7 +76,14 @@ fn every_shipped_campaign_plans_and_the_study_file_sweeps() {
     }
     let out = dir.path().join("study.mcap");
     let o = Command::new(env!("CARGO_BIN_EXE_tmrotor"))
-        .args(["sweep", "--max-points", "12", "-q", "--no-verify", "--study"])
+        .args([
+            "sweep",
+            "--max-points",
+            "12",
+            "-q",
+            "--no-verify",
+            "--study",
+        ])
         .arg(root.join("examples/study.toml"))
         .arg("-o")
         .arg(&out)

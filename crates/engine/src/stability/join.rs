@@ -188,12 +188,9 @@ mod tests {
         );
     }
 
-    /// A choice that the sum cannot tell from the radius's (within the thermal
-    /// exponents' uncertainty) keeps the radius's.
-    #[test]
-    fn a_close_call_keeps_the_radius() {
-        // 670.41 rad/s: the radius supersedes 1.0062 and 0.8585 (sum −15.6 1/s); the
-        // pair 0.8263 ± 0.4091i sums to −17.3 1/s, the disk's mechanical pair to −16.8
+    /// 670.41 rad/s: the radius supersedes 1.0062 and 0.8585 (sum −15.6 1/s); the pair
+    /// 0.8263 ± 0.4091i sums to −17.3 1/s, the disk's mechanical pair to −16.8.
+    fn close_call() -> ([Complex64; 4], Vec<Complex64>, NearZeroDisk) {
         let fast = [
             c(1.0062, 0.0),
             c(0.8585, 0.0),
@@ -203,6 +200,14 @@ mod tests {
         let near = disk_set(&[c(-0.984, 0.0), c(-15.787, 0.0)]);
         let mut d = disk(670.4061, 32.835);
         d.outer = 60.0;
+        (fast, near, d)
+    }
+
+    /// A choice that the sum cannot tell from the radius's (within the thermal
+    /// exponents' uncertainty) keeps the radius's.
+    #[test]
+    fn a_close_call_keeps_the_radius() {
+        let (fast, near, d) = close_call();
         assert_eq!(
             superseded(&fast, &near, &d, None),
             [true, true, false, false]
@@ -234,15 +239,7 @@ mod tests {
     /// pair and counts 1.0062 as the real multiplier above +1 the parity asks for.
     #[test]
     fn the_fold_parity_decides_what_the_sum_cannot() {
-        let fast = [
-            c(1.0062, 0.0),
-            c(0.8585, 0.0),
-            c(0.8263, 0.4091),
-            c(0.8263, -0.4091),
-        ];
-        let near = disk_set(&[c(-0.984, 0.0), c(-15.787, 0.0)]);
-        let mut d = disk(670.4061, 32.835);
-        d.outer = 60.0;
+        let (fast, near, d) = close_call();
         assert_eq!(
             superseded(&fast, &near, &d, Some(false)),
             [true, true, false, false]
