@@ -249,119 +249,80 @@ impl Default for FloquetSettings {
     }
 }
 
-/// [`StudySettings`] as files spell them: one flat table, unknown keys refused, absent
-/// keys at their defaults. The field meanings are those of the grouped settings.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct FlatSettings {
-    pub model: Option<PathBuf>,
-    pub flow_l_min: f64,
-    pub cooling_temp_c: f64,
-    pub ambient_temp_c: f64,
-    pub order: u32,
-    pub omega_start: f64,
-    pub omega_end: f64,
-    pub ds_max: f64,
-    pub max_points: usize,
-    pub switch_branches: bool,
-    pub thermal: bool,
-    pub stability: bool,
-    pub stability_method: StabilityChoice,
-    pub sip_intervals: usize,
-    pub interval_map: IntervalMap,
-    pub reduction_cutoff_rad_s: f64,
-    pub aft_samples: Option<usize>,
-    pub half_orders: bool,
-    pub combination_tones: bool,
-    pub exact_contacts: bool,
-    pub verify: bool,
-    pub verify_orders: Vec<u32>,
-    pub verify_max_seconds: f64,
-    #[serde(skip_serializing_if = "ModelSet::is_empty")]
-    pub set: ModelSet,
+/// The flat file form of [`StudySettings`] from one list: each setting once, as
+/// `group.field: type`, in the order files write them. It generates [`FlatSettings`] and
+/// both conversions, so a new setting is its field in its group (with its doc and
+/// default) and one line here; `tests::every_grouped_setting_has_a_flat_key` fails on a
+/// group field left out.
+macro_rules! flat_settings {
+    ($($group:ident . $field:ident : $ty:ty),* $(,)?) => {
+        /// [`StudySettings`] as files spell them: one flat table, unknown keys refused,
+        /// absent keys at their defaults. The field meanings are those of the grouped
+        /// settings.
+        #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+        #[serde(deny_unknown_fields, default)]
+        pub struct FlatSettings {
+            pub model: Option<PathBuf>,
+            $(pub $field: $ty,)*
+            #[serde(skip_serializing_if = "ModelSet::is_empty")]
+            pub set: ModelSet,
+        }
+
+        impl From<StudySettings> for FlatSettings {
+            fn from(s: StudySettings) -> Self {
+                Self {
+                    model: s.model,
+                    $($field: s.$group.$field,)*
+                    set: s.set,
+                }
+            }
+        }
+
+        impl From<FlatSettings> for StudySettings {
+            fn from(f: FlatSettings) -> Self {
+                let mut s = StudySettings {
+                    model: f.model,
+                    set: f.set,
+                    ..StudySettings::default()
+                };
+                $(s.$group.$field = f.$field;)*
+                s
+            }
+        }
+
+        /// The flat keys, in file order (without `model` and `set`).
+        pub const FLAT_KEYS: &[&str] = &[$(stringify!($field)),*];
+    };
+}
+
+flat_settings! {
+    operating.flow_l_min: f64,
+    operating.cooling_temp_c: f64,
+    operating.ambient_temp_c: f64,
+    harmonic.order: u32,
+    sweep.omega_start: f64,
+    sweep.omega_end: f64,
+    sweep.ds_max: f64,
+    sweep.max_points: usize,
+    sweep.switch_branches: bool,
+    operating.thermal: bool,
+    floquet.stability: bool,
+    floquet.stability_method: StabilityChoice,
+    floquet.sip_intervals: usize,
+    floquet.interval_map: IntervalMap,
+    floquet.reduction_cutoff_rad_s: f64,
+    harmonic.aft_samples: Option<usize>,
+    harmonic.half_orders: bool,
+    harmonic.combination_tones: bool,
+    harmonic.exact_contacts: bool,
+    floquet.verify: bool,
+    floquet.verify_orders: Vec<u32>,
+    floquet.verify_max_seconds: f64,
 }
 
 impl Default for FlatSettings {
     fn default() -> Self {
         StudySettings::default().into()
-    }
-}
-
-impl From<StudySettings> for FlatSettings {
-    fn from(s: StudySettings) -> Self {
-        let StudySettings {
-            model,
-            operating,
-            harmonic,
-            sweep,
-            floquet,
-            set,
-        } = s;
-        Self {
-            model,
-            flow_l_min: operating.flow_l_min,
-            cooling_temp_c: operating.cooling_temp_c,
-            ambient_temp_c: operating.ambient_temp_c,
-            order: harmonic.order,
-            omega_start: sweep.omega_start,
-            omega_end: sweep.omega_end,
-            ds_max: sweep.ds_max,
-            max_points: sweep.max_points,
-            switch_branches: sweep.switch_branches,
-            thermal: operating.thermal,
-            stability: floquet.stability,
-            stability_method: floquet.stability_method,
-            sip_intervals: floquet.sip_intervals,
-            interval_map: floquet.interval_map,
-            reduction_cutoff_rad_s: floquet.reduction_cutoff_rad_s,
-            aft_samples: harmonic.aft_samples,
-            half_orders: harmonic.half_orders,
-            combination_tones: harmonic.combination_tones,
-            exact_contacts: harmonic.exact_contacts,
-            verify: floquet.verify,
-            verify_orders: floquet.verify_orders,
-            verify_max_seconds: floquet.verify_max_seconds,
-            set,
-        }
-    }
-}
-
-impl From<FlatSettings> for StudySettings {
-    fn from(f: FlatSettings) -> Self {
-        Self {
-            model: f.model,
-            operating: OperatingSettings {
-                flow_l_min: f.flow_l_min,
-                cooling_temp_c: f.cooling_temp_c,
-                ambient_temp_c: f.ambient_temp_c,
-                thermal: f.thermal,
-            },
-            harmonic: HarmonicSettings {
-                order: f.order,
-                aft_samples: f.aft_samples,
-                half_orders: f.half_orders,
-                combination_tones: f.combination_tones,
-                exact_contacts: f.exact_contacts,
-            },
-            sweep: SweepSettings {
-                omega_start: f.omega_start,
-                omega_end: f.omega_end,
-                ds_max: f.ds_max,
-                max_points: f.max_points,
-                switch_branches: f.switch_branches,
-            },
-            floquet: FloquetSettings {
-                stability: f.stability,
-                stability_method: f.stability_method,
-                sip_intervals: f.sip_intervals,
-                interval_map: f.interval_map,
-                reduction_cutoff_rad_s: f.reduction_cutoff_rad_s,
-                verify: f.verify,
-                verify_orders: f.verify_orders,
-                verify_max_seconds: f.verify_max_seconds,
-            },
-            set: f.set,
-        }
     }
 }
 
@@ -809,6 +770,58 @@ fn run_info(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The field names of a struct's `Debug` form (`Name { a: …, b: … }`).
+    fn debug_fields(debug: &str) -> Vec<String> {
+        let body = debug
+            .split_once('{')
+            .map_or("", |(_, b)| b.trim_end_matches('}'));
+        let mut out = Vec::new();
+        let mut depth = 0i32;
+        let mut token = String::new();
+        for ch in body.chars() {
+            match ch {
+                '(' | '[' | '{' => depth += 1,
+                ')' | ']' | '}' => depth -= 1,
+                ':' if depth == 0 && !token.trim().is_empty() => {
+                    out.push(token.trim().trim_start_matches(',').trim().to_string());
+                    token.clear();
+                    continue;
+                }
+                ',' if depth == 0 => token.clear(),
+                _ => {}
+            }
+            if depth == 0 && ch != ',' {
+                token.push(ch);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn every_grouped_setting_has_a_flat_key() {
+        let s = StudySettings::default();
+        let groups = [
+            format!("{:?}", s.operating),
+            format!("{:?}", s.harmonic),
+            format!("{:?}", s.sweep),
+            format!("{:?}", s.floquet),
+        ];
+        let mut fields: Vec<String> = groups.iter().flat_map(|g| debug_fields(g)).collect();
+        assert!(fields.len() >= 20, "{fields:?}");
+        fields.sort();
+        let mut keys: Vec<String> = FLAT_KEYS.iter().map(|k| k.to_string()).collect();
+        keys.sort();
+        assert_eq!(fields, keys);
+        // and the flat form round-trips every value
+        let mut custom = StudySettings::default();
+        custom.operating.flow_l_min = 7.5;
+        custom.harmonic.exact_contacts = true;
+        custom.sweep.max_points = 17;
+        custom.floquet.verify_orders = vec![4, 6];
+        let flat = FlatSettings::from(custom.clone());
+        assert_eq!(StudySettings::from(flat), custom);
+    }
 
     #[test]
     fn setting_names_parse_as_in_files_and_unknown_ones_are_listed() {
