@@ -468,6 +468,13 @@ impl ThermalSpec {
                 ),
             ));
         }
+        self.check_values(file, found)?;
+        self.check_layout(file, found)
+    }
+
+    /// The network's values: temperatures, flow, lubricant, air, materials.
+    fn check_values(&self, file: &str, found: &mut Vec<ThermalError>) -> Result<(), ThermalError> {
+        let p = |s: &str| format!("thermal.{s}");
         found.extend(temperature(file, p("ambient_temp_c"), self.ambient_temp_c).err());
         found.extend(temperature(file, p("cooling_temp_c"), self.cooling_temp_c).err());
         // the bound of `--flow` and of a study file: no lubricant flow leaves the bearings'
@@ -554,6 +561,12 @@ impl ThermalSpec {
             }
         }
 
+        Ok(())
+    }
+
+    /// Every node used exactly once, and each shaft, disk, housing and bearing entry.
+    fn check_layout(&self, file: &str, found: &mut Vec<ThermalError>) -> Result<(), ThermalError> {
+        let p = |s: &str| format!("thermal.{s}");
         // Node usage: every node exactly once.
         let mut owner: Vec<Option<String>> = vec![None; self.n_nodes + 1];
         let mut claim = |node: usize, path: String| -> Result<(), ThermalError> {
@@ -639,97 +652,7 @@ impl ThermalSpec {
             claim(b.inner_node, q("inner_node"))?;
             claim(b.outer_node, q("outer_node"))?;
             claim(b.lubricant_node, q("lubricant_node"))?;
-            if !shaft_node(b.inner_shaft_node) {
-                return Err(invalid(file, q("inner_shaft_node"), "is not a shaft node"));
-            }
-            match (&b.housing, b.outer_shaft_node) {
-                (Some(name), None) => {
-                    if !self.housings.iter().any(|h| &h.name == name) {
-                        return Err(invalid(
-                            file,
-                            q("housing"),
-                            format!("no housing named {name:?}"),
-                        ));
-                    }
-                }
-                (None, Some(n)) => {
-                    if !shaft_node(n) {
-                        return Err(invalid(file, q("outer_shaft_node"), "is not a shaft node"));
-                    }
-                }
-                _ => {
-                    return Err(invalid(
-                        file,
-                        q("housing"),
-                        "give exactly one of `housing` and `outer_shaft_node`",
-                    ));
-                }
-            }
-            if b.n_elements == 0 {
-                return Err(invalid(file, q("n_elements"), "must be > 0"));
-            }
-            b.heat_split.check(file, &q("heat_split"))?;
-            for (f, v) in [
-                ("seat_diameter_m", b.seat_diameter_m),
-                ("element_diameter_m", b.element_diameter_m),
-                ("inner_raceway_m", b.inner_raceway_m),
-                ("outer_raceway_m", b.outer_raceway_m),
-                ("pitch_diameter_m", b.pitch_diameter_m),
-                ("bore_diameter_m", b.bore_diameter_m),
-                ("outer_diameter_m", b.outer_diameter_m),
-                ("width_m", b.width_m),
-                ("f_l", b.f_l),
-                ("f_v", b.f_v),
-            ] {
-                found.extend(positive(file, q(f), v).err());
-            }
-            if !non_negative(b.cage_mass_kg) {
-                return Err(invalid(file, q("cage_mass_kg"), "must be >= 0"));
-            }
-            if !(b.bore_diameter_m < b.inner_raceway_m
-                && b.inner_raceway_m < b.outer_raceway_m
-                && b.outer_raceway_m < b.outer_diameter_m)
-            {
-                return Err(invalid(
-                    file,
-                    q("inner_raceway_m"),
-                    "need bore < inner raceway < outer raceway < outer diameter",
-                ));
-            }
-            // the rolling elements' centres lie between the raceways, and the elements fill
-            // the gap between them
-            if !(b.inner_raceway_m < b.pitch_diameter_m && b.pitch_diameter_m < b.outer_raceway_m) {
-                return Err(invalid(
-                    file,
-                    q("pitch_diameter_m"),
-                    format!(
-                        "{} m: need inner raceway ({} m) < pitch diameter < outer raceway ({} m)",
-                        b.pitch_diameter_m, b.inner_raceway_m, b.outer_raceway_m
-                    ),
-                ));
-            }
-            match b.kind {
-                ContactLaw::Ball => match b.conformity {
-                    Some(f) if f > 0.5 => {}
-                    _ => {
-                        return Err(invalid(
-                            file,
-                            q("conformity"),
-                            "ball bearings need conformity > 0.5",
-                        ));
-                    }
-                },
-                ContactLaw::Roller => match b.roller_length_m {
-                    Some(l) if l > 0.0 => {}
-                    _ => {
-                        return Err(invalid(
-                            file,
-                            q("roller_length_m"),
-                            "roller bearings need roller_length_m > 0",
-                        ));
-                    }
-                },
-            }
+            self.check_bearing(file, k, b, &shaft_node, found)?;
         }
         if let Some(n) = (1..=self.n_nodes).find(|&n| owner[n].is_none()) {
             return Err(invalid(
@@ -737,6 +660,110 @@ impl ThermalSpec {
                 p("n_nodes"),
                 format!("node {n} is not used by any entry"),
             ));
+        }
+        Ok(())
+    }
+
+    /// Bearing `k`'s values and its seat (its nodes are claimed by [`Self::check_layout`]).
+    fn check_bearing(
+        &self,
+        file: &str,
+        k: usize,
+        b: &BearingThermalSpec,
+        shaft_node: &dyn Fn(usize) -> bool,
+        found: &mut Vec<ThermalError>,
+    ) -> Result<(), ThermalError> {
+        let q = |f: &str| format!("thermal.bearings[{k}].{f}");
+        if !shaft_node(b.inner_shaft_node) {
+            return Err(invalid(file, q("inner_shaft_node"), "is not a shaft node"));
+        }
+        match (&b.housing, b.outer_shaft_node) {
+            (Some(name), None) => {
+                if !self.housings.iter().any(|h| &h.name == name) {
+                    return Err(invalid(
+                        file,
+                        q("housing"),
+                        format!("no housing named {name:?}"),
+                    ));
+                }
+            }
+            (None, Some(n)) => {
+                if !shaft_node(n) {
+                    return Err(invalid(file, q("outer_shaft_node"), "is not a shaft node"));
+                }
+            }
+            _ => {
+                return Err(invalid(
+                    file,
+                    q("housing"),
+                    "give exactly one of `housing` and `outer_shaft_node`",
+                ));
+            }
+        }
+        if b.n_elements == 0 {
+            return Err(invalid(file, q("n_elements"), "must be > 0"));
+        }
+        b.heat_split.check(file, &q("heat_split"))?;
+        for (f, v) in [
+            ("seat_diameter_m", b.seat_diameter_m),
+            ("element_diameter_m", b.element_diameter_m),
+            ("inner_raceway_m", b.inner_raceway_m),
+            ("outer_raceway_m", b.outer_raceway_m),
+            ("pitch_diameter_m", b.pitch_diameter_m),
+            ("bore_diameter_m", b.bore_diameter_m),
+            ("outer_diameter_m", b.outer_diameter_m),
+            ("width_m", b.width_m),
+            ("f_l", b.f_l),
+            ("f_v", b.f_v),
+        ] {
+            found.extend(positive(file, q(f), v).err());
+        }
+        if !non_negative(b.cage_mass_kg) {
+            return Err(invalid(file, q("cage_mass_kg"), "must be >= 0"));
+        }
+        if !(b.bore_diameter_m < b.inner_raceway_m
+            && b.inner_raceway_m < b.outer_raceway_m
+            && b.outer_raceway_m < b.outer_diameter_m)
+        {
+            return Err(invalid(
+                file,
+                q("inner_raceway_m"),
+                "need bore < inner raceway < outer raceway < outer diameter",
+            ));
+        }
+        // the rolling elements' centres lie between the raceways, and the elements fill
+        // the gap between them
+        if !(b.inner_raceway_m < b.pitch_diameter_m && b.pitch_diameter_m < b.outer_raceway_m) {
+            return Err(invalid(
+                file,
+                q("pitch_diameter_m"),
+                format!(
+                    "{} m: need inner raceway ({} m) < pitch diameter < outer raceway ({} m)",
+                    b.pitch_diameter_m, b.inner_raceway_m, b.outer_raceway_m
+                ),
+            ));
+        }
+        match b.kind {
+            ContactLaw::Ball => match b.conformity {
+                Some(f) if f > 0.5 => {}
+                _ => {
+                    return Err(invalid(
+                        file,
+                        q("conformity"),
+                        "ball bearings need conformity > 0.5",
+                    ));
+                }
+            },
+            ContactLaw::Roller => match b.roller_length_m {
+                Some(l) if l > 0.0 => {}
+                _ => {
+                    return Err(invalid(
+                        file,
+                        q("roller_length_m"),
+                        "roller bearings need roller_length_m > 0",
+                    ));
+                }
+            },
         }
         Ok(())
     }
