@@ -105,61 +105,6 @@ pub struct NearZero {
     pub steps: usize,
 }
 
-impl NearZero {
-    /// The disk's edge placed where the set and a frozen-temperature monodromy product
-    /// with multipliers `fast` (orbit period `period`, s) agree on how many mechanical
-    /// exponents lie inside: `exponents.len() − thermal` of the product's exponents
-    /// `|ln μ|/P` below the edge, the next one above it.
-    ///
-    /// The same mode has two estimates, the set's coupled exponent and the product's
-    /// frozen one, which differ by the thermal coupling. An edge that falls between the
-    /// two loses the mode (the product's estimate is superseded, the coupled one is not
-    /// in the set) or counts it twice; it happens wherever the edge, halfway to the next
-    /// converged exponent, meets the product's estimate. The current `radius` is kept
-    /// when it agrees already, or when no edge between the largest kept modulus and
-    /// [`Self::outer`] (at most twice the radius) does, or when the two counts differ by
-    /// more than one mode (the set then lacks thermal exponents that decay faster than it
-    /// reaches, and its mechanical count is not known).
-    pub fn edge_agreeing_with(&self, fast: &[Complex64], period: f64) -> f64 {
-        let Some(mech) = self.exponents.len().checked_sub(self.thermal) else {
-            return self.radius;
-        };
-        if self.thermal == 0 {
-            return self.radius;
-        }
-        let mut p: Vec<f64> = fast
-            .iter()
-            .filter(|m| m.norm() > 0.0)
-            .map(|m| m.ln().norm() / period)
-            .collect();
-        p.sort_by(f64::total_cmp);
-        // a count off by more than one mode: not every thermal exponent is in the set
-        if p.iter()
-            .filter(|x| **x < self.radius)
-            .count()
-            .abs_diff(mech)
-            > 1
-        {
-            return self.radius;
-        }
-        let inner = self.exponents.iter().map(|l| l.norm()).fold(0.0, f64::max);
-        let lo = inner.max(if mech > 0 {
-            p.get(mech - 1).copied().unwrap_or(f64::INFINITY)
-        } else {
-            0.0
-        });
-        let hi = self
-            .outer
-            .min(2.0 * self.radius)
-            .min(p.get(mech).copied().unwrap_or(f64::INFINITY));
-        if lo >= hi || (lo < self.radius && self.radius < hi) {
-            self.radius
-        } else {
-            0.5 * (lo + hi)
-        }
-    }
-}
-
 /// A Floquet mode of the truncated balance near zero: the exponent `λ` and the harmonic
 /// coefficients of its periodic factor `p` (a perturbation `Re(e^{λt} p(t))` of the
 /// orbit), in the layout of the balance's unknowns (mechanical DoFs, then thermal, each

@@ -35,10 +35,72 @@
 
 use num_complex::Complex64;
 
-use super::{BifurcationKind, NearZeroDisk, UNIT_CIRCLE_TOL};
+use super::{BifurcationKind, NearZero, NearZeroDisk, UNIT_CIRCLE_TOL};
 
 /// More candidates than this and the radius decides (2^12 subsets at most).
 const MAX_CANDIDATES: usize = 12;
+
+/// The exponents `ln μ / P` of the fast multipliers `fast` (`None` for `μ = 0`).
+fn rates(fast: &[Complex64], period: f64) -> Vec<Option<Complex64>> {
+    fast.iter()
+        .map(|m| (m.norm() > 0.0).then(|| m.ln() / period))
+        .collect()
+}
+
+/// How many of a disk's `n` exponents are mechanical, with `thermal` of them the thermal
+/// equations'; `None` when unknown (`thermal` 0) or impossible.
+fn mechanical(n: usize, thermal: usize) -> Option<usize> {
+    n.checked_sub(thermal).filter(|_| thermal > 0)
+}
+
+/// Whether a radius's count of product exponents inside and the disk's mechanical count
+/// are off by more than one mode: then the thermal equations' exponents are not all in
+/// the disk (a thermal node of small capacity decays fast), the mechanical count is
+/// unknown, and the radius decides.
+fn counts_disagree(inside: usize, mech: usize) -> bool {
+    inside.abs_diff(mech) > 1
+}
+
+/// The disk's edge placed where its set `nz` and a frozen-temperature monodromy product
+/// with multipliers `fast` (orbit period `period`, s) agree on how many mechanical
+/// exponents lie inside: `exponents.len() − thermal` of the product's exponents
+/// `|ln μ|/P` below the edge, the next one above it.
+///
+/// The same mode has two estimates, the set's coupled exponent and the product's frozen
+/// one, which differ by the thermal coupling. An edge that falls between the two loses
+/// the mode (the product's estimate is superseded, the coupled one is not in the set) or
+/// counts it twice; it happens wherever the edge, halfway to the next converged
+/// exponent, meets the product's estimate. The set's radius is kept when it agrees
+/// already, or when no edge between the largest kept modulus and [`NearZero::outer`] (at
+/// most twice the radius) does, or when the counts disagree by more than one mode.
+pub(super) fn edge(nz: &NearZero, fast: &[Complex64], period: f64) -> f64 {
+    let Some(mech) = mechanical(nz.exponents.len(), nz.thermal) else {
+        return nz.radius;
+    };
+    let mut p: Vec<f64> = rates(fast, period)
+        .into_iter()
+        .flatten()
+        .map(|r| r.norm())
+        .collect();
+    p.sort_by(f64::total_cmp);
+    if counts_disagree(p.iter().filter(|x| **x < nz.radius).count(), mech) {
+        return nz.radius;
+    }
+    let inner = nz.exponents.iter().map(|l| l.norm()).fold(0.0, f64::max);
+    let lo = inner.max(match mech {
+        0 => 0.0,
+        m => p.get(m - 1).copied().unwrap_or(f64::INFINITY),
+    });
+    let hi = nz
+        .outer
+        .min(2.0 * nz.radius)
+        .min(p.get(mech).copied().unwrap_or(f64::INFINITY));
+    if lo >= hi || (lo < nz.radius && nz.radius < hi) {
+        nz.radius
+    } else {
+        0.5 * (lo + hi)
+    }
+}
 
 /// The superseded flags (one per entry of `fast`) for the disk `disk` holding the
 /// exponents `near` (sorted by modulus); with `odd_folds`, the fold parity of the branch.
@@ -48,12 +110,16 @@ pub(super) fn superseded(
     disk: &NearZeroDisk,
     odd_folds: Option<bool>,
 ) -> Vec<bool> {
-    let rate = |m: Complex64| m.ln() / disk.period;
-    let by_radius: Vec<bool> = fast.iter().map(|m| disk.holds(*m)).collect();
-    let Some(mech) = near.len().checked_sub(disk.thermal) else {
+    let rate = rates(fast, disk.period);
+    let by_radius: Vec<bool> = rate
+        .iter()
+        .map(|r| r.is_some_and(|r| r.norm() < disk.radius))
+        .collect();
+    let Some(mech) = mechanical(near.len(), disk.thermal) else {
         return by_radius;
     };
-    if disk.thermal == 0 {
+    let inside = by_radius.iter().filter(|f| **f).count();
+    if counts_disagree(inside, mech) {
         return by_radius;
     }
     let target: f64 = near.iter().skip(disk.thermal).map(|l| l.re).sum();
@@ -63,81 +129,78 @@ pub(super) fn superseded(
             .take(disk.thermal)
             .map(|l| l.norm())
             .fold(0.0, f64::max);
-    // the thermal equations' exponents are not all in the disk (a thermal node of small
-    // capacity decays fast) when the radius's count is off by more than one mode: the
-    // mechanical count is then unknown and the radius decides
-    if by_radius.iter().filter(|f| **f).count().abs_diff(mech) > 1 {
-        return by_radius;
-    }
     // the product's estimates of the disk's modes lie within twice its radius
     let reach = disk.outer.max(disk.radius).min(2.0 * disk.radius);
     let candidates: Vec<usize> = (0..fast.len())
-        .filter(|&i| fast[i].norm() > 0.0 && rate(fast[i]).norm() < reach)
+        .filter(|&i| rate[i].is_some_and(|r| r.norm() < reach))
         .collect();
     if candidates.len() > MAX_CANDIDATES || candidates.len() < mech {
         return by_radius;
     }
-    let flags_of = |mask: u32| {
-        let mut f = vec![false; fast.len()];
-        for (k, &i) in candidates.iter().enumerate() {
-            f[i] = mask >> k & 1 == 1;
-        }
-        f
-    };
-    let mismatch = |flags: &[bool]| {
-        let sum: f64 = (0..fast.len())
-            .filter(|&i| flags[i])
-            .map(|i| rate(fast[i]).re)
-            .sum();
-        (sum - target).abs()
-    };
-    // the real exponents above zero of the joint set, for the parity
-    let real_unstable = |flags: &[bool]| {
-        let fast_real = (0..fast.len())
-            .filter(|&i| !flags[i])
-            .filter(|&i| {
-                BifurcationKind::of_multiplier(fast[i]) == BifurcationKind::SaddleNode
-                    && fast[i].norm() > 1.0 + UNIT_CIRCLE_TOL
-            })
-            .count();
-        let near_real = near
+    let re = |i: usize| rate[i].map_or(0.0, |r| r.re);
+    let chosen_by = |mask: u32| {
+        candidates
             .iter()
-            .filter(|l| BifurcationKind::of_exponent(**l) == BifurcationKind::SaddleNode)
-            .filter(|l| l.re > disk.tol())
-            .count();
-        fast_real + near_real
+            .enumerate()
+            .filter(move |(k, _)| mask >> k & 1 == 1)
+            .map(|(_, &i)| i)
     };
-    let subsets: Vec<(f64, Vec<bool>)> = (0u32..(1 << candidates.len()))
+    let mismatch = |sum: f64| (sum - target).abs();
+    // the real exponents above zero of the joint set, for the parity: the disk's real
+    // ones and the product's real ones above +1 it does not supersede
+    let near_real = near
+        .iter()
+        .filter(|l| BifurcationKind::of_exponent(**l) == BifurcationKind::SaddleNode)
+        .filter(|l| l.re > disk.tol())
+        .count();
+    let real_above = |i: usize| {
+        BifurcationKind::of_multiplier(fast[i]) == BifurcationKind::SaddleNode
+            && fast[i].norm() > 1.0 + UNIT_CIRCLE_TOL
+    };
+    let all_real_above = (0..fast.len()).filter(|&i| real_above(i)).count();
+    let parity_of = |superseded_real_above: usize| {
+        (near_real + all_real_above - superseded_real_above) % 2 == 1
+    };
+    // each subset of `mech` candidates: its mismatch, its mask
+    let subsets: Vec<(f64, u32)> = (0u32..(1 << candidates.len()))
         .filter(|mask| mask.count_ones() as usize == mech)
-        .map(|mask| {
-            let f = flags_of(mask);
-            (mismatch(&f), f)
-        })
+        .map(|mask| (mismatch(chosen_by(mask).map(re).sum()), mask))
         .collect();
-    let Some(best) = subsets.iter().min_by(|a, b| a.0.total_cmp(&b.0)) else {
+    let Some(&(best, best_mask)) = subsets.iter().min_by(|a, b| a.0.total_cmp(&b.0)) else {
         return by_radius;
     };
-    let base = if by_radius.iter().filter(|f| **f).count() == mech {
-        mismatch(&by_radius)
+    let flags_of = |mask: u32| {
+        let mut f = vec![false; fast.len()];
+        chosen_by(mask).for_each(|i| f[i] = true);
+        f
+    };
+    let base = if inside == mech {
+        mismatch((0..fast.len()).filter(|&i| by_radius[i]).map(re).sum())
     } else {
         f64::INFINITY
     };
-    let (chosen_d, chosen) = if best.0 < 0.5 * base && base - best.0 > slack {
-        (best.0, best.1.clone())
+    let (chosen_d, chosen) = if best < 0.5 * base && base - best > slack {
+        (best, flags_of(best_mask))
     } else {
-        (base.min(best.0 + slack), by_radius)
+        (base.min(best + slack), by_radius)
     };
     let Some(odd) = odd_folds else {
         return chosen;
     };
-    if (real_unstable(&chosen) % 2 == 1) == odd {
+    let chosen_real = (0..fast.len())
+        .filter(|&i| chosen[i] && real_above(i))
+        .count();
+    if parity_of(chosen_real) == odd {
         return chosen;
     }
     subsets
-        .into_iter()
-        .filter(|(d, f)| *d <= chosen_d + slack && (real_unstable(f) % 2 == 1) == odd)
+        .iter()
+        .filter(|(d, mask)| {
+            *d <= chosen_d + slack
+                && parity_of(chosen_by(*mask).filter(|&i| real_above(i)).count()) == odd
+        })
         .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map_or(chosen, |(_, f)| f)
+        .map_or(chosen, |&(_, mask)| flags_of(mask))
 }
 
 #[cfg(test)]

@@ -202,7 +202,7 @@ impl FloquetResult {
     pub fn with_near_zero(self, nz: NearZero, period: f64) -> Self {
         let gamma = slow::fast_gap(&self.multipliers, period);
         let disk = NearZeroDisk {
-            radius: nz.edge_agreeing_with(&self.multipliers, period),
+            radius: join::edge(&nz, &self.multipliers, period),
             period,
             outer: nz.outer,
             thermal: nz.thermal,
