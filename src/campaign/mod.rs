@@ -57,6 +57,7 @@
 pub mod figures;
 pub mod map;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::Mutex;
@@ -138,13 +139,34 @@ pub struct TransientRun {
     pub rtol: Option<f64>,
     /// Displacement samples per revolution on `/transient/samples` (default 16).
     pub samples_per_rev: Option<u32>,
+    /// Start on a point of this sweep run of the campaign instead of a cold start (with
+    /// `point`); the run then takes that run's model and settings, and starts once it has
+    /// ended.
+    pub from: Option<String>,
+    /// Index of the point of `from`'s recording to start on.
+    pub point: Option<u64>,
+    /// With `from`: scale the start's vibration by 1 + `perturb`; with `perturb_mode`, the
+    /// size of the step along that Floquet mode (as `tmrotor transient --perturb`).
+    pub perturb: Option<f64>,
+    /// With `from`: perturb along the K-th Floquet mode nearest zero (0: the largest real
+    /// part of its exponent), by `perturb` of the orbit's vibration.
+    pub perturb_mode: Option<usize>,
 }
 
 impl TransientRun {
-    /// The integrator's settings, checked; the error says which key and why.
-    pub fn settings(&self) -> Result<crate::transient::TransientSettings, String> {
+    /// The integrator's settings, checked; the error says which key and why. `start_speed`
+    /// is the speed of the point a run `from` a sweep starts on: without `speed` or `ramp`
+    /// the run holds it.
+    pub fn settings(
+        &self,
+        start_speed: Option<f64>,
+    ) -> Result<crate::transient::TransientSettings, String> {
         use crate::integrate::{SpeedProfile, TransientOptions};
-        let profile = match (&self.ramp, self.speed) {
+        self.check_start()?;
+        let profile = match (
+            &self.ramp,
+            self.speed.or(start_speed.filter(|_| self.ramp.is_none())),
+        ) {
             (Some(_), Some(_)) => return Err("transient: give speed or ramp, not both".into()),
             (Some(r), None) => {
                 let parsed = r
@@ -173,7 +195,11 @@ impl TransientRun {
                 SpeedProfile::Constant(w)
             }
             (None, None) => {
-                return Err("transient: give speed (rad/s) or ramp (\"START:END\")".into());
+                return Err(
+                    "transient: give speed (rad/s) or ramp (\"START:END\"), or from and point \
+                     (the point's speed)"
+                        .into(),
+                );
             }
         };
         profile.check().map_err(|e| {
@@ -215,6 +241,73 @@ impl TransientRun {
             },
             samples_per_revolution,
         })
+    }
+}
+
+impl TransientRun {
+    /// The start keys together: `from` with `point`, perturbations only from a point.
+    fn check_start(&self) -> Result<(), String> {
+        match (&self.from, self.point) {
+            (Some(_), None) => {
+                return Err("transient.from: give the point to start on (point = INDEX)".into());
+            }
+            (None, Some(_)) => {
+                return Err(
+                    "transient.point: give the sweep run it belongs to (from = \"RUN\")".into(),
+                );
+            }
+            (Some(run), _) if run.is_empty() => {
+                return Err("transient.from: name a sweep run of this campaign".into());
+            }
+            _ => {}
+        }
+        if self.from.is_none() && (self.perturb.is_some() || self.perturb_mode.is_some()) {
+            return Err(
+                "transient.perturb: only with from and point (a cold start has no orbit to perturb)"
+                    .into(),
+            );
+        }
+        if let Some(f) = self.perturb
+            && !(f.is_finite() && f > -1.0 && f.abs() <= 10.0)
+        {
+            return Err(format!("transient.perturb {f}: must lie in (-1, 10]"));
+        }
+        if let Some(k) = self.perturb_mode
+            && self.perturb.is_none_or(|f| f == 0.0)
+        {
+            return Err(format!(
+                "transient.perturb_mode {k}: give the size with perturb (a fraction of the \
+                 orbit's vibration, e.g. 0.01)"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The run's start state: a cold start, or the point of `from`'s recording at
+    /// `source` (perturbed as asked), with the problem to integrate and the start's speed.
+    fn start(
+        &self,
+        run: &CampaignRun,
+        source: &Path,
+    ) -> Result<(SweepProblem, crate::transient::StartState, Option<f64>), String> {
+        let Some(point) = self.point else {
+            let problem = SweepProblem::new(&run.settings).map_err(|e| e.to_string())?;
+            let start = crate::transient::StartState::cold(&problem);
+            return Ok((problem, start, None));
+        };
+        let recorded =
+            crate::transient::RecordedStart::read(source, point).map_err(|e| e.to_string())?;
+        let perturb = self.perturb.unwrap_or(0.0);
+        let start = match self.perturb_mode {
+            None => recorded.on_orbit(perturb, 0.0),
+            Some(k) => {
+                recorded
+                    .along_mode(k, perturb, 0.0)
+                    .map_err(|e| e.to_string())?
+                    .0
+            }
+        };
+        Ok((recorded.problem, start, Some(recorded.omega)))
     }
 }
 
@@ -379,7 +472,23 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
                 let t: TransientRun = v.try_into().map_err(|e: toml::de::Error| {
                     error(&origin, format!("transient: {}", e.to_string().trim_end()))
                 })?;
-                t.settings().map_err(|e| error(&origin, e))?;
+                // a run from a point holds that point's speed unless told otherwise, known
+                // once its sweep has run: any speed checks the other keys now
+                t.settings(t.from.as_ref().map(|_| 1.0))
+                    .map_err(|e| error(&origin, e))?;
+                if t.from.is_some()
+                    && let Some(key) = table
+                        .keys()
+                        .find(|k| !matches!(k.as_str(), "name" | "transient"))
+                {
+                    return Err(error(
+                        &origin,
+                        format!(
+                            "{key}: a transient run from a recorded point takes the model and \
+                             settings of its sweep run (transient.from); leave {key} out"
+                        ),
+                    ));
+                }
                 Some(t)
             }
         };
@@ -405,6 +514,29 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
             lean: spec.lean,
             transient,
         });
+    }
+    // a run from a recorded point: its sweep run exists and is a sweep, and the run takes
+    // its settings (what ran is what the manifest lists)
+    for k in 0..runs.len() {
+        let Some(source) = runs[k].transient.as_ref().and_then(|t| t.from.clone()) else {
+            continue;
+        };
+        let fail = |reason: String| CampaignError::Invalid {
+            file: file.clone(),
+            run: runs[k].name.clone(),
+            reason,
+        };
+        let Some(src) = runs.iter().find(|r| r.name == source) else {
+            return Err(fail(format!(
+                "transient.from {source:?}: the campaign has no run of that name"
+            )));
+        };
+        if src.transient.is_some() {
+            return Err(fail(format!(
+                "transient.from {source:?}: that run is a transient run; start from a sweep run"
+            )));
+        }
+        runs[k].settings = src.settings.clone();
     }
     let out = match &spec.output_dir {
         Some(d) if d.is_relative() => base.join(d),
@@ -707,6 +839,50 @@ fn completed_before<'m>(
     .then_some(prev)
 }
 
+/// How the runs of one invocation ended, by name, for the runs waiting on them.
+#[derive(Default)]
+struct Ended {
+    status: Mutex<BTreeMap<String, String>>,
+    changed: std::sync::Condvar,
+}
+
+impl Ended {
+    fn set(&self, run: &str, status: &str) {
+        if let Ok(mut m) = self.status.lock() {
+            m.insert(run.to_string(), status.to_string());
+        }
+        self.changed.notify_all();
+    }
+
+    /// Waits until `run` has ended (its status) or `stop` says so (`None`).
+    fn wait_for(&self, run: &str, stop: &dyn Fn() -> bool) -> Option<String> {
+        let mut m = self.status.lock().ok()?;
+        loop {
+            if let Some(s) = m.get(run) {
+                return Some(s.clone());
+            }
+            if stop() {
+                return None;
+            }
+            m = self
+                .changed
+                .wait_timeout(m, std::time::Duration::from_millis(200))
+                .ok()?
+                .0;
+        }
+    }
+}
+
+/// Adds the checksum of sweep run `source`'s recording in `out` to a transient run's
+/// manifest settings: a run from a recorded point is complete only for the recording it
+/// started from (empty when the recording cannot be read; the run then fails saying why).
+fn with_source_checksum(settings: &mut toml::Table, out: &Path, source: &str) {
+    let sha = sha256_file(&out.join(format!("{source}.mcap"))).unwrap_or_default();
+    if let Some(toml::Value::Table(t)) = settings.get_mut("transient") {
+        t.insert("from_sha256".into(), toml::Value::String(sha));
+    }
+}
+
 /// Where run `r`'s recording goes in `out`, and its settings as a manifest table.
 fn recording_and_settings(r: &CampaignRun, out: &Path) -> (PathBuf, toml::Table) {
     let mut table = toml::Table::try_from(&r.settings).unwrap_or_default();
@@ -761,13 +937,16 @@ pub fn plan(
     shard: Option<(usize, usize)>,
 ) -> Result<(Vec<PlannedRun>, PathBuf), CampaignError> {
     let p = prepare(campaign_path, shard)?;
-    let planned = p
+    let mut planned: Vec<PlannedRun> = p
         .runs
         .iter()
         .enumerate()
         .map(|(k, r)| {
             let prev = previous_entry(&p.previous, &r.name);
-            let (rec_path, settings) = recording_and_settings(r, &p.out);
+            let (rec_path, mut settings) = recording_and_settings(r, &p.out);
+            if let Some(source) = r.transient.as_ref().and_then(|t| t.from.as_deref()) {
+                with_source_checksum(&mut settings, &p.out, source);
+            }
             PlannedRun {
                 run: r.clone(),
                 position: shard.map_or(k, |(i, n)| i + k * n),
@@ -776,6 +955,22 @@ pub fn plan(
             }
         })
         .collect();
+    // a run from a point of a sweep that runs again runs again too
+    let rerun: Vec<String> = planned
+        .iter()
+        .filter(|r| !r.skip)
+        .map(|r| r.run.name.clone())
+        .collect();
+    for r in &mut planned {
+        if r.run
+            .transient
+            .as_ref()
+            .and_then(|t| t.from.as_ref())
+            .is_some_and(|s| rerun.contains(s))
+        {
+            r.skip = false;
+        }
+    }
     Ok((planned, p.out))
 }
 
@@ -846,14 +1041,60 @@ pub fn run(
         workers,
         wide: std::sync::OnceLock::new(),
     };
+    // how each run of this invocation ended, for the runs that start from its points
+    let ended = Ended::default();
+    // After an interrupt no further run is started (it would only write an empty recording
+    // over whatever an earlier attempt left).
+    let interrupted = || {
+        interrupt
+            .as_ref()
+            .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
+    };
+    let finish = |k: usize, r: &CampaignRun, entry: ManifestEntry| {
+        if let Ok(mut m) = manifest.lock() {
+            m.runs[k] = entry.clone();
+            let _ = write_manifest(&manifest_path, &m);
+        }
+        ended.set(&r.name, &entry.status);
+        progress(Event::Finished {
+            run: &r.name,
+            entry: &entry,
+        });
+    };
     let work = |k: usize, r: &CampaignRun| {
-        let (rec_path, settings_table) = recording_and_settings(r, &out);
+        let (rec_path, mut settings_table) = recording_and_settings(r, &out);
+        if let Some(source) = r.transient.as_ref().and_then(|t| t.from.as_deref()) {
+            let in_this = selected.iter().any(|s| s.name == source);
+            let status = if in_this {
+                ended.wait_for(source, &interrupted)
+            } else {
+                None
+            };
+            if interrupted() {
+                return;
+            }
+            if let Some(status) = status.filter(|s| s != "completed") {
+                let entry = ManifestEntry {
+                    status: format!(
+                        "failed: its sweep run {source} ended {status:?}; nothing was started"
+                    ),
+                    ..manifest
+                        .lock()
+                        .map(|m| m.runs[k].clone())
+                        .unwrap_or_default()
+                };
+                finish(k, r, entry);
+                return;
+            }
+            with_source_checksum(&mut settings_table, &out, source);
+        }
         // Resume: skip a completed run whose recording is unchanged.
         let prev = previous_entry(&previous, &r.name);
         if let Some(prev) = completed_before(prev, &settings_table, &r.model_sha256, &rec_path) {
             if let Ok(mut m) = manifest.lock() {
                 m.runs[k] = prev.clone();
             }
+            ended.set(&r.name, &prev.status);
             progress(Event::Skipped {
                 run: &r.name,
                 entry: prev,
@@ -883,29 +1124,24 @@ pub fn run(
             model_sha256: r.model_sha256.clone(),
             ..entry
         };
-        if let Ok(mut m) = manifest.lock() {
-            m.runs[k] = entry.clone();
-            let _ = write_manifest(&manifest_path, &m);
-        }
-        progress(Event::Finished {
-            run: &r.name,
-            entry: &entry,
-        });
+        finish(k, r, entry);
     };
-    // After an interrupt no further run is started (it would only write an empty recording
-    // over whatever an earlier attempt left).
-    let interrupted = || {
-        interrupt
+    // runs that start from another run's points go last, so that every run they wait
+    // for has started before them (no slot waits on a run that has no slot)
+    let mut order: Vec<usize> = (0..selected.len()).collect();
+    order.sort_by_key(|&k| {
+        selected[k]
+            .transient
             .as_ref()
-            .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed))
-    };
+            .is_some_and(|t| t.from.is_some())
+    });
     std::thread::scope(|scope| {
         for _ in 0..slots {
             scope.spawn(|| {
                 while !interrupted() {
-                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-                    let Some(r) = selected.get(k) else { break };
-                    work(k, r);
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(&k) = order.get(i) else { break };
+                    work(k, &selected[k]);
                 }
             });
         }
@@ -1066,9 +1302,9 @@ fn run_transient_one(
     interrupt: Option<Arc<AtomicBool>>,
     entry: &mut ManifestEntry,
 ) {
-    let result = t.settings().and_then(|settings| {
-        let problem = SweepProblem::new(&r.settings).map_err(|e| e.to_string())?;
-        let start = crate::transient::StartState::cold(&problem);
+    let source = rec_path.with_file_name(format!("{}.mcap", t.from.as_deref().unwrap_or_default()));
+    let result = t.start(r, &source).and_then(|(problem, start, speed)| {
+        let settings = t.settings(speed)?;
         let mut sink =
             McapSink::create(rec_path, McapOptions::default()).map_err(|e| e.to_string())?;
         crate::transient::run_transient(

@@ -12,15 +12,14 @@ use indicatif::ProgressBar;
 
 use super::sweep::{StudyArgs, parse_range};
 use crate::cli::interrupt::install_interrupt_flag;
-use crate::derive::CoupledRederive;
-use crate::hb::HarmonicBalance;
 use crate::integrate::IntegrateError;
 use crate::integrate::{SpeedProfile, ThermalStepping, TransientOptions};
+use crate::record::McapOptions;
 use crate::record::output::check_target;
-use crate::record::{McapOptions, read_recording};
 use crate::study::SweepProblem;
-use crate::system::System;
-use crate::transient::{StartState, TransientSettings, describe_profile, run_transient};
+use crate::transient::{
+    RecordedStart, StartState, TransientSettings, describe_profile, run_transient,
+};
 
 /// Speed profile, start state and integrator settings of a transient run.
 #[derive(Debug, Clone, Args)]
@@ -254,49 +253,9 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
                     "--from takes the model and study of the recording; leave out --model, --study and --set"
                 );
             }
-            let rec = read_recording(rec_path)?;
-            let point = rec.point(index).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "{}: no point {index} (the recording holds {} points{})",
-                    rec_path.display(),
-                    rec.points.len(),
-                    rec.points
-                        .last()
-                        .map_or(String::new(), |p| format!(", indices up to {}", p.index))
-                )
-            })?;
-            let run = rec
-                .run_of(point.branch)
-                .ok_or_else(|| {
-                    anyhow::anyhow!(
-                        "{}: point {index} is on branch {} which the recording does not describe",
-                        rec_path.display(),
-                        point.branch
-                    )
-                })?
-                .into_owned();
-            let rederive = CoupledRederive::from_run(&run)
-                .with_context(|| format!("rebuilding the model of {}", rec_path.display()))?;
-            let sol = rederive.solution(point);
-            let problem = rederive.problem();
-            let sys = &problem.system;
-            let mean: Vec<f64> = (0..sys.n_mech()).map(|d| sol.mech_coeffs(d)[0]).collect();
-            let label = format!(
-                "point {index} of {} (ω = {} rad/s{})",
-                rec_path.display(),
-                point.omega_rad_s,
-                match point.stable {
-                    Some(true) => ", stable",
-                    Some(false) => ", unstable",
-                    None => "",
-                }
-            );
+            let recorded = RecordedStart::read(rec_path, index)?;
             let start = match args.perturb_mode {
-                None => StartState::on_orbit(&sol, sys.n_mech(), sys.n_therm(), label).perturbed(
-                    &mean,
-                    args.perturb,
-                    args.perturb_temp,
-                ),
+                None => recorded.on_orbit(args.perturb, args.perturb_temp),
                 Some(k) => {
                     if args.perturb == 0.0 {
                         bail!(
@@ -304,24 +263,21 @@ pub fn run(args: &TransientArgs, out: &mut impl std::io::Write) -> anyhow::Resul
                              the orbit's vibration, e.g. 0.01)"
                         );
                     }
-                    let s = &problem.settings;
-                    let hb = HarmonicBalance::new(sys, &problem.basis, s.harmonic.aft_samples)?;
-                    let (start, mode) = StartState::along_mode(&sol, &hb, k, args.perturb, label)?;
+                    let (start, mode) = recorded.along_mode(k, args.perturb, args.perturb_temp)?;
                     if !args.quiet {
                         eprintln!(
                             "transient: start along the Floquet mode of exponent {:.4e}{:+.4e}i \
                              1/s (period of the orbit {:.4e} s)",
                             mode.exponent.re,
                             mode.exponent.im,
-                            crate::system::PeriodicOrbit::period(&sol)
+                            crate::system::PeriodicOrbit::period(&recorded.orbit)
                         );
                     }
-                    start.perturbed(&mean, 0.0, args.perturb_temp)
+                    start
                 }
             };
-            // the recording's problem, rebuilt once more to own it
-            let problem = SweepProblem::with_model(&problem.settings, problem.model.clone())?;
-            (problem, start, Some(point.omega_rad_s))
+            let omega = recorded.omega;
+            (recorded.problem, start, Some(omega))
         }
         _ => {
             let mut settings = args.base.settings()?;

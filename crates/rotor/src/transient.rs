@@ -32,6 +32,8 @@ pub enum TransientError {
     Integrate(#[from] IntegrateError),
     #[error(transparent)]
     Record(#[from] RecordError),
+    #[error("{file}: {reason}")]
+    Recording { file: String, reason: String },
     #[error("transient setting {field} = {value}: {reason}")]
     Setting {
         field: &'static str,
@@ -177,6 +179,104 @@ impl StartState {
             mu.norm()
         );
         Ok((start, mode))
+    }
+}
+
+/// A point of a recorded sweep to start a run from, with the model and study that
+/// computed it (rebuilt from the recording's run description, on the point's branch's
+/// basis): what `tmrotor transient --from REC --point I` and a campaign's
+/// `transient = { from = …, point = … }` start from.
+pub struct RecordedStart {
+    /// The recording's problem (model, coupled rotor, basis, settings).
+    pub problem: SweepProblem,
+    /// The point's harmonic-balance orbit.
+    pub orbit: crate::hb::HbSolution,
+    /// The point's speed, rad/s.
+    pub omega: f64,
+    /// `point 93 of sweep.mcap (ω = 468.47 rad/s, stable)`.
+    pub label: String,
+}
+
+impl RecordedStart {
+    /// Reads point `index` of the sweep recording at `path`; errors name the file and say
+    /// which points it holds.
+    pub fn read(path: &std::path::Path, index: u64) -> Result<Self, TransientError> {
+        let file = path.display().to_string();
+        let fail = |reason: String| TransientError::Recording {
+            file: file.clone(),
+            reason,
+        };
+        let rec = crate::record::read_recording(path).map_err(|e| fail(e.to_string()))?;
+        let point = rec.point(index).ok_or_else(|| {
+            fail(format!(
+                "no point {index} (the recording holds {} points{})",
+                rec.points.len(),
+                rec.points
+                    .last()
+                    .map_or(String::new(), |p| format!(", indices up to {}", p.index))
+            ))
+        })?;
+        let run = rec.run_of(point.branch).ok_or_else(|| {
+            fail(format!(
+                "point {index} is on branch {} which the recording does not describe",
+                point.branch
+            ))
+        })?;
+        let rederive = crate::derive::CoupledRederive::from_run(&run)
+            .map_err(|e| fail(format!("rebuilding its model: {e}")))?;
+        let orbit = rederive.solution(point);
+        let label = format!(
+            "point {index} of {file} (ω = {} rad/s{})",
+            point.omega_rad_s,
+            match point.stable {
+                Some(true) => ", stable",
+                Some(false) => ", unstable",
+                None => "",
+            }
+        );
+        Ok(Self {
+            problem: rederive.into_problem(),
+            omega: point.omega_rad_s,
+            orbit,
+            label,
+        })
+    }
+
+    /// The orbit's mean displacements (the centre of [`StartState::perturbed`]'s scaling).
+    fn mean(&self) -> Vec<f64> {
+        (0..self.orbit.n_mech())
+            .map(|d| self.orbit.mech_coeffs(d)[0])
+            .collect()
+    }
+
+    /// On the orbit at time 0, its vibration scaled by `1 + factor` and its temperatures
+    /// shifted by `temp_shift` K ([`StartState::perturbed`]).
+    pub fn on_orbit(&self, factor: f64, temp_shift: f64) -> StartState {
+        let sys = &self.problem.system;
+        StartState::on_orbit(&self.orbit, sys.n_mech(), sys.n_therm(), self.label.clone())
+            .perturbed(&self.mean(), factor, temp_shift)
+    }
+
+    /// On the orbit moved along its `k`-th Floquet mode nearest zero by `size`
+    /// ([`StartState::along_mode`]), temperatures shifted by `temp_shift` K.
+    pub fn along_mode(
+        &self,
+        k: usize,
+        size: f64,
+        temp_shift: f64,
+    ) -> Result<(StartState, crate::stability::HillMode), TransientError> {
+        let hb = crate::hb::HarmonicBalance::new(
+            &self.problem.system,
+            &self.problem.basis,
+            self.problem.settings.harmonic.aft_samples,
+        )
+        .map_err(|e| TransientError::Setting {
+            field: "perturb_mode",
+            value: k.to_string(),
+            reason: format!("the point's harmonic balance: {e}"),
+        })?;
+        let (start, mode) = StartState::along_mode(&self.orbit, &hb, k, size, self.label.clone())?;
+        Ok((start.perturbed(&self.mean(), 0.0, temp_shift), mode))
     }
 }
 

@@ -145,6 +145,11 @@ impl CoupledRederive {
         &self.problem
     }
 
+    /// The rebuilt sweep problem, owned.
+    pub fn into_problem(self) -> SweepProblem {
+        self.problem
+    }
+
     /// The harmonic-balance solution of a recorded point.
     pub fn solution(&self, point: &PointRecord) -> HbSolution {
         HbSolution {
