@@ -45,11 +45,12 @@ pub fn run(args: &ReportArgs, out: &mut impl std::io::Write) -> anyhow::Result<(
         ),
         None => None,
     };
-    let mut text = markdown(
-        &runs,
-        &args.dir.display().to_string(),
-        truncation.as_deref(),
-    );
+    // the command line that regenerates the report, for its header
+    let source = match &args.truncation {
+        Some(p) => format!("{} --truncation {}", args.dir.display(), p.display()),
+        None => args.dir.display().to_string(),
+    };
+    let mut text = markdown(&runs, &source, truncation.as_deref());
     text.push_str(&verdicts(&args.dir, args.verify)?);
     emit(args, &text, out)
 }

@@ -128,19 +128,44 @@ const FLOWS: [f64; 5] = [20.0, 10.0, 5.0, 2.0, 1.0];
 
 /// The thirteen statements. `truncation`: the truncation study's rows, if given.
 pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) -> Vec<Statement> {
-    let mut out = Vec::new();
-    let mut push = |id: &str, claim, paper, ours: String, verdict| {
-        out.push(Statement {
-            id: id.to_string(),
-            claim,
-            paper,
-            ours,
-            verdict,
-        })
-    };
-    let not_run = |what: &str| (format!("no {what} run in the campaign"), Verdict::NotRun);
+    let mut out = peaks_move_down_and_grow(runs).to_vec();
+    out.push(two_saddle_nodes_at_2(runs));
+    out.push(clean_at_high_flows(runs));
+    out.push(more_at_1_than_at_2(runs));
+    out.extend(cooled_to_50(runs));
+    let at = find(runs, 2.0, 25.0).and_then(|r| r.at_620.as_ref());
+    out.push(clearance_order_near_620(at));
+    out.push(positions_near_620(runs));
+    out.push(small_clearance_change_at_20(runs));
+    out.push(clearance_ratio_near_620(at));
+    out.push(ball_bearing_order_at_1(runs));
+    out.push(truncation_statement(truncation));
+    out
+}
 
-    // 1–2: the peaks over the five flow rates, each followed from 20 L/min by continuity.
+/// A scored statement.
+fn statement(
+    id: &str,
+    claim: &'static str,
+    paper: &'static str,
+    (ours, verdict): (String, Verdict),
+) -> Statement {
+    Statement {
+        id: id.to_string(),
+        claim,
+        paper,
+        ours,
+        verdict,
+    }
+}
+
+/// What a statement says when the campaign lacks the run it needs.
+fn not_run(what: &str) -> (String, Verdict) {
+    (format!("no {what} run in the campaign"), Verdict::NotRun)
+}
+
+/// 1–2: the peaks over the five flow rates, each followed from 20 L/min by continuity.
+fn peaks_move_down_and_grow(runs: &[RunFindings]) -> [Statement; 2] {
     let series: Option<Vec<&RunFindings>> = FLOWS.iter().map(|&q| find(runs, q, 25.0)).collect();
     let tracked = series.as_ref().and_then(|s| track_peaks(s));
     let (o1, v1, o2, v2) = match (&series, &tracked) {
@@ -200,16 +225,19 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
             (t.clone(), v, t, v)
         }
     };
-    push(
-        "1",
-        "As q_l falls 20 → 10 → 5 → 2 → 1 L/min, node 8's two resonant peaks move to lower ω",
-        "both peaks move down (Figs. 8a, 10a)",
-        o1,
-        v1,
-    );
-    push("2", "… and grow", "both peaks grow", o2, v2);
+    [
+        statement(
+            "1",
+            "As q_l falls 20 → 10 → 5 → 2 → 1 L/min, node 8's two resonant peaks move to lower ω",
+            "both peaks move down (Figs. 8a, 10a)",
+            (o1, v1),
+        ),
+        statement("2", "… and grow", "both peaks grow", (o2, v2)),
+    ]
+}
 
-    // 3: 2 L/min, exactly two saddle-nodes.
+/// 3: 2 L/min, exactly two saddle-nodes.
+fn two_saddle_nodes_at_2(runs: &[RunFindings]) -> Statement {
     let (o, v) = match find(runs, 2.0, 25.0) {
         Some(r) => {
             let sn = count(r, BifurcationKind::SaddleNode);
@@ -227,15 +255,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         None => not_run("2 L/min"),
     };
-    push(
+    statement(
         "3",
         "At 2 L/min exactly two bifurcation points, both saddle-node, bounding a hysteresis interval",
         "2 SN, nothing else (Fig. 9)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 4: 20, 10, 5 L/min clean.
+/// 4: 20, 10, 5 L/min clean.
+fn clean_at_high_flows(runs: &[RunFindings]) -> Statement {
     let high: Vec<Option<&RunFindings>> = [20.0, 10.0, 5.0]
         .iter()
         .map(|&q| find(runs, q, 25.0))
@@ -255,15 +284,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
     } else {
         not_run("20, 10 and 5 L/min")
     };
-    push(
+    statement(
         "4",
         "At 20, 10 and 5 L/min no bifurcation point and no unstable point",
         "none (Fig. 8)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 5: 1 L/min vs 2 L/min.
+/// 5: 1 L/min against 2 L/min.
+fn more_at_1_than_at_2(runs: &[RunFindings]) -> Statement {
     let (o, v) = match (find(runs, 1.0, 25.0), find(runs, 2.0, 25.0)) {
         (Some(r1), Some(r2)) => {
             let more = r1.bifurcations.len() > r2.bifurcations.len();
@@ -277,15 +307,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         _ => not_run("1 and 2 L/min"),
     };
-    push(
+    statement(
         "5",
         "At 1 L/min more bifurcation points than at 2 L/min, the saddle-nodes turned into Neimark–Sacker points (none at 2 L/min)",
         "more points; NS at 1 L/min only (Fig. 10)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 6–7: 2 L/min with 50 °C cooling.
+/// 6–7: 2 L/min with 50 °C cooling.
+fn cooled_to_50(runs: &[RunFindings]) -> [Statement; 2] {
     let hot = find(runs, 2.0, 50.0);
     let (o, v) = match hot {
         Some(r) => {
@@ -298,12 +329,11 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         None => not_run("2 L/min, 50 °C"),
     };
-    push(
+    let six = statement(
         "6",
         "At 2 L/min with 50 °C cooling four saddle-nodes and no Neimark–Sacker point",
         "4 SN, 0 NS (Fig. 21)",
-        o,
-        v,
+        (o, v),
     );
     let (o, v) = match hot.and_then(|r| r.temp_range_c) {
         Some((lo, hi)) => {
@@ -315,16 +345,17 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         None => not_run("2 L/min, 50 °C (coupled)"),
     };
-    push(
+    let seven = statement(
         "7",
         "At 2 L/min with 50 °C cooling the highest temperature about 72 °C, the lowest about 50 °C (all thermal nodes, all speeds; rule: within 3 °C)",
         "≈ 72 °C / ≈ 50 °C (Fig. 22a)",
-        o,
-        v,
+        (o, v),
     );
+    [six, seven]
+}
 
-    // 8, 11: 2 L/min near 620 rad/s.
-    let at = find(runs, 2.0, 25.0).and_then(|r| r.at_620.as_ref());
+/// 8: 2 L/min near 620 rad/s, the order of δv (`at`: the run's point there).
+fn clearance_order_near_620(at: Option<&super::At620>) -> Statement {
     let (o, v) = match at {
         Some(a) => {
             let (ok, of) = pairs_holding(&a.dv_um, &[4, 2, 1, 3]);
@@ -340,15 +371,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         None => not_run("2 L/min (with a point near 620 rad/s)"),
     };
-    push(
+    statement(
         "8",
         "At 2 L/min near 620 rad/s δv4 > δv2 > δv1 > δv3",
         "δv4 > δv2 > δv1 > δv3 (Fig. 9b)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 9: positions at 20 and 1 L/min.
+/// 9: the bearing positions at 20 and 1 L/min.
+fn positions_near_620(runs: &[RunFindings]) -> Statement {
     let pos: Vec<Option<&super::At620>> = [20.0, 1.0]
         .iter()
         .map(|&q| find(runs, q, 25.0).and_then(|r| r.at_620.as_ref()))
@@ -369,15 +401,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
     } else {
         not_run("20 and 1 L/min (with a point near 620 rad/s)")
     };
-    push(
+    statement(
         "9",
         "At 620 rad/s, at 20 and at 1 L/min, the bearing positions ordered 4# > 2# > 1# > 3# (rings and housing)",
         "4# > 2# > 1# > 3# (Fig. 14d, e)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 10: 20 L/min |δv| < 1 µm.
+/// 10: 20 L/min |δv| < 1 µm.
+fn small_clearance_change_at_20(runs: &[RunFindings]) -> Statement {
     let (o, v) = match find(runs, 20.0, 25.0) {
         Some(r) => {
             let m = r.max_abs_dv_um.iter().copied().fold(0.0, f64::max);
@@ -388,14 +421,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         None => not_run("20 L/min"),
     };
-    push(
+    statement(
         "10",
         "At 20 L/min all |δv| < 1 µm over 300–700 rad/s (partial: below 2 µm)",
         "< 1 µm (Fig. 8b)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
+/// 11: 2 L/min near 620 rad/s, the effective clearances of 2# and 4#.
+fn clearance_ratio_near_620(at: Option<&super::At620>) -> Statement {
     let (o, v) = match at {
         Some(a) if a.clearance_ratio.len() >= 4 => {
             let (b2, b4) = (a.clearance_ratio[1] > 5.0, a.clearance_ratio[3] > 5.0);
@@ -410,15 +445,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         _ => not_run("2 L/min (with a point near 620 rad/s)"),
     };
-    push(
+    statement(
         "11",
         "At 2 L/min near 620 rad/s the effective clearances of 2# and 4# above 5× their initial value",
         "> 5 δ0 (Fig. 9b)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 12: ball bearings along the 1 L/min branch.
+/// 12: ball bearings along the 1 L/min branch.
+fn ball_bearing_order_at_1(runs: &[RunFindings]) -> Statement {
     let (o, v) = match find(runs, 1.0, 25.0) {
         Some(r) => {
             let detail = r
@@ -447,15 +483,16 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
         }
         None => not_run("1 L/min"),
     };
-    push(
+    statement(
         "12",
         "Ball bearings 1# and 2#: T_b > T_i > T_o along the 1 L/min branch (partial: at half the points or more)",
         "T_b > T_i > T_o (Fig. 14)",
-        o,
-        v,
-    );
+        (o, v),
+    )
+}
 
-    // 13: truncation.
+/// 13: the truncation study.
+fn truncation_statement(truncation: Option<&[TruncationRow]>) -> Statement {
     let (o, v) = match truncation {
         Some(rows) if !rows.is_empty() => truncation_verdict(rows),
         _ => (
@@ -463,14 +500,12 @@ pub fn statements(runs: &[RunFindings], truncation: Option<&[TruncationRow]>) ->
             Verdict::NotRun,
         ),
     };
-    push(
+    statement(
         "13",
         "Third-order truncation converged: residuals at B and D fall with the order up to 3, order 4 changes little (rule: < 5 %), nonlinear forces far above the residual (rule: > 100×)",
         "converged at order 3 (Figs. 5–7)",
-        o,
-        v,
-    );
-    out
+        (o, v),
+    )
 }
 
 /// The paper's points B and D of the truncation study (rad/s).
