@@ -49,7 +49,7 @@ use super::convection::{
     ring_lubricant, shaft_ambient,
 };
 use super::friction::{Palmgren, Viscosity, lubricant_conductance_w_k};
-use super::spec::ThermalSpec;
+use super::spec::{BearingThermalSpec, ThermalSpec};
 use crate::bearing::{ContactLaw, ExpansionGeometry, OuterSeat, cage_speed_rad_s};
 use crate::system::DenseMatrix;
 use std::f64::consts::PI;
@@ -196,29 +196,28 @@ fn idx(node: usize) -> usize {
     node - 1
 }
 
-impl ThermalNetwork {
-    /// Builds the network from a validated spec.
-    pub fn new(spec: &ThermalSpec) -> Result<Self, ThermalError> {
-        spec.validate("<thermal spec>")?;
-        let n = spec.n_nodes;
-        let mut names = vec![String::new(); n];
-        let mut capacity = vec![0.0; n];
-        let mut links = Vec::new();
-        let mut ambient_fixed = Vec::new();
-        let mut ambient_rotating = Vec::new();
-        let sm = &spec.materials.shaft;
-        let bm = &spec.materials.bearing;
-        let ks = sm.conductivity_w_m_k;
-        let kb = bm.conductivity_w_m_k;
+/// The network's nodes, capacities and links as [`ThermalNetwork::new`] builds them, part
+/// by part (global node indices, 0-based).
+struct Parts {
+    names: Vec<String>,
+    capacity: Vec<f64>,
+    links: Vec<(usize, usize, f64)>,
+    ambient_fixed: Vec<(usize, f64)>,
+    ambient_rotating: Vec<RotatingSurface>,
+    /// Mean radius of each shaft segment's cross-section (0 for other nodes).
+    shaft_mid_radius: Vec<f64>,
+}
 
-        // Shafts: segments, axial chains, convection to ambient.
+impl Parts {
+    /// Shafts: segments, axial chains, convection to ambient.
+    fn shafts(&mut self, spec: &ThermalSpec) {
+        let sm = &spec.materials.shaft;
+        let ks = sm.conductivity_w_m_k;
         struct Seg {
             node: usize,
             half_r: f64,
-            mid_radius: f64,
         }
         let mut chains: Vec<(String, Vec<Seg>)> = Vec::new();
-        let mut shaft_mid_radius = vec![0.0; n];
         for s in &spec.shafts {
             let nseg = s.nodes.len() as f64;
             let len = s.length_m / nseg;
@@ -233,16 +232,16 @@ impl ThermalNetwork {
             };
             for (k, &node) in s.nodes.iter().enumerate() {
                 let p = idx(node);
-                names[p] = format!(
+                self.names[p] = format!(
                     "{} shaft {} seg {}/{}",
                     s.chain,
                     s.label,
                     k + 1,
                     s.nodes.len()
                 );
-                capacity[p] = sm.density_kg_m3 * sm.specific_heat_j_kg_k * area * len;
-                shaft_mid_radius[p] = 0.25 * (s.inner_diameter_m + s.outer_diameter_m);
-                ambient_rotating.push(RotatingSurface {
+                self.capacity[p] = sm.density_kg_m3 * sm.specific_heat_j_kg_k * area * len;
+                self.shaft_mid_radius[p] = 0.25 * (s.inner_diameter_m + s.outer_diameter_m);
+                self.ambient_rotating.push(RotatingSurface {
                     node: p,
                     area_m2: PI * s.outer_diameter_m * len,
                     diameter_m: s.outer_diameter_m,
@@ -251,235 +250,308 @@ impl ThermalNetwork {
                 chain.push(Seg {
                     node: p,
                     half_r: flat_conduction(0.5 * len, ks, area),
-                    mid_radius: shaft_mid_radius[p],
                 });
             }
         }
         for (_, segs) in &chains {
             for w in segs.windows(2) {
-                let _ = w[0].mid_radius;
-                links.push((w[0].node, w[1].node, 1.0 / (w[0].half_r + w[1].half_r)));
+                self.links
+                    .push((w[0].node, w[1].node, 1.0 / (w[0].half_r + w[1].half_r)));
             }
         }
+    }
 
-        // Disks: equivalent annular disk with the given mass and polar inertia.
+    /// Disks: equivalent annular disk with the given mass and polar inertia.
+    fn disks(&mut self, spec: &ThermalSpec) {
+        let sm = &spec.materials.shaft;
+        let ks = sm.conductivity_w_m_k;
         for d in &spec.disks {
             let p = idx(d.node);
             let r_b = 0.5 * d.bore_diameter_m;
             let r_o = (2.0 * d.polar_inertia_kg_m2 / d.mass_kg - r_b * r_b).sqrt();
             let thickness = d.mass_kg / (sm.density_kg_m3 * PI * (r_o * r_o - r_b * r_b));
-            names[p] = format!("{} disk", d.name);
-            capacity[p] = d.mass_kg * sm.specific_heat_j_kg_k;
+            self.names[p] = format!("{} disk", d.name);
+            self.capacity[p] = d.mass_kg * sm.specific_heat_j_kg_k;
             let r_m = 0.5 * (r_b + r_o);
-            links.push((
+            self.links.push((
                 p,
                 idx(d.shaft_node),
                 1.0 / cylinder_conduction(r_b, r_m, ks, thickness),
             ));
-            ambient_rotating.push(RotatingSurface {
+            self.ambient_rotating.push(RotatingSurface {
                 node: p,
                 area_m2: 2.0 * PI * (r_o * r_o - r_b * r_b) + 2.0 * PI * r_o * thickness,
                 diameter_m: 2.0 * r_o,
                 speed_ratio: d.speed_ratio,
             });
         }
+    }
 
-        // Housings: seat + two flanks.
+    /// Housings: seat + two flanks.
+    fn housings(&mut self, spec: &ThermalSpec) {
+        let sm = &spec.materials.shaft;
+        let ks = sm.conductivity_w_m_k;
         let h_amb = spec.air.housing_h_w_m2_k;
         for h in &spec.housings {
             let r_in = 0.5 * h.bore_diameter_m;
             let ring_area = PI * (h.radius_m.powi(2) - r_in * r_in);
             let l_f = 0.5 * (h.length_m - h.seat_length_m);
             let seat = idx(h.seat_node);
-            names[seat] = format!("{} housing seat", h.name);
-            capacity[seat] =
+            self.names[seat] = format!("{} housing seat", h.name);
+            self.capacity[seat] =
                 sm.density_kg_m3 * sm.specific_heat_j_kg_k * ring_area * h.seat_length_m;
-            ambient_fixed.push((seat, h_amb * 2.0 * PI * h.radius_m * h.seat_length_m));
+            self.ambient_fixed
+                .push((seat, h_amb * 2.0 * PI * h.radius_m * h.seat_length_m));
             for (k, &f) in h.flank_nodes.iter().enumerate() {
                 let pf = idx(f);
-                names[pf] = format!("{} housing flank {}", h.name, k + 1);
-                capacity[pf] = sm.density_kg_m3 * sm.specific_heat_j_kg_k * ring_area * l_f;
+                self.names[pf] = format!("{} housing flank {}", h.name, k + 1);
+                self.capacity[pf] = sm.density_kg_m3 * sm.specific_heat_j_kg_k * ring_area * l_f;
                 let r = flat_conduction(0.5 * (h.seat_length_m + l_f), ks, ring_area);
-                links.push((seat, pf, 1.0 / r));
-                ambient_fixed.push((pf, h_amb * (2.0 * PI * h.radius_m * l_f + ring_area)));
+                self.links.push((seat, pf, 1.0 / r));
+                self.ambient_fixed
+                    .push((pf, h_amb * (2.0 * PI * h.radius_m * l_f + ring_area)));
             }
         }
+    }
 
-        // Bearings.
-        let e_prime = bm.modulus_pa / (1.0 - bm.poisson * bm.poisson);
-        let mut bearings = Vec::new();
-        for b in &spec.bearings {
-            let (pb, pi_, po, pl) = (
-                idx(b.element_node),
-                idx(b.inner_node),
-                idx(b.outer_node),
-                idx(b.lubricant_node),
-            );
-            let d = b.element_diameter_m;
-            let roller_len = b.roller_length_m.unwrap_or(0.0);
-            let v_elem = b.kind.element_volume(d, roller_len);
-            let nel = b.n_elements as f64;
-            names[pb] = format!("{} rolling elements", b.name);
-            names[pi_] = format!("{} inner ring", b.name);
-            names[po] = format!("{} outer ring", b.name);
-            names[pl] = format!("{} lubricant", b.name);
-            capacity[pb] =
-                (nel * v_elem * bm.density_kg_m3 + b.cage_mass_kg) * bm.specific_heat_j_kg_k;
-            let rb = 0.5 * b.bore_diameter_m;
-            let rir = 0.5 * b.inner_raceway_m;
-            let ror = 0.5 * b.outer_raceway_m;
-            let rod = 0.5 * b.outer_diameter_m;
-            capacity[pi_] =
-                bm.density_kg_m3 * bm.specific_heat_j_kg_k * PI * (rir * rir - rb * rb) * b.width_m;
-            capacity[po] = bm.density_kg_m3
-                * bm.specific_heat_j_kg_k
-                * PI
-                * (rod * rod - ror * ror)
-                * b.width_m;
-            let free_volume = PI * (ror * ror - rir * rir) * b.width_m - nel * v_elem;
-            capacity[pl] = spec.lubricant.density_kg_m3
-                * spec.lubricant.specific_heat_j_kg_k
-                * free_volume.max(0.1 * PI * (ror * ror - rir * rir) * b.width_m);
+    /// One bearing: its rolling elements, rings and lubricant, the links to its shaft and
+    /// seat, and its contacts (`e_prime`: the plane-strain modulus of its material).
+    fn bearing(
+        &mut self,
+        spec: &ThermalSpec,
+        b: &BearingThermalSpec,
+        e_prime: f64,
+    ) -> Result<BearingNet, ThermalError> {
+        let sm = &spec.materials.shaft;
+        let bm = &spec.materials.bearing;
+        let ks = sm.conductivity_w_m_k;
+        let kb = bm.conductivity_w_m_k;
+        let (pb, pi_, po, pl) = (
+            idx(b.element_node),
+            idx(b.inner_node),
+            idx(b.outer_node),
+            idx(b.lubricant_node),
+        );
+        let d = b.element_diameter_m;
+        let roller_len = b.roller_length_m.unwrap_or(0.0);
+        let v_elem = b.kind.element_volume(d, roller_len);
+        let nel = b.n_elements as f64;
+        self.names[pb] = format!("{} rolling elements", b.name);
+        self.names[pi_] = format!("{} inner ring", b.name);
+        self.names[po] = format!("{} outer ring", b.name);
+        self.names[pl] = format!("{} lubricant", b.name);
+        self.capacity[pb] =
+            (nel * v_elem * bm.density_kg_m3 + b.cage_mass_kg) * bm.specific_heat_j_kg_k;
+        let rb = 0.5 * b.bore_diameter_m;
+        let rir = 0.5 * b.inner_raceway_m;
+        let ror = 0.5 * b.outer_raceway_m;
+        let rod = 0.5 * b.outer_diameter_m;
+        self.capacity[pi_] =
+            bm.density_kg_m3 * bm.specific_heat_j_kg_k * PI * (rir * rir - rb * rb) * b.width_m;
+        self.capacity[po] =
+            bm.density_kg_m3 * bm.specific_heat_j_kg_k * PI * (rod * rod - ror * ror) * b.width_m;
+        let free_volume = PI * (ror * ror - rir * rir) * b.width_m - nel * v_elem;
+        self.capacity[pl] = spec.lubricant.density_kg_m3
+            * spec.lubricant.specific_heat_j_kg_k
+            * free_volume.max(0.1 * PI * (ror * ror - rir * rir) * b.width_m);
 
-            // Inner ring ↔ shaft node.
-            let ps = idx(b.inner_shaft_node);
-            let r_im = 0.5 * (rb + rir);
-            let r_sm = shaft_mid_radius[ps].min(rb);
-            let r_in = cylinder_conduction(rb, r_im, kb, b.width_m)
-                + cylinder_conduction(r_sm, rb, ks, b.width_m);
-            links.push((pi_, ps, 1.0 / r_in));
+        // Inner ring ↔ shaft node.
+        let ps = idx(b.inner_shaft_node);
+        let r_im = 0.5 * (rb + rir);
+        let r_sm = self.shaft_mid_radius[ps].min(rb);
+        let r_in = cylinder_conduction(rb, r_im, kb, b.width_m)
+            + cylinder_conduction(r_sm, rb, ks, b.width_m);
+        self.links.push((pi_, ps, 1.0 / r_in));
 
-            // Outer ring ↔ seat.
-            let r_om = 0.5 * (ror + rod);
-            let (seat, seat_kind, flanks, area_flank, housing_d) =
-                match (&b.housing, b.outer_shaft_node) {
-                    (Some(name), _) => {
-                        let h =
-                            spec.housings
-                                .iter()
-                                .find(|h| &h.name == name)
-                                .ok_or_else(|| ThermalError::Invalid {
-                                    line: None,
-                                    file: "<thermal spec>".into(),
-                                    path: format!("thermal.bearings.{}.housing", b.name),
-                                    reason: format!("no housing named {name:?}"),
-                                })?;
-                        let r_hm = 0.5 * (0.5 * h.bore_diameter_m + h.radius_m);
-                        let r = cylinder_conduction(r_om, rod, kb, b.width_m)
-                            + cylinder_conduction(rod, r_hm, ks, h.seat_length_m);
-                        let seat = idx(h.seat_node);
-                        links.push((po, seat, 1.0 / r));
-                        let l_f = 0.5 * (h.length_m - h.seat_length_m);
-                        (
-                            seat,
-                            OuterSeat::Housing,
-                            h.flank_nodes.iter().map(|&f| idx(f)).collect::<Vec<_>>(),
-                            PI * h.bore_diameter_m * l_f,
-                            2.0 * h.radius_m,
-                        )
-                    }
-                    (None, Some(node)) => {
-                        let seat = idx(node);
-                        let r_sm = shaft_mid_radius[seat].max(rod);
-                        let r = cylinder_conduction(r_om, rod, kb, b.width_m)
-                            + cylinder_conduction(rod, r_sm, ks, b.width_m);
-                        links.push((po, seat, 1.0 / r));
-                        (seat, OuterSeat::Shaft, Vec::new(), 0.0, 0.0)
-                    }
-                    (None, None) => {
-                        return Err(ThermalError::Invalid {
-                            line: None,
-                            file: "<thermal spec>".into(),
-                            path: format!("thermal.bearings.{}.housing", b.name),
-                            reason: "no outer-ring seat".into(),
-                        });
-                    }
-                };
+        // Outer ring ↔ seat.
+        let r_om = 0.5 * (ror + rod);
+        let (seat, seat_kind, flanks, area_flank, housing_d) =
+            self.outer_seat(spec, b, po, r_om, rod)?;
 
-            let contact = |raceway: Raceway, race_d: f64| ContactGeometry {
-                element_diameter_m: d,
-                raceway_diameter_m: race_d,
-                raceway,
-                conformity: b.conformity.unwrap_or(0.52),
-                roller_length_m: roller_len,
-                modulus_pa: e_prime,
-                k_element: kb,
-                k_ring: kb,
-            };
-            let area_elements = nel * b.kind.element_area(d, roller_len);
-            bearings.push(BearingNet {
-                name: b.name.clone(),
-                kind: b.kind,
-                b: pb,
-                i: pi_,
-                o: po,
-                l: pl,
-                seat,
-                seat_kind,
-                flanks,
-                lb: 0,
-                li: 0,
-                lo: 0,
-                ll: 0,
-                lflanks: Vec::new(),
-                inner_contact: ContactResistance::new(
-                    contact(Raceway::Inner, b.inner_raceway_m),
-                    b.kind,
-                ),
-                outer_contact: ContactResistance::new(
-                    contact(Raceway::Outer, b.outer_raceway_m),
-                    b.kind,
-                ),
-                palmgren: Palmgren {
-                    f_l: b.f_l,
-                    f_v: b.f_v,
-                    pitch_diameter_m: b.pitch_diameter_m,
-                },
-                heat_split: b.heat_split.fractions(),
-                inner_ratio: b.inner_speed_ratio,
-                outer_ratio: b.outer_speed_ratio,
-                pitch_m: b.pitch_diameter_m,
+        let contact = |raceway: Raceway, race_d: f64| ContactGeometry {
+            element_diameter_m: d,
+            raceway_diameter_m: race_d,
+            raceway,
+            conformity: b.conformity.unwrap_or(0.52),
+            roller_length_m: roller_len,
+            modulus_pa: e_prime,
+            k_element: kb,
+            k_ring: kb,
+        };
+        let area_elements = nel * b.kind.element_area(d, roller_len);
+        Ok(BearingNet {
+            name: b.name.clone(),
+            kind: b.kind,
+            b: pb,
+            i: pi_,
+            o: po,
+            l: pl,
+            seat,
+            seat_kind,
+            flanks,
+            lb: 0,
+            li: 0,
+            lo: 0,
+            ll: 0,
+            lflanks: Vec::new(),
+            inner_contact: ContactResistance::new(
+                contact(Raceway::Inner, b.inner_raceway_m),
+                b.kind,
+            ),
+            outer_contact: ContactResistance::new(
+                contact(Raceway::Outer, b.outer_raceway_m),
+                b.kind,
+            ),
+            palmgren: Palmgren {
+                f_l: b.f_l,
+                f_v: b.f_v,
+                pitch_diameter_m: b.pitch_diameter_m,
+            },
+            heat_split: b.heat_split.fractions(),
+            inner_ratio: b.inner_speed_ratio,
+            outer_ratio: b.outer_speed_ratio,
+            pitch_m: b.pitch_diameter_m,
+            element_diameter_m: d,
+            inner_raceway_m: b.inner_raceway_m,
+            outer_raceway_m: b.outer_raceway_m,
+            area_elements_m2: area_elements,
+            area_inner_m2: PI * b.inner_raceway_m * b.width_m,
+            area_outer_m2: PI * b.outer_raceway_m * b.width_m,
+            area_flank_m2: area_flank,
+            housing_diameter_m: housing_d,
+            expansion: ExpansionGeometry {
                 element_diameter_m: d,
                 inner_raceway_m: b.inner_raceway_m,
                 outer_raceway_m: b.outer_raceway_m,
-                area_elements_m2: area_elements,
-                area_inner_m2: PI * b.inner_raceway_m * b.width_m,
-                area_outer_m2: PI * b.outer_raceway_m * b.width_m,
-                area_flank_m2: area_flank,
-                housing_diameter_m: housing_d,
-                expansion: ExpansionGeometry {
-                    element_diameter_m: d,
-                    inner_raceway_m: b.inner_raceway_m,
-                    outer_raceway_m: b.outer_raceway_m,
-                    seat_diameter_m: b.seat_diameter_m,
-                    expansion_element_per_k: bm.expansion_per_k,
-                    expansion_inner_per_k: bm.expansion_per_k,
-                    expansion_outer_per_k: bm.expansion_per_k,
-                    poisson: bm.poisson,
-                },
-            });
-        }
+                seat_diameter_m: b.seat_diameter_m,
+                expansion_element_per_k: bm.expansion_per_k,
+                expansion_inner_per_k: bm.expansion_per_k,
+                expansion_outer_per_k: bm.expansion_per_k,
+                poisson: bm.poisson,
+            },
+        })
+    }
 
-        // Nonlinear nodes and local indices.
-        let mut nl: Vec<usize> = bearings
+    /// The outer ring's seat (a housing's, or a shaft node's for an inter-shaft bearing) and
+    /// its link: the seat node, its kind, the housing's flank nodes, the flank area wetted
+    /// by the lubricant and the housing's diameter.
+    fn outer_seat(
+        &mut self,
+        spec: &ThermalSpec,
+        b: &BearingThermalSpec,
+        po: usize,
+        r_om: f64,
+        rod: f64,
+    ) -> Result<(usize, OuterSeat, Vec<usize>, f64, f64), ThermalError> {
+        let sm = &spec.materials.shaft;
+        let bm = &spec.materials.bearing;
+        let ks = sm.conductivity_w_m_k;
+        let kb = bm.conductivity_w_m_k;
+        Ok(match (&b.housing, b.outer_shaft_node) {
+            (Some(name), _) => {
+                let h = spec
+                    .housings
+                    .iter()
+                    .find(|h| &h.name == name)
+                    .ok_or_else(|| ThermalError::Invalid {
+                        line: None,
+                        file: "<thermal spec>".into(),
+                        path: format!("thermal.bearings.{}.housing", b.name),
+                        reason: format!("no housing named {name:?}"),
+                    })?;
+                let r_hm = 0.5 * (0.5 * h.bore_diameter_m + h.radius_m);
+                let r = cylinder_conduction(r_om, rod, kb, b.width_m)
+                    + cylinder_conduction(rod, r_hm, ks, h.seat_length_m);
+                let seat = idx(h.seat_node);
+                self.links.push((po, seat, 1.0 / r));
+                let l_f = 0.5 * (h.length_m - h.seat_length_m);
+                (
+                    seat,
+                    OuterSeat::Housing,
+                    h.flank_nodes.iter().map(|&f| idx(f)).collect::<Vec<_>>(),
+                    PI * h.bore_diameter_m * l_f,
+                    2.0 * h.radius_m,
+                )
+            }
+            (None, Some(node)) => {
+                let seat = idx(node);
+                let r_sm = self.shaft_mid_radius[seat].max(rod);
+                let r = cylinder_conduction(r_om, rod, kb, b.width_m)
+                    + cylinder_conduction(rod, r_sm, ks, b.width_m);
+                self.links.push((po, seat, 1.0 / r));
+                (seat, OuterSeat::Shaft, Vec::new(), 0.0, 0.0)
+            }
+            (None, None) => {
+                return Err(ThermalError::Invalid {
+                    line: None,
+                    file: "<thermal spec>".into(),
+                    path: format!("thermal.bearings.{}.housing", b.name),
+                    reason: "no outer-ring seat".into(),
+                });
+            }
+        })
+    }
+}
+
+/// The sorted global nodes the bearings' nonlinear terms touch, with each bearing's local
+/// indices into them filled in.
+fn local_indices(bearings: &mut [BearingNet]) -> Vec<usize> {
+    let mut nl: Vec<usize> = bearings
+        .iter()
+        .flat_map(|b| {
+            let mut v = vec![b.b, b.i, b.o, b.l, b.seat];
+            v.extend(b.flanks.iter().copied());
+            v
+        })
+        .collect();
+    nl.sort_unstable();
+    nl.dedup();
+    let local = |g: usize| nl.binary_search(&g).unwrap_or(usize::MAX);
+    for b in bearings.iter_mut() {
+        b.lb = local(b.b);
+        b.li = local(b.i);
+        b.lo = local(b.o);
+        b.ll = local(b.l);
+        b.lflanks = b.flanks.iter().map(|&f| local(f)).collect();
+    }
+
+    nl
+}
+
+impl ThermalNetwork {
+    /// Builds the network from a validated spec: the shafts, disks and housings, then each
+    /// bearing's four nodes with their links and contacts, then the local indices of the
+    /// nodes the bearings' nonlinear terms touch.
+    pub fn new(spec: &ThermalSpec) -> Result<Self, ThermalError> {
+        spec.validate("<thermal spec>")?;
+        let n = spec.n_nodes;
+        let mut parts = Parts {
+            names: vec![String::new(); n],
+            capacity: vec![0.0; n],
+            links: Vec::new(),
+            ambient_fixed: Vec::new(),
+            ambient_rotating: Vec::new(),
+            shaft_mid_radius: vec![0.0; n],
+        };
+        parts.shafts(spec);
+        parts.disks(spec);
+        parts.housings(spec);
+        let bm = &spec.materials.bearing;
+        let e_prime = bm.modulus_pa / (1.0 - bm.poisson * bm.poisson);
+        let mut bearings = spec
+            .bearings
             .iter()
-            .flat_map(|b| {
-                let mut v = vec![b.b, b.i, b.o, b.l, b.seat];
-                v.extend(b.flanks.iter().copied());
-                v
-            })
-            .collect();
-        nl.sort_unstable();
-        nl.dedup();
-        let local = |g: usize| nl.binary_search(&g).unwrap_or(usize::MAX);
-        for b in &mut bearings {
-            b.lb = local(b.b);
-            b.li = local(b.i);
-            b.lo = local(b.o);
-            b.ll = local(b.l);
-            b.lflanks = b.flanks.iter().map(|&f| local(f)).collect();
-        }
-
+            .map(|b| parts.bearing(spec, b, e_prime))
+            .collect::<Result<Vec<_>, _>>()?;
+        let nl = local_indices(&mut bearings);
+        let Parts {
+            names,
+            capacity,
+            links,
+            ambient_fixed,
+            ambient_rotating,
+            ..
+        } = parts;
         Ok(Self {
             n,
             names,
