@@ -15,6 +15,21 @@ fn stable_label(s: Option<bool>) -> &'static str {
 
 /// Prints a summary of the recording.
 pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
+    header(rec, out)?;
+    if let Some(t) = &rec.transient {
+        transient_info(t, out)?;
+    }
+    writeln!(out, "points:      {}", rec.points.len())?;
+    if let Some((lo, hi)) = rec.omega_range() {
+        writeln!(out, "ω range:     {lo:.4} … {hi:.4} rad/s")?;
+    }
+    branches(rec, out)?;
+    stability_and_bifurcations(rec, out)?;
+    warnings_and_contents(rec, out)
+}
+
+/// The file, its state, the run's model, basis and sizes, and the viewer indices.
+fn header(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     let r = &rec.run;
     writeln!(out, "file:        {}", rec.file.display())?;
     writeln!(
@@ -97,13 +112,11 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
             indexed(r.bearings.iter().map(|b| b.name.as_str()).collect())
         )?;
     }
-    if let Some(t) = &rec.transient {
-        transient_info(t, out)?;
-    }
-    writeln!(out, "points:      {}", rec.points.len())?;
-    if let Some((lo, hi)) = rec.omega_range() {
-        writeln!(out, "ω range:     {lo:.4} … {hi:.4} rad/s")?;
-    }
+    Ok(())
+}
+
+/// The branches of a recording with switched branches, each with its origin and points.
+fn branches(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     if !rec.branches.is_empty() {
         writeln!(out, "branches:    {}", rec.branches.len() + 1)?;
         for k in rec.branch_numbers() {
@@ -130,6 +143,12 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
             writeln!(out, "  branch {k}: {what}; {} {range}", on.len())?;
         }
     }
+    Ok(())
+}
+
+/// The stability counts, the located bifurcations (with their modulation and truncation
+/// checks) and the unlocated changes of stability.
+fn stability_and_bifurcations(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     let unstable = rec
         .points
         .iter()
@@ -191,6 +210,12 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
             )?;
         }
     }
+    Ok(())
+}
+
+/// The warnings, the period-doubled stretches, the topics and attachments, the settings
+/// and the last point.
+fn warnings_and_contents(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     if !rec.warnings.is_empty() {
         writeln!(out, "warnings:    {}", rec.warnings.len())?;
         for w in &rec.warnings {
@@ -200,7 +225,7 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     let stretches = period_doubled_stretches(
         rec.points
             .iter()
-            .map(|p| (p.index, p.omega_rad_s, point_half_order_share(r, p))),
+            .map(|p| (p.index, p.omega_rad_s, point_half_order_share(&rec.run, p))),
     );
     if !stretches.is_empty() {
         writeln!(
@@ -222,7 +247,7 @@ pub fn run(rec: &Recording, out: &mut dyn Write) -> anyhow::Result<()> {
     }
     writeln!(out, "attachments: {}", rec.attachments.join(", "))?;
     writeln!(out, "settings:")?;
-    for (k, v) in &r.settings {
+    for (k, v) in &rec.run.settings {
         writeln!(out, "  {k} = {v}")?;
     }
     if let Some(p) = rec.points.last() {
