@@ -400,10 +400,6 @@ fn read_from<R: std::io::Read + std::io::Seek>(
         file: file_buf.clone(),
         reason,
     };
-    let foreign = |reason: String| ReadError::Foreign {
-        file: file_buf.clone(),
-        reason,
-    };
     let mut c = Collected {
         skip_orbits: !options.orbits,
         ..Collected::default()
@@ -427,16 +423,7 @@ fn read_from<R: std::io::Read + std::io::Seek>(
             });
         }
     };
-    // Messages whose channel was defined only later (or in the summary section).
-    for (id, data) in std::mem::take(&mut c.pending) {
-        if c.channels.contains_key(&id) {
-            c.message(id, &data);
-        } else {
-            c.undecodable.push(format!(
-                "a message of channel {id}, which no intact record defines"
-            ));
-        }
-    }
+    c.decode_pending();
     let mut notes = Vec::new();
     let damaged = !report.damage.is_empty() || !c.undecodable.is_empty();
     notes.extend(report.damage.iter().map(|d| format!("damaged: {d}")));
@@ -445,142 +432,13 @@ fn read_from<R: std::io::Read + std::io::Seek>(
             .iter()
             .map(|d| format!("undecodable message: {d}")),
     );
-
-    let run_msg = c.run.take().ok_or_else(|| {
-        let topics: Vec<String> = c.channels.values().map(|c| c.topic.clone()).collect();
-        let what = if topics.is_empty() {
-            "it holds no channels (no /run_info message)".to_string()
-        } else {
-            format!(
-                "no /run_info message of schema {} (topics found: {})",
-                schema::RUN_INFO.name,
-                topics.join(", ")
-            )
-        };
-        if damaged {
-            corrupt(format!("{what}; {}", notes.join("; ")))
-        } else {
-            foreign(what)
-        }
-    })?;
-    let model_text = match c.attachments.iter().find(|(n, _)| *n == run_msg.model_name) {
-        Some((_, data)) => String::from_utf8_lossy(data).into_owned(),
-        None => {
-            notes.push(format!(
-                "the model file attachment {:?} is missing",
-                run_msg.model_name
-            ));
-            String::new()
-        }
-    };
-    let run = run_info_from_pb(&run_msg, model_text)
-        .map_err(|reason| corrupt(format!("/run_info: {reason}")))?;
-
-    // Messages of a point that arrive after its /summary (which is written last) come from
-    // a damaged stretch.
-    let late: Vec<u64> = c
-        .parts
-        .keys()
-        .filter(|i| c.built.contains_key(i))
-        .copied()
-        .collect();
-    for index in &late {
-        c.parts.remove(index);
-        notes.push(format!(
-            "damaged: a message of point {index} after its /summary was ignored"
-        ));
-    }
-    let damaged = damaged || !late.is_empty();
-    // In a damaged file, a point without a message that other points have lost it (its
-    // channel's definition, or the message itself, was in a damaged stretch).
-    let mut usual: BTreeMap<&str, usize> = BTreeMap::new();
-    if damaged {
-        let present = c
-            .parts
-            .values()
-            .filter(|p| p.summary.is_some())
-            .map(|p| p.present())
-            .chain(c.built.values().map(|(_, present)| *present));
-        for flags in present {
-            for (topic, has) in flags {
-                *usual.entry(topic).or_default() += usize::from(has);
-            }
-        }
-    }
-    let absent_in = |present: &[(&'static str, bool)]| -> Vec<&'static str> {
-        present
-            .iter()
-            .filter(|(topic, has)| !has && usual.get(topic).is_some_and(|&n| n > 0))
-            .map(|(topic, _)| *topic)
-            .collect()
-    };
-    let mut points = Vec::with_capacity(c.parts.len() + c.built.len());
-    let mut lost = Vec::new();
-    for (index, (point, present)) in std::mem::take(&mut c.built) {
-        let absent = absent_in(&present);
-        if absent.is_empty() {
-            points.push(point);
-        } else {
-            notes.push(format!(
-                "point {index} lost: its {} message is missing",
-                absent.join(", ")
-            ));
-            lost.push(index);
-        }
-    }
-    // Consumed as the points are built: the messages and the points are not held twice.
-    for (index, p) in std::mem::take(&mut c.parts) {
-        let absent = absent_in(&p.present());
-        if p.summary.is_some() && !absent.is_empty() {
-            notes.push(format!(
-                "point {index} lost: its {} message is missing",
-                absent.join(", ")
-            ));
-            lost.push(index);
-            continue;
-        }
-        let point = match branch_run(&run, &c.branches, &p) {
-            Some(branch) => point_from_pb(&branch, &p),
-            None => Err(format!(
-                "its branch {} is not described on /branches",
-                p.summary.as_ref().map_or(0, |s| s.branch)
-            )),
-        };
-        match point {
-            Ok(point) => points.push(point),
-            Err(reason) if p.summary.is_none() => {
-                notes.push(format!("point {index} skipped: {reason}"));
-            }
-            Err(reason) if damaged => {
-                notes.push(format!("point {index} lost: {reason}"));
-                lost.push(index);
-            }
-            Err(reason) => return Err(corrupt(format!("point {index}: {reason}"))),
-        }
-    }
-    points.sort_by_key(|p| p.index);
-    let mut branches = Vec::with_capacity(c.branches.len());
-    for b in &c.branches {
-        match branch_record_from_pb(b) {
-            Ok(b) => branches.push(b),
-            Err(reason) => notes.push(format!("a /branches message is unreadable: {reason}")),
-        }
-    }
-    let mut bifurcations = Vec::with_capacity(c.bifs.len());
-    for b in &c.bifs {
-        match bifurcation_record_from_pb(b) {
-            Ok(b) => bifurcations.push(b),
-            Err(reason) => notes.push(format!("a /bifurcations message is unreadable: {reason}")),
-        }
-    }
-    let mut truncation = Vec::with_capacity(c.truncation.len());
-    for m in &c.truncation {
-        match super::convert::truncation_check_from_pb(m) {
-            Ok(t) => truncation.push(t),
-            Err(reason) => notes.push(format!("a /truncation message is unreadable: {reason}")),
-        }
-    }
-
+    let run = c.run_description(file, damaged, &mut notes)?;
+    let late = c.drop_late_parts(&mut notes);
+    let damaged = damaged || late;
+    let (points, lost) = c
+        .points(&run, damaged, &mut notes)
+        .map_err(|(index, reason)| corrupt(format!("point {index}: {reason}")))?;
+    let (branches, bifurcations, truncation) = c.records(&mut notes);
     // Points are numbered 0, 1, … along the branch: a gap is a lost point.
     let present: std::collections::BTreeSet<u64> = points.iter().map(|p| p.index).collect();
     let last = present.iter().next_back().copied();
@@ -591,41 +449,9 @@ fn read_from<R: std::io::Read + std::io::Seek>(
     if !missing.is_empty() {
         notes.push(format!("points missing: {}", index_ranges(&missing)));
     }
-    // Revolutions are numbered 1, 2, …: a gap is a lost revolution.
-    let mut transient = c.transient.take();
-    if let Some(t) = &mut transient {
-        let present: std::collections::BTreeSet<u64> =
-            t.revolutions.iter().map(|r| r.index).collect();
-        let last = present.iter().next_back().copied().unwrap_or(0);
-        t.missing = (1..last).filter(|i| !present.contains(i)).collect();
-        if !t.missing.is_empty() {
-            notes.push(format!("revolutions missing: {}", index_ranges(&t.missing)));
-        }
-    }
+    let transient = c.transient_with_gaps(&mut notes);
     let transient_gap = transient.as_ref().is_some_and(|t| !t.missing.is_empty());
-    // The summary section's counts against what was read.
-    let mut count_mismatch = false;
-    if let Some((chunk_count, counts)) = &c.statistics {
-        let read_chunks = report.chunks as u64;
-        if u64::from(*chunk_count) != read_chunks {
-            count_mismatch = true;
-            notes.push(format!(
-                "the summary counts {chunk_count} chunks, {read_chunks} were read whole"
-            ));
-        }
-        for (id, want) in counts {
-            if let Some(ch) = c.channels.get(id)
-                && ch.count != *want
-            {
-                count_mismatch = true;
-                notes.push(format!(
-                    "the summary counts {want} {} messages, {} were read",
-                    ch.topic, ch.count
-                ));
-            }
-        }
-    }
-
+    let count_mismatch = c.counts_disagree(report.chunks as u64, &mut notes);
     let status = c
         .metadata
         .get(names::METADATA_STATUS)
@@ -681,6 +507,248 @@ fn read_from<R: std::io::Read + std::io::Seek>(
         transient,
         truncation,
     })
+}
+
+impl Collected {
+    /// Decodes the messages whose channel was defined only later (or in the summary
+    /// section); those of a channel no intact record defines are undecodable.
+    fn decode_pending(&mut self) {
+        for (id, data) in std::mem::take(&mut self.pending) {
+            if self.channels.contains_key(&id) {
+                self.message(id, &data);
+            } else {
+                self.undecodable.push(format!(
+                    "a message of channel {id}, which no intact record defines"
+                ));
+            }
+        }
+    }
+
+    /// The run description (`/run_info` and the model file it names): a file without it
+    /// is foreign, or corrupt when damaged.
+    fn run_description(
+        &mut self,
+        file: &Path,
+        damaged: bool,
+        notes: &mut Vec<String>,
+    ) -> Result<RunInfo, ReadError> {
+        let corrupt = |reason: String| ReadError::Corrupt {
+            file: file.to_path_buf(),
+            reason,
+        };
+        let run_msg = self.run.take().ok_or_else(|| {
+            let topics: Vec<String> = self.channels.values().map(|c| c.topic.clone()).collect();
+            let what = if topics.is_empty() {
+                "it holds no channels (no /run_info message)".to_string()
+            } else {
+                format!(
+                    "no /run_info message of schema {} (topics found: {})",
+                    schema::RUN_INFO.name,
+                    topics.join(", ")
+                )
+            };
+            if damaged {
+                corrupt(format!("{what}; {}", notes.join("; ")))
+            } else {
+                ReadError::Foreign {
+                    file: file.to_path_buf(),
+                    reason: what,
+                }
+            }
+        })?;
+        let model_text = match self
+            .attachments
+            .iter()
+            .find(|(n, _)| *n == run_msg.model_name)
+        {
+            Some((_, data)) => String::from_utf8_lossy(data).into_owned(),
+            None => {
+                notes.push(format!(
+                    "the model file attachment {:?} is missing",
+                    run_msg.model_name
+                ));
+                String::new()
+            }
+        };
+        run_info_from_pb(&run_msg, model_text)
+            .map_err(|reason| corrupt(format!("/run_info: {reason}")))
+    }
+
+    /// Drops the messages of a point that arrive after its /summary (which is written
+    /// last): they come from a damaged stretch. Whether there were any.
+    fn drop_late_parts(&mut self, notes: &mut Vec<String>) -> bool {
+        let late: Vec<u64> = self
+            .parts
+            .keys()
+            .filter(|i| self.built.contains_key(i))
+            .copied()
+            .collect();
+        for index in &late {
+            self.parts.remove(index);
+            notes.push(format!(
+                "damaged: a message of point {index} after its /summary was ignored"
+            ));
+        }
+        !late.is_empty()
+    }
+
+    /// The points, built and assembled from their messages (consumed as they are built: the
+    /// messages and the points are not held twice), and the indices of those lost. In a
+    /// damaged file, a point without a message that other points have lost it (its
+    /// channel's definition, or the message itself, was in a damaged stretch). An
+    /// unreadable point of an undamaged file is an error (its index and the reason).
+    #[allow(clippy::type_complexity)]
+    fn points(
+        &mut self,
+        run: &RunInfo,
+        damaged: bool,
+        notes: &mut Vec<String>,
+    ) -> Result<(Vec<PointRecord>, Vec<u64>), (u64, String)> {
+        let mut usual: BTreeMap<&str, usize> = BTreeMap::new();
+        if damaged {
+            let present = self
+                .parts
+                .values()
+                .filter(|p| p.summary.is_some())
+                .map(|p| p.present())
+                .chain(self.built.values().map(|(_, present)| *present));
+            for flags in present {
+                for (topic, has) in flags {
+                    *usual.entry(topic).or_default() += usize::from(has);
+                }
+            }
+        }
+        let absent_in = |present: &[(&'static str, bool)]| -> Vec<&'static str> {
+            present
+                .iter()
+                .filter(|(topic, has)| !has && usual.get(topic).is_some_and(|&n| n > 0))
+                .map(|(topic, _)| *topic)
+                .collect()
+        };
+        let mut points = Vec::with_capacity(self.parts.len() + self.built.len());
+        let mut lost = Vec::new();
+        for (index, (point, present)) in std::mem::take(&mut self.built) {
+            let absent = absent_in(&present);
+            if absent.is_empty() {
+                points.push(point);
+            } else {
+                notes.push(format!(
+                    "point {index} lost: its {} message is missing",
+                    absent.join(", ")
+                ));
+                lost.push(index);
+            }
+        }
+        for (index, p) in std::mem::take(&mut self.parts) {
+            let absent = absent_in(&p.present());
+            if p.summary.is_some() && !absent.is_empty() {
+                notes.push(format!(
+                    "point {index} lost: its {} message is missing",
+                    absent.join(", ")
+                ));
+                lost.push(index);
+                continue;
+            }
+            let point = match branch_run(run, &self.branches, &p) {
+                Some(branch) => point_from_pb(&branch, &p),
+                None => Err(format!(
+                    "its branch {} is not described on /branches",
+                    p.summary.as_ref().map_or(0, |s| s.branch)
+                )),
+            };
+            match point {
+                Ok(point) => points.push(point),
+                Err(reason) if p.summary.is_none() => {
+                    notes.push(format!("point {index} skipped: {reason}"));
+                }
+                Err(reason) if damaged => {
+                    notes.push(format!("point {index} lost: {reason}"));
+                    lost.push(index);
+                }
+                Err(reason) => return Err((index, reason)),
+            }
+        }
+        points.sort_by_key(|p| p.index);
+        Ok((points, lost))
+    }
+
+    /// The branches, bifurcations and truncation checks; an unreadable one is noted and
+    /// left out.
+    fn records(
+        &self,
+        notes: &mut Vec<String>,
+    ) -> (
+        Vec<BranchRecord>,
+        Vec<BifurcationRecord>,
+        Vec<TruncationCheck>,
+    ) {
+        let mut branches = Vec::with_capacity(self.branches.len());
+        for b in &self.branches {
+            match branch_record_from_pb(b) {
+                Ok(b) => branches.push(b),
+                Err(reason) => notes.push(format!("a /branches message is unreadable: {reason}")),
+            }
+        }
+        let mut bifurcations = Vec::with_capacity(self.bifs.len());
+        for b in &self.bifs {
+            match bifurcation_record_from_pb(b) {
+                Ok(b) => bifurcations.push(b),
+                Err(reason) => {
+                    notes.push(format!("a /bifurcations message is unreadable: {reason}"))
+                }
+            }
+        }
+        let mut truncation = Vec::with_capacity(self.truncation.len());
+        for m in &self.truncation {
+            match super::convert::truncation_check_from_pb(m) {
+                Ok(t) => truncation.push(t),
+                Err(reason) => notes.push(format!("a /truncation message is unreadable: {reason}")),
+            }
+        }
+        (branches, bifurcations, truncation)
+    }
+
+    /// A transient run's records, with the revolutions missing from them (numbered 1, 2,
+    /// …: a gap is a lost revolution).
+    fn transient_with_gaps(&mut self, notes: &mut Vec<String>) -> Option<TransientRecords> {
+        let mut transient = self.transient.take();
+        if let Some(t) = &mut transient {
+            let present: std::collections::BTreeSet<u64> =
+                t.revolutions.iter().map(|r| r.index).collect();
+            let last = present.iter().next_back().copied().unwrap_or(0);
+            t.missing = (1..last).filter(|i| !present.contains(i)).collect();
+            if !t.missing.is_empty() {
+                notes.push(format!("revolutions missing: {}", index_ranges(&t.missing)));
+            }
+        }
+        transient
+    }
+
+    /// Whether the summary section's counts disagree with what was read (`read_chunks`
+    /// chunks read whole), each disagreement noted.
+    fn counts_disagree(&self, read_chunks: u64, notes: &mut Vec<String>) -> bool {
+        let mut mismatch = false;
+        if let Some((chunk_count, counts)) = &self.statistics {
+            if u64::from(*chunk_count) != read_chunks {
+                mismatch = true;
+                notes.push(format!(
+                    "the summary counts {chunk_count} chunks, {read_chunks} were read whole"
+                ));
+            }
+            for (id, want) in counts {
+                if let Some(ch) = self.channels.get(id)
+                    && ch.count != *want
+                {
+                    mismatch = true;
+                    notes.push(format!(
+                        "the summary counts {want} {} messages, {} were read",
+                        ch.topic, ch.count
+                    ));
+                }
+            }
+        }
+        mismatch
+    }
 }
 
 /// `0–3, 7, 9–10` for `[0, 1, 2, 3, 7, 9, 10]`.
