@@ -281,162 +281,30 @@ impl Assembly {
     pub fn new(model: &Model) -> Result<Self, ModelError> {
         let n = model.n_dof();
         let spec = &model.spec;
-        let mut mass = DenseMatrix::zeros(n);
-        let mut stiffness = DenseMatrix::zeros(n);
-        let mut dashpots = DenseMatrix::zeros(n);
-        let mut gyro: Vec<RotorGyro> = spec
-            .rotors
-            .iter()
-            .enumerate()
-            .map(|(r, rot)| RotorGyro {
-                rotor_id: rot.id.clone(),
-                speed_ratio: model.speed_ratio(r),
-                matrix: DenseMatrix::zeros(n),
-            })
-            .collect();
-        let node = |id: u32| {
-            model.node_index(id).ok_or_else(|| ModelError::Numerical {
-                file: model.source.clone(),
-                what: format!("node {id} is not indexed"),
-            })
-        };
-        let material = |id: &str| {
-            model
-                .material_index(id)
-                .map(|i| &spec.materials[i])
-                .ok_or_else(|| ModelError::Numerical {
-                    file: model.source.clone(),
-                    what: format!("material {id} is not indexed"),
+        let mut m = Matrices {
+            mass: DenseMatrix::zeros(n),
+            stiffness: DenseMatrix::zeros(n),
+            dashpots: DenseMatrix::zeros(n),
+            gyro: spec
+                .rotors
+                .iter()
+                .enumerate()
+                .map(|(r, rot)| RotorGyro {
+                    rotor_id: rot.id.clone(),
+                    speed_ratio: model.speed_ratio(r),
+                    matrix: DenseMatrix::zeros(n),
                 })
+                .collect(),
         };
-
-        for s in &spec.shafts {
-            let (a, b) = (node(s.nodes[0])?, node(s.nodes[1])?);
-            let mat = material(&s.material)?;
-            let sec = ShaftSection {
-                length_m: s.length_m,
-                inner_diameter_m: s.inner_diameter_m,
-                outer_diameter_m: s.outer_diameter_m,
-                youngs_modulus_pa: mat.youngs_modulus_pa,
-                poisson_ratio: mat.poisson_ratio,
-                density_kg_m3: mat.density_kg_m3,
-            };
-            let em = if s.tapered() {
-                let (end_out, end_in) = s.end_diameters();
-                super::element::tapered_matrices(&sec, end_out, end_in)
-            } else {
-                sec.matrices()
-            };
-            let px = [
-                dof(a, Dir::X),
-                dof(a, Dir::ThetaX),
-                dof(b, Dir::X),
-                dof(b, Dir::ThetaX),
-            ];
-            let py = [
-                dof(a, Dir::Y),
-                dof(a, Dir::ThetaY),
-                dof(b, Dir::Y),
-                dof(b, Dir::ThetaY),
-            ];
-            for p in [px, py] {
-                add_plane(&mut mass, p, &em.mass, 1.0);
-                add_plane(&mut stiffness, p, &em.stiffness, 1.0);
-            }
-            let g = &mut gyro[model.rotor_of(a)].matrix;
-            for r in 0..4 {
-                for c in 0..4 {
-                    g.add(px[r], py[c], em.gyro[r][c]);
-                    g.add(py[r], px[c], -em.gyro[r][c]);
-                }
-            }
-        }
-
-        let mut unbalances = Vec::new();
-        for d in &spec.disks {
-            let a = node(d.node)?;
-            mass.add(dof(a, Dir::X), dof(a, Dir::X), d.mass_kg);
-            mass.add(dof(a, Dir::Y), dof(a, Dir::Y), d.mass_kg);
-            mass.add(
-                dof(a, Dir::ThetaX),
-                dof(a, Dir::ThetaX),
-                d.diametral_inertia_kg_m2,
-            );
-            mass.add(
-                dof(a, Dir::ThetaY),
-                dof(a, Dir::ThetaY),
-                d.diametral_inertia_kg_m2,
-            );
-            let r = model.rotor_of(a);
-            let g = &mut gyro[r].matrix;
-            g.add(
-                dof(a, Dir::ThetaX),
-                dof(a, Dir::ThetaY),
-                d.polar_inertia_kg_m2,
-            );
-            g.add(
-                dof(a, Dir::ThetaY),
-                dof(a, Dir::ThetaX),
-                -d.polar_inertia_kg_m2,
-            );
-            if d.eccentricity_m > 0.0 {
-                unbalances.push(Unbalance {
-                    disk_id: d.id.clone(),
-                    node: d.node,
-                    dof_x: dof(a, Dir::X),
-                    dof_y: dof(a, Dir::Y),
-                    mass_eccentricity_kg_m: d.mass_kg * d.eccentricity_m,
-                    phase_rad: d.phase_deg.to_radians(),
-                    speed_ratio: model.speed_ratio(r).value(),
-                    rotor_id: spec.rotors[r].id.clone(),
-                });
-            }
-        }
-
-        let mut cross: Vec<CrossTerms> = Vec::new();
-        let mut support_tables = Vec::new();
-        for s in &spec.supports {
-            let a = node(s.node)?;
-            let b = s.to_node.map(node).transpose()?;
-            let (k, c) = (s.stiffness_matrix(), s.damping_matrix());
-            for (i, dir) in [Dir::X, Dir::Y].into_iter().enumerate() {
-                add_spring(&mut stiffness, dof(a, dir), b.map(|b| dof(b, dir)), k[i][i]);
-                add_spring(&mut dashpots, dof(a, dir), b.map(|b| dof(b, dir)), c[i][i]);
-            }
-            // Cross-coupled terms stay out of the Rayleigh damping (added below).
-            let off = |m: [[f64; 2]; 2]| [[0.0, m[0][1]], [m[1][0], 0.0]];
-            if k[0][1] != 0.0 || k[1][0] != 0.0 || c[0][1] != 0.0 || c[1][0] != 0.0 {
-                cross.push((dof(a, Dir::X), b.map(|b| dof(b, Dir::X)), off(k), off(c)));
-            }
-            if let Some(t) = &s.table {
-                let col = |v: &[f64]| {
-                    if v.is_empty() {
-                        vec![0.0; t.speeds_rad_s.len()]
-                    } else {
-                        v.to_vec()
-                    }
-                };
-                let [kxx, kxy, kyx, kyy, cxx, cxy, cyx, cyy] = t.columns().map(|(_, v)| col(v));
-                support_tables.push(SupportTable {
-                    id: s.id.clone(),
-                    dof_x: dof(a, Dir::X),
-                    to_dof_x: b.map(|b| dof(b, Dir::X)),
-                    speed_ratio: model.speed_ratio(model.rotor_of(a)).value(),
-                    speeds_rad_s: t.speeds_rad_s.clone(),
-                    stiffness: [[kxx, kxy], [kyx, kyy]],
-                    damping: [[cxx, cxy], [cyx, cyy]],
-                });
-            }
-            for dir in [Dir::ThetaX, Dir::ThetaY] {
-                add_spring(
-                    &mut stiffness,
-                    dof(a, dir),
-                    b.map(|b| dof(b, dir)),
-                    s.rotational_stiffness_n_m_rad,
-                );
-            }
-        }
-
+        m.shafts(model)?;
+        let unbalances = m.disks(model)?;
+        let (cross, support_tables) = m.supports(model)?;
+        let Matrices {
+            mass,
+            mut stiffness,
+            dashpots,
+            gyro,
+        } = m;
         let (a0, a1) = model.rayleigh();
         let mut damping = dashpots;
         for (d, (m, k)) in damping
@@ -480,7 +348,7 @@ impl Assembly {
                     let a = f.direction_deg.to_radians();
                     Ok(HarmonicForce {
                         id: f.id.clone(),
-                        dof_x: dof(node(f.node)?, Dir::X),
+                        dof_x: dof(node_index(model, f.node)?, Dir::X),
                         amplitude_n: f.amplitude_n,
                         direction: [a.cos(), a.sin()],
                         phase_rad: f.phase_deg.to_radians(),
@@ -493,7 +361,196 @@ impl Assembly {
         asm.linearise_bearings(model)?;
         Ok(asm)
     }
+}
 
+/// The index of node `id` of a validated model.
+fn node_index(model: &Model, id: u32) -> Result<usize, ModelError> {
+    model.node_index(id).ok_or_else(|| ModelError::Numerical {
+        file: model.source.clone(),
+        what: format!("node {id} is not indexed"),
+    })
+}
+
+/// The linear matrices as [`Assembly::new`] builds them, element kind by element kind.
+struct Matrices {
+    mass: DenseMatrix,
+    stiffness: DenseMatrix,
+    /// The supports' dashpots (the Rayleigh damping is added to them afterwards).
+    dashpots: DenseMatrix,
+    gyro: Vec<RotorGyro>,
+}
+
+impl Matrices {
+    /// Timoshenko shaft elements (Appendix B): mass, stiffness and gyroscopic matrices.
+    fn shafts(&mut self, model: &Model) -> Result<(), ModelError> {
+        let spec = &model.spec;
+        let material = |id: &str| {
+            model
+                .material_index(id)
+                .map(|i| &spec.materials[i])
+                .ok_or_else(|| ModelError::Numerical {
+                    file: model.source.clone(),
+                    what: format!("material {id} is not indexed"),
+                })
+        };
+        let node = |id: u32| node_index(model, id);
+        for s in &spec.shafts {
+            let (a, b) = (node(s.nodes[0])?, node(s.nodes[1])?);
+            let mat = material(&s.material)?;
+            let sec = ShaftSection {
+                length_m: s.length_m,
+                inner_diameter_m: s.inner_diameter_m,
+                outer_diameter_m: s.outer_diameter_m,
+                youngs_modulus_pa: mat.youngs_modulus_pa,
+                poisson_ratio: mat.poisson_ratio,
+                density_kg_m3: mat.density_kg_m3,
+            };
+            let em = if s.tapered() {
+                let (end_out, end_in) = s.end_diameters();
+                super::element::tapered_matrices(&sec, end_out, end_in)
+            } else {
+                sec.matrices()
+            };
+            let px = [
+                dof(a, Dir::X),
+                dof(a, Dir::ThetaX),
+                dof(b, Dir::X),
+                dof(b, Dir::ThetaX),
+            ];
+            let py = [
+                dof(a, Dir::Y),
+                dof(a, Dir::ThetaY),
+                dof(b, Dir::Y),
+                dof(b, Dir::ThetaY),
+            ];
+            for p in [px, py] {
+                add_plane(&mut self.mass, p, &em.mass, 1.0);
+                add_plane(&mut self.stiffness, p, &em.stiffness, 1.0);
+            }
+            let g = &mut self.gyro[model.rotor_of(a)].matrix;
+            for r in 0..4 {
+                for c in 0..4 {
+                    g.add(px[r], py[c], em.gyro[r][c]);
+                    g.add(py[r], px[c], -em.gyro[r][c]);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Rigid disks (Eq. 6): mass, inertia and gyroscopic terms, and their unbalances.
+    fn disks(&mut self, model: &Model) -> Result<Vec<Unbalance>, ModelError> {
+        let spec = &model.spec;
+        let node = |id: u32| node_index(model, id);
+        let mut unbalances = Vec::new();
+        for d in &spec.disks {
+            let a = node(d.node)?;
+            self.mass.add(dof(a, Dir::X), dof(a, Dir::X), d.mass_kg);
+            self.mass.add(dof(a, Dir::Y), dof(a, Dir::Y), d.mass_kg);
+            self.mass.add(
+                dof(a, Dir::ThetaX),
+                dof(a, Dir::ThetaX),
+                d.diametral_inertia_kg_m2,
+            );
+            self.mass.add(
+                dof(a, Dir::ThetaY),
+                dof(a, Dir::ThetaY),
+                d.diametral_inertia_kg_m2,
+            );
+            let r = model.rotor_of(a);
+            let g = &mut self.gyro[r].matrix;
+            g.add(
+                dof(a, Dir::ThetaX),
+                dof(a, Dir::ThetaY),
+                d.polar_inertia_kg_m2,
+            );
+            g.add(
+                dof(a, Dir::ThetaY),
+                dof(a, Dir::ThetaX),
+                -d.polar_inertia_kg_m2,
+            );
+            if d.eccentricity_m > 0.0 {
+                unbalances.push(Unbalance {
+                    disk_id: d.id.clone(),
+                    node: d.node,
+                    dof_x: dof(a, Dir::X),
+                    dof_y: dof(a, Dir::Y),
+                    mass_eccentricity_kg_m: d.mass_kg * d.eccentricity_m,
+                    phase_rad: d.phase_deg.to_radians(),
+                    speed_ratio: model.speed_ratio(r).value(),
+                    rotor_id: spec.rotors[r].id.clone(),
+                });
+            }
+        }
+        Ok(unbalances)
+    }
+
+    /// Linear supports: springs and dashpots, their cross-coupled terms (kept out of the
+    /// Rayleigh damping) and their coefficient tables over speed.
+    fn supports(
+        &mut self,
+        model: &Model,
+    ) -> Result<(Vec<CrossTerms>, Vec<SupportTable>), ModelError> {
+        let spec = &model.spec;
+        let node = |id: u32| node_index(model, id);
+        let mut cross: Vec<CrossTerms> = Vec::new();
+        let mut support_tables = Vec::new();
+        for s in &spec.supports {
+            let a = node(s.node)?;
+            let b = s.to_node.map(node).transpose()?;
+            let (k, c) = (s.stiffness_matrix(), s.damping_matrix());
+            for (i, dir) in [Dir::X, Dir::Y].into_iter().enumerate() {
+                add_spring(
+                    &mut self.stiffness,
+                    dof(a, dir),
+                    b.map(|b| dof(b, dir)),
+                    k[i][i],
+                );
+                add_spring(
+                    &mut self.dashpots,
+                    dof(a, dir),
+                    b.map(|b| dof(b, dir)),
+                    c[i][i],
+                );
+            }
+            // Cross-coupled terms stay out of the Rayleigh damping (added below).
+            let off = |m: [[f64; 2]; 2]| [[0.0, m[0][1]], [m[1][0], 0.0]];
+            if k[0][1] != 0.0 || k[1][0] != 0.0 || c[0][1] != 0.0 || c[1][0] != 0.0 {
+                cross.push((dof(a, Dir::X), b.map(|b| dof(b, Dir::X)), off(k), off(c)));
+            }
+            if let Some(t) = &s.table {
+                let col = |v: &[f64]| {
+                    if v.is_empty() {
+                        vec![0.0; t.speeds_rad_s.len()]
+                    } else {
+                        v.to_vec()
+                    }
+                };
+                let [kxx, kxy, kyx, kyy, cxx, cxy, cyx, cyy] = t.columns().map(|(_, v)| col(v));
+                support_tables.push(SupportTable {
+                    id: s.id.clone(),
+                    dof_x: dof(a, Dir::X),
+                    to_dof_x: b.map(|b| dof(b, Dir::X)),
+                    speed_ratio: model.speed_ratio(model.rotor_of(a)).value(),
+                    speeds_rad_s: t.speeds_rad_s.clone(),
+                    stiffness: [[kxx, kxy], [kyx, kyy]],
+                    damping: [[cxx, cxy], [cyx, cyy]],
+                });
+            }
+            for dir in [Dir::ThetaX, Dir::ThetaY] {
+                add_spring(
+                    &mut self.stiffness,
+                    dof(a, dir),
+                    b.map(|b| dof(b, dir)),
+                    s.rotational_stiffness_n_m_rad,
+                );
+            }
+        }
+        Ok((cross, support_tables))
+    }
+}
+
+impl Assembly {
     /// Linearises the bearings: explicit stiffness, tangent at an explicit load (taken
     /// along gravity, i.e. the shaft pushed along −x), or tangent at the load of the static
     /// gravity equilibrium, found by a secant fixed-point iteration: solve
