@@ -13,7 +13,7 @@ use crate::derive::PERIOD_DOUBLED_SHARE;
 use crate::record::McapOptions;
 use crate::stability::IntervalMap;
 use crate::study::{StabilityChoice, parse_name};
-use crate::sweep::{Progress, StudySettings, SweepProblem};
+use crate::sweep::{Progress, StudySettings, SweepProblem, SweepReport};
 
 /// The study flags shared by `tmrotor sweep` and `tmrotor truncation`: model, study file,
 /// flow rate and temperatures.
@@ -303,6 +303,34 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
             )
         }
     })?;
+    outcome_summary(args, &report, (cpu_start, steal_start), out)?;
+    branches_summary(&settings, &problem, &report, out)?;
+    warnings_summary(&report, out)?;
+    let file = args.output.display();
+    writeln!(
+        out,
+        "next: replay info {file}; replay plot {file} --out figures/; or open it in Foxglove \
+         or Rerun (docs/user-guide.md)"
+    )?;
+    if report.status == crate::record::RunStatus::Interrupted {
+        return Err(super::Interrupted(format!(
+            "the sweep stopped after {} points; {} is a complete recording of them",
+            report.points,
+            args.output.display()
+        ))
+        .into());
+    }
+    Ok(())
+}
+
+/// What the sweep did: its points and time, how the branch started and ended, the
+/// refused steps, and the truncation checks.
+fn outcome_summary(
+    args: &SweepArgs,
+    report: &SweepReport,
+    (cpu_start, steal_start): (Option<f64>, Option<f64>),
+    out: &mut impl std::io::Write,
+) -> anyhow::Result<()> {
     writeln!(
         out,
         "{} in {:.1} s, {} → {}",
@@ -344,7 +372,18 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
     if let Some(note) = &report.stability_note {
         writeln!(out, "  stability not assessed: {note}")?;
     }
-    truncation_summary(&report, out)?;
+    truncation_summary(report, out)?;
+    Ok(())
+}
+
+/// The period doublings (followed or why not), the switched branches and the
+/// period-doubled stretches of the response.
+fn branches_summary(
+    settings: &StudySettings,
+    problem: &SweepProblem,
+    report: &SweepReport,
+    out: &mut impl std::io::Write,
+) -> anyhow::Result<()> {
     let doublings = report
         .bifurcations
         .iter()
@@ -402,6 +441,11 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
              primary response on its own period (docs/user-guide.md, \"The primary basis\")"
         )?;
     }
+    Ok(())
+}
+
+/// The first warnings, and how many more the recording's log holds.
+fn warnings_summary(report: &SweepReport, out: &mut impl std::io::Write) -> anyhow::Result<()> {
     const SHOWN_WARNINGS: usize = 5;
     for w in report.warnings.iter().take(SHOWN_WARNINGS) {
         writeln!(out, "  warning: {w}")?;
@@ -416,20 +460,6 @@ pub fn run(args: &SweepArgs, out: &mut impl std::io::Write) -> anyhow::Result<()
                 "warnings"
             )
         )?;
-    }
-    let file = args.output.display();
-    writeln!(
-        out,
-        "next: replay info {file}; replay plot {file} --out figures/; or open it in Foxglove \
-         or Rerun (docs/user-guide.md)"
-    )?;
-    if report.status == crate::record::RunStatus::Interrupted {
-        return Err(super::Interrupted(format!(
-            "the sweep stopped after {} points; {} is a complete recording of them",
-            report.points,
-            args.output.display()
-        ))
-        .into());
     }
     Ok(())
 }
