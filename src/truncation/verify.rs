@@ -17,7 +17,7 @@ pub use crate::sweep::verify::VerifyOptions;
 pub fn verify_bifurcations(
     rec: &Recording,
     options: &VerifyOptions,
-    progress: impl FnMut(&str),
+    progress: impl FnMut(&str) + Send,
 ) -> Result<Vec<TruncationCheck>, SweepError> {
     let settings = StudySettings::from_run(&rec.run)?;
     let model = Model::from_str(&rec.run.model_text, &rec.run.model_name)

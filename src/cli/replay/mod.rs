@@ -216,7 +216,7 @@ fn operating_map(
 }
 
 /// Runs a parsed command line, writing results to `out` and notes to `err`.
-pub fn run(cli: Cli, out: &mut dyn Write, err: &mut dyn Write) -> anyhow::Result<()> {
+pub fn run(cli: Cli, out: &mut dyn Write, err: &mut (dyn Write + Send)) -> anyhow::Result<()> {
     match cli.command {
         Command::Info { file } => match open(&file, err) {
             Ok(rec) => info::run(&rec, out),

@@ -12,7 +12,7 @@ pub fn run(
     window: f64,
     tolerance: f64,
     out: &mut dyn Write,
-    err: &mut dyn Write,
+    err: &mut (dyn Write + Send),
 ) -> anyhow::Result<()> {
     let settings = crate::sweep::StudySettings::from_run(&rec.run)?;
     let recorded = settings.harmonic.order;

@@ -178,7 +178,9 @@ struct Found {
 /// Re-solves `events` of a run (settings `settings`, model `model`, recorded on
 /// `recorded_basis`, its branch's points `points` in index order) at `options.orders`
 /// (see the module docs), telling `progress` what it does; `interrupted` is polled between
-/// windows. One [`TruncationCheck`] per event, in the order given.
+/// windows. One [`TruncationCheck`] per event, in the order given. The windows (every
+/// group at every order) are independent and run in parallel on the current rayon pool;
+/// each one's outcome is the same as it would be alone.
 #[allow(clippy::too_many_arguments)]
 pub fn verify_events(
     settings: &StudySettings,
@@ -187,12 +189,11 @@ pub fn verify_events(
     points: &[StartPoint<'_>],
     events: &[Event],
     options: &VerifyOptions,
-    mut progress: impl FnMut(&str),
-    interrupted: &dyn Fn() -> bool,
+    progress: impl FnMut(&str) + Send,
+    interrupted: &(dyn Fn() -> bool + Sync),
 ) -> Result<Vec<TruncationCheck>, SweepError> {
-    let started = Instant::now();
+    use rayon::prelude::*;
     let ascending = settings.sweep.omega_end >= settings.sweep.omega_start;
-    let sign = if ascending { 1.0 } else { -1.0 };
     let w = options.window_rad_s;
     // groups of events closer than two windows to each other, in branch order
     let mut groups: Vec<Vec<usize>> = Vec::new();
@@ -220,135 +221,207 @@ pub fn verify_events(
             orders: Vec::new(),
         })
         .collect();
-    for &order in &options.orders {
-        let mut s = settings.clone();
-        s.harmonic.order = order;
-        if order != settings.harmonic.order {
-            s.harmonic.aft_samples = None;
-        }
-        let problem = SweepProblem::with_model(&s, model.clone())?;
-        let method = stability_method(&s, &problem.system, s.sweep.omega_start)
-            .map_err(|e| SweepError::Derive(e.to_string()))?;
-        for g in &groups {
-            let omegas: Vec<f64> = g.iter().map(|&i| events[i].omega_rad_s).collect();
-            let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
-            let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-            let first_after = g.iter().map(|&i| events[i].after_point).min().unwrap_or(0);
-            // the start: walking back along the branch from the group's first event while
-            // the points stay inside the window (the branch may pass the same speeds on
-            // another sheet earlier), the first point at least half a window from each
-            // event, else the earliest of that stretch, else the point just before
-            let before: Vec<&StartPoint> =
-                points.iter().filter(|p| p.index <= first_after).collect();
-            let stretch: Vec<&StartPoint> = before
-                .iter()
-                .rev()
-                .take_while(|p| p.omega_rad_s >= lo - w && p.omega_rad_s <= hi + w)
-                .copied()
-                .collect();
-            let start = stretch
-                .iter()
-                .find(|p| omegas.iter().all(|o| (p.omega_rad_s - o).abs() >= 0.5 * w))
-                .or_else(|| stretch.last())
-                .or_else(|| before.last())
-                .copied();
-            // the branch is followed until it leaves the window, which holds the start
-            let bounds = start.map(|p| ((lo - w).min(p.omega_rad_s), (hi + w).max(p.omega_rad_s)));
-            // the way the recorded branch runs from the start point (it may be running
-            // back after a fold)
-            let forward = start
-                .and_then(|p| {
-                    points
-                        .iter()
-                        .find(|q| q.index > p.index)
-                        .map(|q| q.omega_rad_s >= p.omega_rad_s)
-                })
-                .unwrap_or(ascending);
-            let end = match bounds {
-                Some((a, b)) => {
-                    if forward {
-                        b
-                    } else {
-                        a
-                    }
-                }
-                None => hi + sign * w,
-            };
-            // a group of saddle-nodes alone is matched by the folds of the window's branch,
-            // which its corrector locates without multipliers: no stability there
-            let folds_only = g
-                .iter()
-                .all(|&i| events[i].kind == Some(BifurcationKind::SaddleNode));
-            let method = (!folds_only).then_some(method.as_ref());
-            let t0 = Instant::now();
-            let window = Window {
-                start,
-                end,
-                bounds,
-                recorded_basis,
-                max_points: options.max_points,
-            };
-            let mut found: Result<Found, String> = if interrupted() {
-                Err("not reached: the sweep was interrupted".to_string())
-            } else if started.elapsed().as_secs_f64() > options.max_seconds {
-                Err(format!(
-                    "not reached within the check's budget of {} s (verify_max_seconds)",
-                    options.max_seconds
-                ))
-            } else {
-                if let Some(p) = start {
-                    progress(&format!(
-                        "order {order}: ω {:.3} → {:.3} rad/s from point {}",
-                        p.omega_rad_s, end, p.index
-                    ));
-                }
-                window.follow(&problem, method)
-            };
-            // A fold pair or a crossing narrower than a step is passed over unseen: before
-            // an event is called vanished, the window is followed again with
-            // 1/FINE_STEP_DIVISOR of the step.
-            if let Ok(f) = &found
-                && match_events(g, events, f, options).contains(&TruncationOutcome::Vanished)
-                && !interrupted()
-            {
-                let mut fine = s.clone();
-                fine.sweep.ds_max /= FINE_STEP_DIVISOR;
-                let fine_problem = SweepProblem::with_model(&fine, model.clone())?;
-                progress(&format!(
-                    "order {order}: again with a step of {:.4}",
-                    fine.sweep.ds_max
-                ));
-                let again = Window {
-                    max_points: options.max_points * FINE_STEP_DIVISOR as usize,
-                    ..window
-                }
-                .follow(&fine_problem, method);
-                if again.is_ok() {
-                    found = again;
-                }
+    let orders = options
+        .orders
+        .iter()
+        .map(|&order| {
+            let mut s = settings.clone();
+            s.harmonic.order = order;
+            if order != settings.harmonic.order {
+                s.harmonic.aft_samples = None;
             }
-            progress(&format!(
-                "order {order}: window done in {:.1} s",
-                t0.elapsed().as_secs_f64()
-            ));
-            let outcomes = match &found {
-                Err(e) => vec![TruncationOutcome::Failed(e.clone()); g.len()],
-                Ok(f) => {
-                    let listed: Vec<String> = f
-                        .bifurcations
-                        .iter()
-                        .map(|(k, w)| format!("{} {w:.4}", k.abbreviation()))
-                        .collect();
-                    progress(&format!("order {order}: located {}", listed.join(", ")));
-                    match_events(g, events, f, options)
-                }
-            };
-            for (&i, o) in g.iter().zip(outcomes) {
-                checks[i].orders.push((order, o));
+            let problem = SweepProblem::with_model(&s, model.clone())?;
+            let method = stability_method(&s, &problem.system, s.sweep.omega_start)
+                .map_err(|e| SweepError::Derive(e.to_string()))?;
+            Ok(AtOrder {
+                order,
+                settings: s,
+                problem,
+                method,
+            })
+        })
+        .collect::<Result<Vec<_>, SweepError>>()?;
+    let progress = std::sync::Mutex::new(progress);
+    let c = Checking {
+        model,
+        recorded_basis,
+        points,
+        events,
+        options,
+        started: Instant::now(),
+        sign: if ascending { 1.0 } else { -1.0 },
+        interrupted,
+        progress: &|m: &str| {
+            if let Ok(mut p) = progress.lock() {
+                p(m)
             }
+        },
+    };
+    let windows: Vec<(usize, usize)> = (0..orders.len())
+        .flat_map(|o| (0..groups.len()).map(move |g| (o, g)))
+        .collect();
+    let outcomes = windows
+        .par_iter()
+        .map(|&(o, g)| c.group(&orders[o], &groups[g]))
+        .collect::<Result<Vec<_>, SweepError>>()?;
+    // in order and group order, as one window after the other would give them
+    for (&(o, g), outs) in windows.iter().zip(outcomes) {
+        for (&i, out) in groups[g].iter().zip(outs) {
+            checks[i].orders.push((orders[o].order, out));
         }
     }
     Ok(checks)
+}
+
+/// One truncation order of the check: its settings, problem and stability method.
+struct AtOrder {
+    order: u32,
+    settings: StudySettings,
+    problem: SweepProblem,
+    method: Box<dyn crate::stability::StabilityMethod>,
+}
+
+/// What every window of a check reads.
+struct Checking<'a> {
+    model: &'a Model,
+    recorded_basis: Option<&'a Basis>,
+    points: &'a [StartPoint<'a>],
+    events: &'a [Event],
+    options: &'a VerifyOptions,
+    started: Instant,
+    /// +1 for an ascending sweep, −1 for a descending one.
+    sign: f64,
+    interrupted: &'a (dyn Fn() -> bool + Sync),
+    progress: &'a (dyn Fn(&str) + Sync),
+}
+
+impl Checking<'_> {
+    /// The outcomes of group `g` (indices into the events) at order `o`: its window
+    /// followed from the recorded point before it, again with a finer step where an event
+    /// seemed to vanish.
+    fn group(&self, o: &AtOrder, g: &[usize]) -> Result<Vec<TruncationOutcome>, SweepError> {
+        let c = self;
+        let say = |m: &str| (c.progress)(m);
+        let order = o.order;
+        let w = c.options.window_rad_s;
+        let omegas: Vec<f64> = g.iter().map(|&i| c.events[i].omega_rad_s).collect();
+        let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let first_after = g
+            .iter()
+            .map(|&i| c.events[i].after_point)
+            .min()
+            .unwrap_or(0);
+        // the start: walking back along the branch from the group's first event while
+        // the c.points stay inside the window (the branch may pass the same speeds on
+        // another sheet earlier), the first point at least half a window from each
+        // event, else the earliest of that stretch, else the point just before
+        let before: Vec<&StartPoint> = c.points.iter().filter(|p| p.index <= first_after).collect();
+        let stretch: Vec<&StartPoint> = before
+            .iter()
+            .rev()
+            .take_while(|p| p.omega_rad_s >= lo - w && p.omega_rad_s <= hi + w)
+            .copied()
+            .collect();
+        let start = stretch
+            .iter()
+            .find(|p| omegas.iter().all(|o| (p.omega_rad_s - o).abs() >= 0.5 * w))
+            .or_else(|| stretch.last())
+            .or_else(|| before.last())
+            .copied();
+        // the branch is followed until it leaves the window, which holds the start
+        let bounds = start.map(|p| ((lo - w).min(p.omega_rad_s), (hi + w).max(p.omega_rad_s)));
+        // the way the recorded branch runs from the start point (it may be running
+        // back after a fold)
+        let forward = start
+            .and_then(|p| {
+                c.points
+                    .iter()
+                    .find(|q| q.index > p.index)
+                    .map(|q| q.omega_rad_s >= p.omega_rad_s)
+            })
+            .unwrap_or(c.sign > 0.0);
+        let end = match bounds {
+            Some((a, b)) => {
+                if forward {
+                    b
+                } else {
+                    a
+                }
+            }
+            None => hi + c.sign * w,
+        };
+        // a group of saddle-nodes alone is matched by the folds of the window's branch,
+        // which its corrector locates without multipliers: no stability there
+        let folds_only = g
+            .iter()
+            .all(|&i| c.events[i].kind == Some(BifurcationKind::SaddleNode));
+        let method = (!folds_only).then_some(o.method.as_ref());
+        let t0 = Instant::now();
+        let window = Window {
+            start,
+            end,
+            bounds,
+            recorded_basis: c.recorded_basis,
+            max_points: c.options.max_points,
+        };
+        let mut found: Result<Found, String> = if (c.interrupted)() {
+            Err("not reached: the sweep was interrupted".to_string())
+        } else if c.started.elapsed().as_secs_f64() > c.options.max_seconds {
+            Err(format!(
+                "not reached within the check's budget of {} s (verify_max_seconds)",
+                c.options.max_seconds
+            ))
+        } else {
+            if let Some(p) = start {
+                say(&format!(
+                    "order {order}: ω {:.3} → {:.3} rad/s from point {}",
+                    p.omega_rad_s, end, p.index
+                ));
+            }
+            window.follow(&o.problem, method)
+        };
+        // A fold pair or a crossing narrower than a step is passed over unseen: before
+        // an event is called vanished, the window is followed again with
+        // 1/FINE_STEP_DIVISOR of the step.
+        if let Ok(f) = &found
+            && match_events(g, c.events, f, c.options).contains(&TruncationOutcome::Vanished)
+            && !(c.interrupted)()
+        {
+            let mut fine = o.settings.clone();
+            fine.sweep.ds_max /= FINE_STEP_DIVISOR;
+            let fine_problem = SweepProblem::with_model(&fine, c.model.clone())?;
+            say(&format!(
+                "order {order}: again with a step of {:.4}",
+                fine.sweep.ds_max
+            ));
+            let again = Window {
+                max_points: c.options.max_points * FINE_STEP_DIVISOR as usize,
+                ..window
+            }
+            .follow(&fine_problem, method);
+            if again.is_ok() {
+                found = again;
+            }
+        }
+        say(&format!(
+            "order {order}: window done in {:.1} s",
+            t0.elapsed().as_secs_f64()
+        ));
+        let outcomes = match &found {
+            Err(e) => vec![TruncationOutcome::Failed(e.clone()); g.len()],
+            Ok(f) => {
+                let listed: Vec<String> = f
+                    .bifurcations
+                    .iter()
+                    .map(|(k, w)| format!("{} {w:.4}", k.abbreviation()))
+                    .collect();
+                say(&format!("order {order}: located {}", listed.join(", ")));
+                match_events(g, c.events, f, c.options)
+            }
+        };
+        Ok(outcomes)
+    }
 }
 
 /// Matches the events of group `g` one to one with what a window found, the closest pairs
