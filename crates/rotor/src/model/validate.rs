@@ -405,6 +405,13 @@ struct Validator<'a> {
 
 type VResult<T> = Result<T, ModelError>;
 
+/// The nodes as the validation has indexed them, and which ones have mass so far.
+struct Layout<'a> {
+    nodes: &'a [u32],
+    node_rotor: &'a [usize],
+    has_mass: &'a mut [bool],
+}
+
 /// The error with the line of each problem in `text`, found from its path.
 fn with_lines(e: ModelError, text: &str) -> ModelError {
     match e {
@@ -789,78 +796,13 @@ impl<'a> Validator<'a> {
 
         // Shaft elements.
         let mut pairs = BTreeSet::new();
-        let mut shaft = |i: usize, s: &ShaftSpec| -> VResult<()> {
-            let p = |f: &str| format!("shafts[{i}].{f}");
-            if s.nodes.len() != 2 {
-                return Err(self.err(
-                    p("nodes"),
-                    InvalidKind::WrongType(format!(
-                        "expected exactly 2 node ids, got {}",
-                        s.nodes.len()
-                    )),
-                ));
-            }
-            let a = self.node(&nodes, format!("shafts[{i}].nodes[0]"), s.nodes[0])?;
-            let b = self.node(&nodes, format!("shafts[{i}].nodes[1]"), s.nodes[1])?;
-            if a == b {
-                return Err(self.err(
-                    p("nodes"),
-                    InvalidKind::BadConnection(format!(
-                        "an element needs two different nodes, got {} twice",
-                        s.nodes[0]
-                    )),
-                ));
-            }
-            if node_rotor[a] != node_rotor[b] {
-                return Err(self.err(
-                    p("nodes"),
-                    InvalidKind::BadConnection(format!(
-                        "nodes {} and {} belong to different rotors; couple rotors with a bearing or support",
-                        s.nodes[0], s.nodes[1]
-                    )),
-                ));
-            }
-            if !pairs.insert((a.min(b), a.max(b))) {
-                return Err(self.err(
-                    p("nodes"),
-                    InvalidKind::DuplicateId(format!("element {}–{}", s.nodes[0], s.nodes[1])),
-                ));
-            }
-            self.positive(p("length_m"), s.length_m)?;
-            self.positive(p("outer_diameter_m"), s.outer_diameter_m)?;
-            self.non_negative(p("inner_diameter_m"), s.inner_diameter_m)?;
-            if s.inner_diameter_m >= s.outer_diameter_m {
-                return Err(self.err(
-                    p("inner_diameter_m"),
-                    InvalidKind::DiameterOrder {
-                        inner_m: s.inner_diameter_m,
-                        outer_m: s.outer_diameter_m,
-                    },
-                ));
-            }
-            if let Some(v) = s.outer_diameter_end_m {
-                self.positive(p("outer_diameter_end_m"), v)?;
-            }
-            if let Some(v) = s.inner_diameter_end_m {
-                self.non_negative(p("inner_diameter_end_m"), v)?;
-            }
-            let (end_out, end_in) = s.end_diameters();
-            if end_in >= end_out {
-                return Err(self.err(
-                    p("inner_diameter_end_m"),
-                    InvalidKind::DiameterOrder {
-                        inner_m: end_in,
-                        outer_m: end_out,
-                    },
-                ));
-            }
-            self.material(&spec, p("material"), &s.material)?;
-            has_mass[a] = true;
-            has_mass[b] = true;
-            Ok(())
+        let mut layout = Layout {
+            nodes: &nodes,
+            node_rotor: &node_rotor,
+            has_mass: &mut has_mass,
         };
         for (i, s) in spec.shafts.iter().enumerate() {
-            self.keep(shaft(i, s));
+            self.keep(self.shaft_element(&spec, i, s, &mut layout, &mut pairs));
         }
         if !self.refused.get() {
             self.keep(self.shafts_in_line(&spec, &nodes, &node_rotor));
@@ -868,29 +810,8 @@ impl<'a> Validator<'a> {
 
         // Disks.
         self.unique("disks", spec.disks.iter().map(|d| d.id.as_str()))?;
-        let mut disk = |i: usize, d: &DiskSpec| -> VResult<()> {
-            let p = |f: &str| format!("disks[{i}].{f}");
-            let n = self.node(&nodes, p("node"), d.node)?;
-            self.positive(p("mass_kg"), d.mass_kg)?;
-            self.non_negative(p("polar_inertia_kg_m2"), d.polar_inertia_kg_m2)?;
-            self.non_negative(p("diametral_inertia_kg_m2"), d.diametral_inertia_kg_m2)?;
-            self.non_negative(p("eccentricity_m"), d.eccentricity_m)?;
-            if !d.phase_deg.is_finite() {
-                return Err(self.err(
-                    p("phase_deg"),
-                    InvalidKind::OutOfRange {
-                        value: d.phase_deg,
-                        reason: "must be finite".into(),
-                    },
-                ));
-            }
-            if d.diametral_inertia_kg_m2 > 0.0 {
-                has_mass[n] = true;
-            }
-            Ok(())
-        };
         for (i, d) in spec.disks.iter().enumerate() {
-            self.keep(disk(i, d));
+            self.keep(self.disk(i, d, &mut layout));
         }
         if let Some(n) = has_mass.iter().position(|&m| !m)
             && !self.refused.get()
@@ -906,49 +827,8 @@ impl<'a> Validator<'a> {
 
         // Supports.
         self.unique("supports", spec.supports.iter().map(|s| s.id.as_str()))?;
-        let support = |i: usize, s: &SupportSpec| -> VResult<()> {
-            let p = |f: &str| format!("supports[{i}].{f}");
-            self.node(&nodes, p("node"), s.node)?;
-            if let Some(t) = s.to_node {
-                self.node(&nodes, p("to_node"), t)?;
-                if t == s.node {
-                    return Err(self.err(
-                        p("to_node"),
-                        InvalidKind::BadConnection(format!("support connects node {t} to itself")),
-                    ));
-                }
-            }
-            self.non_negative(p("stiffness_n_m"), s.stiffness_n_m)?;
-            self.non_negative(p("damping_n_s_m"), s.damping_n_s_m)?;
-            for (f, v) in [
-                ("stiffness_xx_n_m", s.stiffness_xx_n_m),
-                ("stiffness_yy_n_m", s.stiffness_yy_n_m),
-                ("damping_xx_n_s_m", s.damping_xx_n_s_m),
-                ("damping_yy_n_s_m", s.damping_yy_n_s_m),
-            ] {
-                if let Some(v) = v {
-                    self.non_negative(p(f), v)?;
-                }
-            }
-            for (f, v) in [
-                ("stiffness_xy_n_m", s.stiffness_xy_n_m),
-                ("stiffness_yx_n_m", s.stiffness_yx_n_m),
-                ("damping_xy_n_s_m", s.damping_xy_n_s_m),
-                ("damping_yx_n_s_m", s.damping_yx_n_s_m),
-            ] {
-                self.finite(p(f), v)?;
-            }
-            self.non_negative(
-                p("rotational_stiffness_n_m_rad"),
-                s.rotational_stiffness_n_m_rad,
-            )?;
-            if let Some(t) = &s.table {
-                self.support_table(&p("table"), s, t)?;
-            }
-            Ok(())
-        };
         for (i, s) in spec.supports.iter().enumerate() {
-            self.keep(support(i, s));
+            self.keep(self.support(i, s, &nodes));
         }
 
         self.bearings(&spec, &nodes)?;
@@ -974,6 +854,154 @@ impl<'a> Validator<'a> {
             rayleigh,
         })
     }
+    /// A `[[shafts]]` entry: two different nodes of one rotor, not joined twice
+    /// (`pairs`), positive lengths and diameters in order, a known material.
+    fn shaft_element(
+        &self,
+        spec: &ModelFile,
+        i: usize,
+        s: &ShaftSpec,
+        layout: &mut Layout<'_>,
+        pairs: &mut BTreeSet<(usize, usize)>,
+    ) -> VResult<()> {
+        let p = |f: &str| format!("shafts[{i}].{f}");
+        if s.nodes.len() != 2 {
+            return Err(self.err(
+                p("nodes"),
+                InvalidKind::WrongType(format!(
+                    "expected exactly 2 node ids, got {}",
+                    s.nodes.len()
+                )),
+            ));
+        }
+        let a = self.node(layout.nodes, format!("shafts[{i}].nodes[0]"), s.nodes[0])?;
+        let b = self.node(layout.nodes, format!("shafts[{i}].nodes[1]"), s.nodes[1])?;
+        if a == b {
+            return Err(self.err(
+                p("nodes"),
+                InvalidKind::BadConnection(format!(
+                    "an element needs two different nodes, got {} twice",
+                    s.nodes[0]
+                )),
+            ));
+        }
+        if layout.node_rotor[a] != layout.node_rotor[b] {
+            return Err(self.err(
+                    p("nodes"),
+                    InvalidKind::BadConnection(format!(
+                        "nodes {} and {} belong to different rotors; couple rotors with a bearing or support",
+                        s.nodes[0], s.nodes[1]
+                    )),
+                ));
+        }
+        if !pairs.insert((a.min(b), a.max(b))) {
+            return Err(self.err(
+                p("nodes"),
+                InvalidKind::DuplicateId(format!("element {}–{}", s.nodes[0], s.nodes[1])),
+            ));
+        }
+        self.positive(p("length_m"), s.length_m)?;
+        self.positive(p("outer_diameter_m"), s.outer_diameter_m)?;
+        self.non_negative(p("inner_diameter_m"), s.inner_diameter_m)?;
+        if s.inner_diameter_m >= s.outer_diameter_m {
+            return Err(self.err(
+                p("inner_diameter_m"),
+                InvalidKind::DiameterOrder {
+                    inner_m: s.inner_diameter_m,
+                    outer_m: s.outer_diameter_m,
+                },
+            ));
+        }
+        if let Some(v) = s.outer_diameter_end_m {
+            self.positive(p("outer_diameter_end_m"), v)?;
+        }
+        if let Some(v) = s.inner_diameter_end_m {
+            self.non_negative(p("inner_diameter_end_m"), v)?;
+        }
+        let (end_out, end_in) = s.end_diameters();
+        if end_in >= end_out {
+            return Err(self.err(
+                p("inner_diameter_end_m"),
+                InvalidKind::DiameterOrder {
+                    inner_m: end_in,
+                    outer_m: end_out,
+                },
+            ));
+        }
+        self.material(spec, p("material"), &s.material)?;
+        layout.has_mass[a] = true;
+        layout.has_mass[b] = true;
+        Ok(())
+    }
+
+    /// A `[[disks]]` entry: its node, positive mass, non-negative inertias and
+    /// eccentricity, a finite phase.
+    fn disk(&self, i: usize, d: &DiskSpec, layout: &mut Layout<'_>) -> VResult<()> {
+        let p = |f: &str| format!("disks[{i}].{f}");
+        let n = self.node(layout.nodes, p("node"), d.node)?;
+        self.positive(p("mass_kg"), d.mass_kg)?;
+        self.non_negative(p("polar_inertia_kg_m2"), d.polar_inertia_kg_m2)?;
+        self.non_negative(p("diametral_inertia_kg_m2"), d.diametral_inertia_kg_m2)?;
+        self.non_negative(p("eccentricity_m"), d.eccentricity_m)?;
+        if !d.phase_deg.is_finite() {
+            return Err(self.err(
+                p("phase_deg"),
+                InvalidKind::OutOfRange {
+                    value: d.phase_deg,
+                    reason: "must be finite".into(),
+                },
+            ));
+        }
+        if d.diametral_inertia_kg_m2 > 0.0 {
+            layout.has_mass[n] = true;
+        }
+        Ok(())
+    }
+
+    /// A `[[supports]]` entry: its nodes, non-negative direct and finite cross-coupled
+    /// coefficients, its coefficient table.
+    fn support(&self, i: usize, s: &SupportSpec, nodes: &[u32]) -> VResult<()> {
+        let p = |f: &str| format!("supports[{i}].{f}");
+        self.node(nodes, p("node"), s.node)?;
+        if let Some(t) = s.to_node {
+            self.node(nodes, p("to_node"), t)?;
+            if t == s.node {
+                return Err(self.err(
+                    p("to_node"),
+                    InvalidKind::BadConnection(format!("support connects node {t} to itself")),
+                ));
+            }
+        }
+        self.non_negative(p("stiffness_n_m"), s.stiffness_n_m)?;
+        self.non_negative(p("damping_n_s_m"), s.damping_n_s_m)?;
+        for (f, v) in [
+            ("stiffness_xx_n_m", s.stiffness_xx_n_m),
+            ("stiffness_yy_n_m", s.stiffness_yy_n_m),
+            ("damping_xx_n_s_m", s.damping_xx_n_s_m),
+            ("damping_yy_n_s_m", s.damping_yy_n_s_m),
+        ] {
+            if let Some(v) = v {
+                self.non_negative(p(f), v)?;
+            }
+        }
+        for (f, v) in [
+            ("stiffness_xy_n_m", s.stiffness_xy_n_m),
+            ("stiffness_yx_n_m", s.stiffness_yx_n_m),
+            ("damping_xy_n_s_m", s.damping_xy_n_s_m),
+            ("damping_yx_n_s_m", s.damping_yx_n_s_m),
+        ] {
+            self.finite(p(f), v)?;
+        }
+        self.non_negative(
+            p("rotational_stiffness_n_m_rad"),
+            s.rotational_stiffness_n_m_rad,
+        )?;
+        if let Some(t) = &s.table {
+            self.support_table(&p("table"), s, t)?;
+        }
+        Ok(())
+    }
+
     /// Rayleigh coefficients `(a0, a1)` from `[damping]`: given directly, or from a damping
     /// ratio at two frequencies; none without the table.
     fn damping(&self, damping: Option<&super::file::DampingSpec>) -> VResult<(f64, f64)> {
