@@ -515,29 +515,7 @@ pub fn load(path: &Path) -> Result<(CampaignFile, Vec<CampaignRun>, PathBuf), Ca
             transient,
         });
     }
-    // a run from a recorded point: its sweep run exists and is a sweep, and the run takes
-    // its settings (what ran is what the manifest lists)
-    for k in 0..runs.len() {
-        let Some(source) = runs[k].transient.as_ref().and_then(|t| t.from.clone()) else {
-            continue;
-        };
-        let fail = |reason: String| CampaignError::Invalid {
-            file: file.clone(),
-            run: runs[k].name.clone(),
-            reason,
-        };
-        let Some(src) = runs.iter().find(|r| r.name == source) else {
-            return Err(fail(format!(
-                "transient.from {source:?}: the campaign has no run of that name"
-            )));
-        };
-        if src.transient.is_some() {
-            return Err(fail(format!(
-                "transient.from {source:?}: that run is a transient run; start from a sweep run"
-            )));
-        }
-        runs[k].settings = src.settings.clone();
-    }
+    from_sweep_runs(&file, &mut runs)?;
     let out = match &spec.output_dir {
         Some(d) if d.is_relative() => base.join(d),
         Some(d) => d.clone(),
@@ -819,6 +797,33 @@ fn prepare(campaign_path: &Path, shard: Option<(usize, usize)>) -> Result<Prepar
 /// The earlier manifest's entry of run `name`, if it lists the run.
 fn previous_entry<'m>(previous: &'m Manifest, name: &str) -> Option<&'m ManifestEntry> {
     previous.runs.iter().find(|e| e.name == name)
+}
+
+/// The runs that start from a recorded point (`transient.from`): each names a sweep run of
+/// the campaign, and takes its settings (what ran is what the manifest lists).
+fn from_sweep_runs(file: &str, runs: &mut [CampaignRun]) -> Result<(), CampaignError> {
+    for k in 0..runs.len() {
+        let Some(source) = runs[k].transient.as_ref().and_then(|t| t.from.clone()) else {
+            continue;
+        };
+        let fail = |reason: String| CampaignError::Invalid {
+            file: file.to_string(),
+            run: runs[k].name.clone(),
+            reason,
+        };
+        let Some(src) = runs.iter().find(|r| r.name == source) else {
+            return Err(fail(format!(
+                "transient.from {source:?}: the campaign has no run of that name"
+            )));
+        };
+        if src.transient.is_some() {
+            return Err(fail(format!(
+                "transient.from {source:?}: that run is a transient run; start from a sweep run"
+            )));
+        }
+        runs[k].settings = src.settings.clone();
+    }
+    Ok(())
 }
 
 /// The earlier entry `prev` when its run is complete and need not run again: status
