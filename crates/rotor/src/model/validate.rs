@@ -564,16 +564,7 @@ impl<'a> Validator<'a> {
     /// another kind), their ranges.
     fn nonlinear_element(&self, i: usize, e: &NonlinearSpec, nodes: &[u32]) -> VResult<()> {
         let p = |f: &str| format!("nonlinear[{i}].{f}");
-        self.node(nodes, p("node"), e.node)?;
-        if let Some(t) = e.to_node {
-            self.node(nodes, p("to_node"), t)?;
-            if t == e.node {
-                return Err(self.err(
-                    p("to_node"),
-                    InvalidKind::BadConnection(format!("element connects node {t} to itself")),
-                ));
-            }
-        }
+        self.connection(nodes, &p, e.node, e.to_node, "element")?;
         let kind = e.kind;
         let given: [(&str, bool); 5] = [
             ("gap_m", e.gap_m.is_some()),
@@ -958,20 +949,34 @@ impl<'a> Validator<'a> {
         Ok(())
     }
 
+    /// The nodes of a two-node entry (`what`: `support`, `element`): `node`, and `to_node`
+    /// when given, known and different; `p` names a key of the entry.
+    fn connection(
+        &self,
+        nodes: &[u32],
+        p: &dyn Fn(&str) -> String,
+        node: u32,
+        to_node: Option<u32>,
+        what: &str,
+    ) -> VResult<()> {
+        self.node(nodes, p("node"), node)?;
+        if let Some(t) = to_node {
+            self.node(nodes, p("to_node"), t)?;
+            if t == node {
+                return Err(self.err(
+                    p("to_node"),
+                    InvalidKind::BadConnection(format!("{what} connects node {t} to itself")),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// A `[[supports]]` entry: its nodes, non-negative direct and finite cross-coupled
     /// coefficients, its coefficient table.
     fn support(&self, i: usize, s: &SupportSpec, nodes: &[u32]) -> VResult<()> {
         let p = |f: &str| format!("supports[{i}].{f}");
-        self.node(nodes, p("node"), s.node)?;
-        if let Some(t) = s.to_node {
-            self.node(nodes, p("to_node"), t)?;
-            if t == s.node {
-                return Err(self.err(
-                    p("to_node"),
-                    InvalidKind::BadConnection(format!("support connects node {t} to itself")),
-                ));
-            }
-        }
+        self.connection(nodes, &p, s.node, s.to_node, "support")?;
         self.non_negative(p("stiffness_n_m"), s.stiffness_n_m)?;
         self.non_negative(p("damping_n_s_m"), s.damping_n_s_m)?;
         for (f, v) in [
