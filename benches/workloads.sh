@@ -29,7 +29,8 @@ timed() { # NAME COMMAND...: runs it, prints its last summary lines and the time
   /usr/bin/time -f "%U %S" -o "$work/time" "$@" > "$work/out" 2>&1 || { cat "$work/out"; exit 1; }
   local t1; t1=$(date +%s.%N)
   read -r user sys < "$work/time"
-  grep -E "points in|campaign:|time:|branches|saddle-nodes|guard" "$work/out" | head -4 | sed 's/^/  /'
+  # the command's closing summary (a campaign's last progress line is its total)
+  grep -E "points in|campaign:|time:|branches|saddle-nodes|guard|wrote" "$work/out" | tail -3 | sed 's/^/  /' || true
   awk -v n="$name" -v a="$t0" -v b="$t1" -v u="$user" -v s="$sys" \
     'BEGIN { printf "%s: %.1f s wall, %.1f s CPU\n", n, b - a, u + s }'
 }
