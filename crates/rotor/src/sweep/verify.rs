@@ -300,23 +300,26 @@ impl Checking<'_> {
     /// followed from the recorded point before it, again with a finer step where an event
     /// seemed to vanish.
     fn group(&self, o: &AtOrder, g: &[usize]) -> Result<Vec<TruncationOutcome>, SweepError> {
-        let c = self;
-        let say = |m: &str| (c.progress)(m);
+        let say = |m: &str| (self.progress)(m);
         let order = o.order;
-        let w = c.options.window_rad_s;
-        let omegas: Vec<f64> = g.iter().map(|&i| c.events[i].omega_rad_s).collect();
+        let w = self.options.window_rad_s;
+        let omegas: Vec<f64> = g.iter().map(|&i| self.events[i].omega_rad_s).collect();
         let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
         let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let first_after = g
             .iter()
-            .map(|&i| c.events[i].after_point)
+            .map(|&i| self.events[i].after_point)
             .min()
             .unwrap_or(0);
         // the start: walking back along the branch from the group's first event while
-        // the c.points stay inside the window (the branch may pass the same speeds on
+        // the points stay inside the window (the branch may pass the same speeds on
         // another sheet earlier), the first point at least half a window from each
         // event, else the earliest of that stretch, else the point just before
-        let before: Vec<&StartPoint> = c.points.iter().filter(|p| p.index <= first_after).collect();
+        let before: Vec<&StartPoint> = self
+            .points
+            .iter()
+            .filter(|p| p.index <= first_after)
+            .collect();
         let stretch: Vec<&StartPoint> = before
             .iter()
             .rev()
@@ -335,12 +338,12 @@ impl Checking<'_> {
         // back after a fold)
         let forward = start
             .and_then(|p| {
-                c.points
+                self.points
                     .iter()
                     .find(|q| q.index > p.index)
                     .map(|q| q.omega_rad_s >= p.omega_rad_s)
             })
-            .unwrap_or(c.sign > 0.0);
+            .unwrap_or(self.sign > 0.0);
         let end = match bounds {
             Some((a, b)) => {
                 if forward {
@@ -349,28 +352,28 @@ impl Checking<'_> {
                     a
                 }
             }
-            None => hi + c.sign * w,
+            None => hi + self.sign * w,
         };
         // a group of saddle-nodes alone is matched by the folds of the window's branch,
         // which its corrector locates without multipliers: no stability there
         let folds_only = g
             .iter()
-            .all(|&i| c.events[i].kind == Some(BifurcationKind::SaddleNode));
+            .all(|&i| self.events[i].kind == Some(BifurcationKind::SaddleNode));
         let method = (!folds_only).then_some(o.method.as_ref());
         let t0 = Instant::now();
         let window = Window {
             start,
             end,
             bounds,
-            recorded_basis: c.recorded_basis,
-            max_points: c.options.max_points,
+            recorded_basis: self.recorded_basis,
+            max_points: self.options.max_points,
         };
-        let mut found: Result<Found, String> = if (c.interrupted)() {
+        let mut found: Result<Found, String> = if (self.interrupted)() {
             Err("not reached: the sweep was interrupted".to_string())
-        } else if c.started.elapsed().as_secs_f64() > c.options.max_seconds {
+        } else if self.started.elapsed().as_secs_f64() > self.options.max_seconds {
             Err(format!(
                 "not reached within the check's budget of {} s (verify_max_seconds)",
-                c.options.max_seconds
+                self.options.max_seconds
             ))
         } else {
             if let Some(p) = start {
@@ -385,18 +388,18 @@ impl Checking<'_> {
         // an event is called vanished, the window is followed again with
         // 1/FINE_STEP_DIVISOR of the step.
         if let Ok(f) = &found
-            && match_events(g, c.events, f, c.options).contains(&TruncationOutcome::Vanished)
-            && !(c.interrupted)()
+            && match_events(g, self.events, f, self.options).contains(&TruncationOutcome::Vanished)
+            && !(self.interrupted)()
         {
             let mut fine = o.settings.clone();
             fine.sweep.ds_max /= FINE_STEP_DIVISOR;
-            let fine_problem = SweepProblem::with_model(&fine, c.model.clone())?;
+            let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
             say(&format!(
                 "order {order}: again with a step of {:.4}",
                 fine.sweep.ds_max
             ));
             let again = Window {
-                max_points: c.options.max_points * FINE_STEP_DIVISOR as usize,
+                max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
                 ..window
             }
             .follow(&fine_problem, method);
@@ -417,7 +420,7 @@ impl Checking<'_> {
                     .map(|(k, w)| format!("{} {w:.4}", k.abbreviation()))
                     .collect();
                 say(&format!("order {order}: located {}", listed.join(", ")));
-                match_events(g, c.events, f, c.options)
+                match_events(g, self.events, f, self.options)
             }
         };
         Ok(outcomes)

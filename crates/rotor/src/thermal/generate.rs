@@ -420,14 +420,14 @@ pub fn generate(model: &Model, g: &GeneratedThermal) -> Result<ThermalSpec, Ther
     let disks = disks(model, &seats, &mut number)?;
     let mut housings = Vec::new();
     let mut bearings = Vec::new();
+    let context = BearingContext {
+        model,
+        g,
+        seats: &seats,
+        material: &bearing,
+    };
     for (k, b) in model.spec.bearings.iter().enumerate() {
-        let new = BearingContext {
-            model,
-            g,
-            seats: &seats,
-            material: &bearing,
-        };
-        bearings.push(new.bearing(k, b, &mut number, &mut housings)?);
+        bearings.push(context.bearing(k, b, &mut number, &mut housings)?);
     }
     let out = ThermalSpec {
         n_nodes: number.0,
