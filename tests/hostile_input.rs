@@ -37,22 +37,22 @@ fn impossible_values_in_a_model_file_are_refused_like_the_flags() {
         (
             "thermal.cooling_temp_c=-500.0",
             "thermal.cooling_temp_c",
-            "absolute zero",
+            "must lie in (−273.15, 1000)",
         ),
         (
             "thermal.ambient_temp_c=-300.0",
             "thermal.ambient_temp_c",
-            "absolute zero",
+            "must lie in (−273.15, 1000)",
         ),
         (
             "thermal.flow_l_min=0.0",
             "thermal.flow_l_min",
-            "(0, 1000] L/min",
+            "must lie in (0, 1000]",
         ),
         (
             "thermal.air.rotor_convection_factor=5.0",
             "thermal.air.rotor_convection_factor",
-            "0–1",
+            "must lie in [0, 1]",
         ),
     ] {
         refused(

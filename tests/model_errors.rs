@@ -263,7 +263,7 @@ fn bearing_geometry_and_roller_data() {
     check(
         &edited("initial_clearance_m = 5e-6", "initial_clearance_m = -5e-6"),
         "bearings[2].initial_clearance_m",
-        |k| matches!(k, InvalidKind::Negative(_)),
+        |k| matches!(k, InvalidKind::OutOfRange { .. }),
     );
 }
 
@@ -483,7 +483,7 @@ fn rejected_value_names_its_line() {
         .expect("edited")
         + 1;
     let e = check(&text, "bearings[0].initial_clearance_m", |k| {
-        matches!(k, InvalidKind::Negative(_))
+        matches!(k, InvalidKind::OutOfRange { .. })
     });
     match &e {
         ModelError::Invalid { line: l, .. } => assert_eq!(*l, Some(line), "{e}"),

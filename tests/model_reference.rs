@@ -9,7 +9,7 @@ use std::collections::BTreeSet;
 use serde::Deserialize;
 use serde::de::{self, Deserializer, Visitor};
 use tmrotor::model::file as mf;
-use tmrotor::model::reference::{KEYS, Need, TABLES, markdown};
+use tmrotor::model::reference::{Bound, KEYS, Need, TABLES, markdown};
 use tmrotor::thermal::generate as tg;
 use tmrotor::thermal::spec as ts;
 
@@ -206,4 +206,186 @@ fn required_means_the_loader_asks_for_it() {
         }
     }
     assert!(tried >= 30, "only {tried} keys tried");
+}
+
+/// The shipped model files and their TOML.
+fn shipped_models() -> Vec<(std::path::PathBuf, toml::Table)> {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    for dir in ["models", "examples/rotors"] {
+        let mut names: Vec<_> = std::fs::read_dir(root.join(dir))
+            .expect("model directory")
+            .map(|e| e.expect("entry").path())
+            .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+            .collect();
+        names.sort();
+        for path in names {
+            let text = std::fs::read_to_string(&path).expect("model file");
+            let table: toml::Table = toml::from_str(&text).expect("model TOML");
+            files.push((path, table));
+        }
+    }
+    files
+}
+
+/// One table of a model file: its path with indices (`thermal.bearings[2]`, `""` at the
+/// top level), the reference's name of its table, and its keys.
+struct Instance {
+    at: String,
+    table: String,
+    keys: BTreeSet<String>,
+}
+
+/// Every table of `table` (itself included), depth first.
+fn instances(
+    table: &toml::Table,
+    at: &str,
+    section: &str,
+    generated: bool,
+    out: &mut Vec<Instance>,
+) {
+    out.push(Instance {
+        at: at.to_string(),
+        table: reference_table(section, generated),
+        keys: table.keys().cloned().collect(),
+    });
+    for (k, v) in table {
+        let path = if at.is_empty() {
+            k.clone()
+        } else {
+            format!("{at}.{k}")
+        };
+        let sub = if section.is_empty() {
+            k.clone()
+        } else {
+            format!("{section}.{k}")
+        };
+        match v {
+            toml::Value::Table(t) => instances(t, &path, &sub, generated, out),
+            toml::Value::Array(items) => {
+                for (i, item) in items.iter().enumerate() {
+                    if let toml::Value::Table(t) = item {
+                        instances(t, &format!("{path}[{i}]"), &sub, generated, out);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+/// The reference's table name of the TOML table `section` (`thermal.bearings`).
+fn reference_table(section: &str, generated: bool) -> String {
+    match (section, generated) {
+        ("thermal", true) => "thermal (generated)".into(),
+        ("thermal.bearings", true) => "thermal.bearings (generated)".into(),
+        ("thermal.ball_bearings" | "thermal.roller_bearings", _) => {
+            "thermal.ball_bearings, thermal.roller_bearings".into()
+        }
+        (s, _) => s.into(),
+    }
+}
+
+/// Values just outside a bound (each one the loader must refuse).
+fn outside(bound: Bound) -> Vec<f64> {
+    match bound {
+        Bound::Free => vec![],
+        Bound::Positive => vec![0.0, -1.0, f64::INFINITY],
+        Bound::NonNegative => vec![-1e-9, f64::INFINITY],
+        Bound::Finite => vec![f64::INFINITY, f64::NEG_INFINITY],
+        Bound::Within {
+            low,
+            low_open,
+            high,
+            high_open,
+        } => {
+            let below = if low_open {
+                low
+            } else {
+                low - 1e-9 * low.abs().max(1.0)
+            };
+            let above = if high_open {
+                high
+            } else {
+                high + 1e-9 * high.abs().max(1.0)
+            };
+            vec![below, above]
+        }
+    }
+}
+
+/// Loads `file` with `path = value` as a sweep does (the model, then the coupled rotor
+/// with its thermal network); the error's text when refused.
+fn load_with(file: &std::path::Path, path: &str, value: f64) -> Result<(), String> {
+    let set = tmrotor::model::ModelSet::from([(path.to_string(), toml::Value::Float(value))]);
+    let model = tmrotor::model::Model::load(Some(file), &set).map_err(|e| e.to_string())?;
+    tmrotor::coupled::CoupledRotor::new(&model, &Default::default(), Default::default())
+        .map(|_| ())
+        .map_err(|e| e.to_string())
+}
+
+/// Each bound the reference gives (its "checked" column's `> 0`, `≥ 0`, `finite`, `in
+/// [a, b]`) is one the loader enforces. For every key with a bound: in the first shipped
+/// model file that gives it (or, failing that, in a table of a shipped file where it may
+/// be added and a value inside the bound loads), values just outside the bound are set
+/// by path, and loading as a sweep does must refuse each, naming that path.
+#[test]
+fn every_bound_of_the_reference_is_enforced_by_the_loader() {
+    let models = shipped_models();
+    let mut places: Vec<(&std::path::Path, Instance)> = Vec::new();
+    for (path, table) in &models {
+        let generated = table
+            .get("thermal")
+            .and_then(|t| t.get("generate"))
+            .and_then(toml::Value::as_bool)
+            .unwrap_or(false);
+        let mut found = Vec::new();
+        instances(table, "", "", generated, &mut found);
+        places.extend(found.into_iter().map(|i| (path.as_path(), i)));
+    }
+    let mut unmet = Vec::new();
+    let mut tried = 0;
+    for key in KEYS.iter().filter(|k| k.bound != Bound::Free) {
+        let named = |i: &Instance| match i.at.as_str() {
+            "" => key.key.to_string(),
+            at => format!("{at}.{}", key.key),
+        };
+        // a file that gives the key, else one where a value inside the bound can be added
+        let given = places
+            .iter()
+            .find(|(_, i)| i.table == key.table && i.keys.contains(key.key));
+        let place = given.or_else(|| {
+            places.iter().find(|(file, i)| {
+                i.table == key.table
+                    && [0.0, 1e-3, 1.0]
+                        .iter()
+                        .any(|&v| key.bound.admits(v) && load_with(file, &named(i), v).is_ok())
+            })
+        });
+        let Some((file, instance)) = place else {
+            unmet.push(format!("{}.{}", key.table, key.key));
+            continue;
+        };
+        let at = named(instance);
+        for bad in outside(key.bound) {
+            match load_with(file, &at, bad) {
+                Err(message) => assert!(
+                    message.contains(&at),
+                    "{}: {at} = {bad} refused without naming it: {message}",
+                    file.display()
+                ),
+                Ok(()) => panic!(
+                    "{}: {at} = {bad} accepted, but the reference says {}",
+                    file.display(),
+                    key.checked()
+                ),
+            }
+            tried += 1;
+        }
+    }
+    assert!(
+        unmet.is_empty(),
+        "bounded keys met in no shipped model: {unmet:?}"
+    );
+    eprintln!("{tried} values outside their bounds refused, naming their paths");
 }

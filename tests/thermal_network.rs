@@ -314,7 +314,7 @@ fn the_heat_split_moves_temperatures_and_keeps_the_balance() {
         ),
         (
             (1.2, -0.2, 0.0, 0.0),
-            "bearings[0].heat_split.elements: must be a fraction",
+            "bearings[0].heat_split.elements: must lie in [0, 1]",
         ),
     ] {
         let mut bad = spec();
@@ -568,6 +568,6 @@ fn a_rotor_convection_factor_outside_0_to_1_is_refused_by_path() {
             .expect_err("refused")
             .to_string();
         assert!(err.contains("air.rotor_convection_factor"), "{err}");
-        assert!(err.contains("must lie in 0–1"), "{err}");
+        assert!(err.contains("must lie in [0, 1]"), "{err}");
     }
 }

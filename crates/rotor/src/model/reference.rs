@@ -30,6 +30,150 @@ impl Need {
     }
 }
 
+/// The bound the loader checks on a number: written here once, shown in the reference's
+/// "checked" column and applied by the validators (`model::validate`, the `[thermal]`
+/// table's check), which find a key's entry with [`key`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bound {
+    /// No bound of its own (text, a table, an id, or a rule given in [`Key::range`]).
+    Free,
+    /// Finite and > 0.
+    Positive,
+    /// Finite and ≥ 0.
+    NonNegative,
+    /// Finite.
+    Finite,
+    /// Finite and within `low`..`high`, each end included unless open.
+    Within {
+        low: f64,
+        low_open: bool,
+        high: f64,
+        high_open: bool,
+    },
+}
+
+impl Bound {
+    /// `[low, high]`, both ends included.
+    pub const fn closed(low: f64, high: f64) -> Self {
+        Bound::Within {
+            low,
+            low_open: false,
+            high,
+            high_open: false,
+        }
+    }
+
+    /// `(low, high)`, both ends excluded.
+    pub const fn open(low: f64, high: f64) -> Self {
+        Bound::Within {
+            low,
+            low_open: true,
+            high,
+            high_open: true,
+        }
+    }
+
+    /// Whether `v` satisfies the bound (always for [`Bound::Free`]).
+    pub fn admits(self, v: f64) -> bool {
+        match self {
+            Bound::Free => true,
+            Bound::Positive => v.is_finite() && v > 0.0,
+            Bound::NonNegative => v.is_finite() && v >= 0.0,
+            Bound::Finite => v.is_finite(),
+            Bound::Within {
+                low,
+                low_open,
+                high,
+                high_open,
+            } => {
+                v.is_finite()
+                    && (if low_open { v > low } else { v >= low })
+                    && (if high_open { v < high } else { v <= high })
+            }
+        }
+    }
+
+    /// The bound as the reference and the error messages write it (`""` for
+    /// [`Bound::Free`]).
+    pub fn text(self) -> String {
+        match self {
+            Bound::Free => String::new(),
+            Bound::Positive => "> 0".into(),
+            Bound::NonNegative => "≥ 0".into(),
+            Bound::Finite => "finite".into(),
+            Bound::Within {
+                low,
+                low_open,
+                high,
+                high_open,
+            } => format!(
+                "in {}{}, {}{}",
+                if low_open { '(' } else { '[' },
+                number(low),
+                number(high),
+                if high_open { ')' } else { ']' }
+            ),
+        }
+    }
+}
+
+/// A bound's end as written in the reference (`−` as a minus sign, exponents for the
+/// very large and very small).
+fn number(v: f64) -> String {
+    let text = if v != 0.0 && (v.abs() >= 1e5 || v.abs() < 1e-3) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    };
+    text.replace('-', "−")
+}
+
+/// The entry of `name` in `table`; evaluated in a `const` context, a key the reference
+/// does not have stops the build.
+pub const fn key(table: &str, name: &str) -> &'static Key {
+    let mut i = 0;
+    while i < KEYS.len() {
+        if same(KEYS[i].table, table) && same(KEYS[i].key, name) {
+            return &KEYS[i];
+        }
+        i += 1;
+    }
+    panic!("no such key in the model-file reference")
+}
+
+/// The reference's entry of a key whose value a validator checks against its bound,
+/// `reference_key!("shafts", "length_m")`: [`key`] evaluated when compiling, so a key the
+/// reference lacks, or one it gives no bound ([`Bound::Free`]), stops the build.
+macro_rules! reference_key {
+    ($table:literal, $key:literal) => {
+        const {
+            let key = $crate::model::reference::key($table, $key);
+            assert!(
+                !matches!(key.bound, $crate::model::reference::Bound::Free),
+                "a checked key without a bound in the model-file reference"
+            );
+            key
+        }
+    };
+}
+pub(crate) use reference_key;
+
+/// String equality usable in `const` functions.
+const fn same(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut i = 0;
+    while i < a.len() {
+        if a[i] != b[i] {
+            return false;
+        }
+        i += 1;
+    }
+    true
+}
+
 /// One key of the model file.
 #[derive(Clone, Copy, Debug)]
 pub struct Key {
@@ -42,10 +186,23 @@ pub struct Key {
     pub need: Need,
     /// Default when optional (`""` when required).
     pub default: &'static str,
-    /// What the loader checks (`""` when nothing).
+    /// The bound the loader checks on its value.
+    pub bound: Bound,
+    /// What else the loader checks (`""` when nothing beyond [`Key::bound`]).
     pub range: &'static str,
     /// What it is, with the paper's symbol, table or equation.
     pub meaning: &'static str,
+}
+
+impl Key {
+    /// The "checked" column: the bound, then the other rules.
+    pub fn checked(&self) -> String {
+        match (self.bound.text(), self.range) {
+            (b, "") => b,
+            (b, r) if b.is_empty() => r.to_string(),
+            (b, r) => format!("{b}; {r}"),
+        }
+    }
 }
 
 /// Tables in the order of the reference, with the heading text of each.
@@ -144,7 +301,7 @@ pub fn markdown() -> String {
                 cell(k.unit),
                 k.need.text(),
                 cell(k.default),
-                cell(k.range),
+                cell(&k.checked()),
                 cell(k.meaning)
             ));
         }

@@ -46,11 +46,12 @@ use serde::Deserialize;
 use super::ThermalError;
 use super::spec::{
     AirSpec, BearingThermalSpec, DiskSpec, HeatSplit, HousingSpec, LubricantSpec, MaterialSpec,
-    MaterialsSpec, ShaftSpec, ThermalSpec, ViscositySpec, deserialize, invalid, positive,
+    MaterialsSpec, ShaftSpec, ThermalSpec, ViscositySpec, bounded, deserialize, invalid,
     table_text,
 };
 use crate::bearing::ContactLaw;
 use crate::model::Model;
+use crate::model::reference::{Key, reference_key as key};
 
 /// The key that marks a generated `[thermal]` table.
 pub const GENERATE_KEY: &str = "generate";
@@ -262,6 +263,13 @@ impl Numbering {
 /// 37 at the default segment length), checked before anything is allocated.
 pub const MAX_SEGMENT_NODES: usize = super::spec::MAX_THERMAL_NODES;
 
+/// The reference's `f_v` and `f_l` of `[thermal.ball_bearings]` and
+/// `[thermal.roller_bearings]` (one entry for both tables).
+const PER_KIND: [&Key; 2] = [
+    key!("thermal.ball_bearings, thermal.roller_bearings", "f_v"),
+    key!("thermal.ball_bearings, thermal.roller_bearings", "f_l"),
+];
+
 /// Checks the per-kind and per-bearing settings; errors name `thermal.…`.
 fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalError> {
     let file = &model.source;
@@ -272,7 +280,12 @@ fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalErro
             "false: remove the key and write the network node by node, or set it to true",
         ));
     }
-    positive(file, "thermal.segment_length_m".into(), g.segment_length_m)?;
+    bounded(
+        file,
+        "thermal",
+        key!("thermal (generated)", "segment_length_m"),
+        g.segment_length_m,
+    )?;
     // the segment nodes the shafts make, counted before anything is allocated: the
     // network's conductance is a dense matrix and the stability's Hill problem holds every
     // thermal exponent, so thousands of nodes cost minutes and gigabytes a point
@@ -302,10 +315,11 @@ fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalErro
         ("ball_bearings", &g.ball_bearings),
         ("roller_bearings", &g.roller_bearings),
     ] {
-        let p = |k: &str| format!("thermal.{name}.{k}");
-        positive(file, p("f_v"), kind.f_v)?;
-        positive(file, p("f_l"), kind.f_l)?;
-        kind.heat_split.check(file, &p("heat_split"))?;
+        let at = format!("thermal.{name}");
+        for (key, v) in [(PER_KIND[0], kind.f_v), (PER_KIND[1], kind.f_l)] {
+            bounded(file, &at, key, v)?;
+        }
+        kind.heat_split.check(file, &format!("{at}.heat_split"))?;
     }
     match g.ball_bearings.conformity {
         Some(c) if c > 0.5 => {}
@@ -345,15 +359,18 @@ fn check_settings(model: &Model, g: &GeneratedThermal) -> Result<(), ThermalErro
                 format!("bearing {:?} has settings twice", s.name),
             ));
         }
-        for (key, v) in [("f_v", s.f_v), ("f_l", s.f_l)] {
+        let at = format!("thermal.bearings[{j}]");
+        for (key, v) in [
+            (key!("thermal.bearings (generated)", "f_v"), s.f_v),
+            (key!("thermal.bearings (generated)", "f_l"), s.f_l),
+            (
+                key!("thermal.bearings (generated)", "cage_mass_kg"),
+                s.cage_mass_kg,
+            ),
+        ] {
             if let Some(v) = v {
-                positive(file, p(key), v)?;
+                bounded(file, &at, key, v)?;
             }
-        }
-        if let Some(c) = s.cage_mass_kg
-            && !(c.is_finite() && c >= 0.0)
-        {
-            return Err(invalid(file, p("cage_mass_kg"), "must be >= 0"));
         }
         if let Some(split) = &s.heat_split {
             split.check(file, &p("heat_split"))?;

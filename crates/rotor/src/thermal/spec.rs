@@ -11,6 +11,7 @@
 
 use super::ThermalError;
 use crate::bearing::ContactLaw;
+use crate::model::reference::{Bound, Key, reference_key as key};
 use serde::{Deserialize, Serialize, de::DeserializeOwned};
 
 /// The most nodes a thermal network may have, written node by node or generated: 600.
@@ -25,7 +26,11 @@ pub const MAX_THERMAL_NODES: usize = 600;
 /// `--flow`: a bound of sanity, some fifty times the jet flow of the largest bearings the
 /// model describes (the paper's campaign runs 1–20 L/min); beyond it the lubricant would
 /// hold every lubricant node at its supply temperature anyway.
-pub const MAX_FLOW_L_MIN: f64 = 1000.0;
+/// Taken from the reference's bound of `thermal.flow_l_min`.
+pub const MAX_FLOW_L_MIN: f64 = match key!("thermal", "flow_l_min").bound {
+    Bound::Within { high, .. } => high,
+    _ => panic!("thermal.flow_l_min has a range in the model-file reference"),
+};
 
 /// Viscosity law (Eq. 12).
 #[derive(Clone, Debug, Deserialize, Serialize, PartialEq)]
@@ -226,15 +231,14 @@ impl HeatSplit {
 
     /// Each fraction in [0, 1], all summing to 1; errors name `path.<part>` (or `path`).
     pub(super) fn check(&self, file: &str, path: &str) -> Result<(), ThermalError> {
-        let parts = ["elements", "inner", "outer", "lubricant"];
-        for (part, v) in parts.iter().zip(self.fractions()) {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(invalid(
-                    file,
-                    format!("{path}.{part}"),
-                    format!("must be a fraction in [0, 1], got {v}"),
-                ));
-            }
+        let parts = [
+            key!("thermal.bearings.heat_split", "elements"),
+            key!("thermal.bearings.heat_split", "inner"),
+            key!("thermal.bearings.heat_split", "outer"),
+            key!("thermal.bearings.heat_split", "lubricant"),
+        ];
+        for (key, v) in parts.into_iter().zip(self.fractions()) {
+            bounded(file, path, key, v)?;
         }
         let sum: f64 = self.fractions().iter().sum();
         if (sum - 1.0).abs() > 1e-9 {
@@ -281,45 +285,41 @@ pub(super) fn invalid(file: &str, path: String, reason: impl Into<String>) -> Th
     }
 }
 
-pub(super) fn positive(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
-    if v > 0.0 && v.is_finite() {
+/// Checks `v`, the value of `key` in the table at `at` (`thermal.bearings[2]`), against
+/// the bound the model-file reference gives the key.
+pub(super) fn bounded(file: &str, at: &str, key: &Key, v: f64) -> Result<(), ThermalError> {
+    if key.bound.admits(v) {
         Ok(())
     } else {
-        Err(invalid(
-            file,
-            path,
-            format!("must be a finite number > 0, got {v}"),
-        ))
+        let reason = match key.bound {
+            Bound::Within { .. } => format!("must lie {}, got {v}", key.bound.text()),
+            Bound::Finite => format!("must be finite, got {v}"),
+            bound => format!("must be a finite number {}, got {v}", bound.text()),
+        };
+        Err(invalid(file, format!("{at}.{}", key.key), reason))
     }
 }
 
-fn non_negative(v: f64) -> bool {
-    v.is_finite() && v >= 0.0
-}
+/// The reference's keys of `[thermal.materials.bearing]` in the order of
+/// [`MaterialSpec`]'s fields.
+const BEARING_MATERIAL: [&Key; 6] = [
+    key!("thermal.materials.bearing", "density_kg_m3"),
+    key!("thermal.materials.bearing", "specific_heat_j_kg_k"),
+    key!("thermal.materials.bearing", "conductivity_w_m_k"),
+    key!("thermal.materials.bearing", "expansion_per_k"),
+    key!("thermal.materials.bearing", "modulus_pa"),
+    key!("thermal.materials.bearing", "poisson"),
+];
 
-/// A temperature in °C: above absolute zero and below 1000 °C (the bound of the
-/// `--cooling-temp` and `--ambient-temp` flags and of study files).
-fn temperature(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
-    if v.is_finite() && v > -273.15 && v < 1000.0 {
-        Ok(())
-    } else {
-        Err(invalid(
-            file,
-            path,
-            format!(
-                "a temperature must lie between absolute zero (−273.15 °C) and 1000 °C, got {v}"
-            ),
-        ))
-    }
-}
-
-fn finite(file: &str, path: String, v: f64) -> Result<(), ThermalError> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid(file, path, format!("must be finite, got {v}")))
-    }
-}
+/// As [`BEARING_MATERIAL`], for `[thermal.materials.shaft]`.
+const SHAFT_MATERIAL: [&Key; 6] = [
+    key!("thermal.materials.shaft", "density_kg_m3"),
+    key!("thermal.materials.shaft", "specific_heat_j_kg_k"),
+    key!("thermal.materials.shaft", "conductivity_w_m_k"),
+    key!("thermal.materials.shaft", "expansion_per_k"),
+    key!("thermal.materials.shaft", "modulus_pa"),
+    key!("thermal.materials.shaft", "poisson"),
+];
 
 /// Deserializes a `[thermal]` table's text as `T`; an unknown, missing or mistyped field is
 /// named by its path (`thermal.shafts[3].length_m`). `lines`: the text's lines are the
@@ -474,91 +474,86 @@ impl ThermalSpec {
 
     /// The network's values: temperatures, flow, lubricant, air, materials.
     fn check_values(&self, file: &str, found: &mut Vec<ThermalError>) -> Result<(), ThermalError> {
-        let p = |s: &str| format!("thermal.{s}");
-        found.extend(temperature(file, p("ambient_temp_c"), self.ambient_temp_c).err());
-        found.extend(temperature(file, p("cooling_temp_c"), self.cooling_temp_c).err());
-        // the bound of `--flow` and of a study file: no lubricant flow leaves the bearings'
-        // heat without its main path out (Eq. 14)
-        if !(self.flow_l_min.is_finite()
-            && self.flow_l_min > 0.0
-            && self.flow_l_min <= MAX_FLOW_L_MIN)
-        {
-            return Err(invalid(
-                file,
-                p("flow_l_min"),
-                format!(
-                    "the lubricant flow rate must lie in (0, {MAX_FLOW_L_MIN}] L/min, got {}",
-                    self.flow_l_min
-                ),
-            ));
-        }
-        found.extend(positive(file, p("min_contact_load_n"), self.min_contact_load_n).err());
-        found.extend(positive(file, p("viscosity.nu0_mm2_s"), self.viscosity.nu0_mm2_s).err());
-        found.extend(finite(file, p("viscosity.ref_temp_c"), self.viscosity.ref_temp_c).err());
-        found.extend(finite(file, p("viscosity.beta_per_k"), self.viscosity.beta_per_k).err());
-        let l = &self.lubricant;
-        found.extend(positive(file, p("lubricant.density_kg_m3"), l.density_kg_m3).err());
-        found.extend(
-            positive(
-                file,
-                p("lubricant.specific_heat_j_kg_k"),
-                l.specific_heat_j_kg_k,
-            )
-            .err(),
-        );
-        found.extend(
-            positive(
-                file,
-                p("lubricant.conductivity_w_m_k"),
-                l.conductivity_w_m_k,
-            )
-            .err(),
-        );
-        found.extend(positive(file, p("lubricant.diffusivity_m2_s"), l.diffusivity_m2_s).err());
-        found.extend(
-            positive(
-                file,
-                p("air.kinematic_viscosity_m2_s"),
-                self.air.kinematic_viscosity_m2_s,
-            )
-            .err(),
-        );
-        found.extend(
-            positive(
-                file,
-                p("air.conductivity_w_m_k"),
-                self.air.conductivity_w_m_k,
-            )
-            .err(),
-        );
-        if !non_negative(self.air.housing_h_w_m2_k) {
-            return Err(invalid(file, p("air.housing_h_w_m2_k"), "must be >= 0"));
-        }
-        if !(non_negative(self.air.rotor_convection_factor)
-            && self.air.rotor_convection_factor <= 1.0)
-        {
-            return Err(invalid(
-                file,
-                p("air.rotor_convection_factor"),
-                format!(
-                    "must lie in 0–1, got {} (the share of the rotor surfaces in free air: 0 none, 1 all, Table 1's correlation)",
-                    self.air.rotor_convection_factor
-                ),
-            ));
-        }
-        for (name, m) in [
-            ("bearing", &self.materials.bearing),
-            ("shaft", &self.materials.shaft),
-        ] {
-            let q = |f: &str| p(&format!("materials.{name}.{f}"));
-            found.extend(positive(file, q("density_kg_m3"), m.density_kg_m3).err());
-            found.extend(positive(file, q("specific_heat_j_kg_k"), m.specific_heat_j_kg_k).err());
-            found.extend(positive(file, q("conductivity_w_m_k"), m.conductivity_w_m_k).err());
-            found.extend(positive(file, q("expansion_per_k"), m.expansion_per_k).err());
-            found.extend(positive(file, q("modulus_pa"), m.modulus_pa).err());
-            if !(m.poisson > -1.0 && m.poisson < 0.5) {
-                return Err(invalid(file, q("poisson"), "must lie in (-1, 0.5)"));
+        let mut check = |at: &str, values: &[(&Key, f64)]| {
+            for &(key, v) in values {
+                found.extend(bounded(file, at, key, v).err());
             }
+        };
+        check(
+            "thermal",
+            &[
+                (key!("thermal", "ambient_temp_c"), self.ambient_temp_c),
+                (key!("thermal", "cooling_temp_c"), self.cooling_temp_c),
+                // the bound of `--flow` and of a study file: no lubricant flow leaves the
+                // bearings' heat without its main path out (Eq. 14)
+                (key!("thermal", "flow_l_min"), self.flow_l_min),
+                (
+                    key!("thermal", "min_contact_load_n"),
+                    self.min_contact_load_n,
+                ),
+            ],
+        );
+        let v = &self.viscosity;
+        check(
+            "thermal.viscosity",
+            &[
+                (key!("thermal.viscosity", "nu0_mm2_s"), v.nu0_mm2_s),
+                (key!("thermal.viscosity", "ref_temp_c"), v.ref_temp_c),
+                (key!("thermal.viscosity", "beta_per_k"), v.beta_per_k),
+            ],
+        );
+        let l = &self.lubricant;
+        check(
+            "thermal.lubricant",
+            &[
+                (key!("thermal.lubricant", "density_kg_m3"), l.density_kg_m3),
+                (
+                    key!("thermal.lubricant", "specific_heat_j_kg_k"),
+                    l.specific_heat_j_kg_k,
+                ),
+                (
+                    key!("thermal.lubricant", "conductivity_w_m_k"),
+                    l.conductivity_w_m_k,
+                ),
+                (
+                    key!("thermal.lubricant", "diffusivity_m2_s"),
+                    l.diffusivity_m2_s,
+                ),
+            ],
+        );
+        let a = &self.air;
+        check(
+            "thermal.air",
+            &[
+                (
+                    key!("thermal.air", "kinematic_viscosity_m2_s"),
+                    a.kinematic_viscosity_m2_s,
+                ),
+                (
+                    key!("thermal.air", "conductivity_w_m_k"),
+                    a.conductivity_w_m_k,
+                ),
+                (key!("thermal.air", "housing_h_w_m2_k"), a.housing_h_w_m2_k),
+                (
+                    key!("thermal.air", "rotor_convection_factor"),
+                    a.rotor_convection_factor,
+                ),
+            ],
+        );
+        for (name, m, keys) in [
+            ("bearing", &self.materials.bearing, BEARING_MATERIAL),
+            ("shaft", &self.materials.shaft, SHAFT_MATERIAL),
+        ] {
+            let values = [
+                m.density_kg_m3,
+                m.specific_heat_j_kg_k,
+                m.conductivity_w_m_k,
+                m.expansion_per_k,
+                m.modulus_pa,
+                m.poisson,
+            ];
+            let pairs: Vec<(&Key, f64)> = keys.iter().copied().zip(values).collect();
+            check(&format!("thermal.materials.{name}"), &pairs);
         }
 
         Ok(())
@@ -589,12 +584,21 @@ impl ThermalSpec {
         };
         for (k, s) in self.shafts.iter().enumerate() {
             let q = |f: &str| p(&format!("shafts[{k}].{f}"));
-            found.extend(finite(file, q("speed_ratio"), s.speed_ratio).err());
-            if !non_negative(s.inner_diameter_m) {
-                return Err(invalid(file, q("inner_diameter_m"), "must be >= 0"));
+            let at = format!("thermal.shafts[{k}]");
+            for (key, v) in [
+                (key!("thermal.shafts", "speed_ratio"), s.speed_ratio),
+                (
+                    key!("thermal.shafts", "inner_diameter_m"),
+                    s.inner_diameter_m,
+                ),
+                (
+                    key!("thermal.shafts", "outer_diameter_m"),
+                    s.outer_diameter_m,
+                ),
+                (key!("thermal.shafts", "length_m"), s.length_m),
+            ] {
+                found.extend(bounded(file, &at, key, v).err());
             }
-            found.extend(positive(file, q("outer_diameter_m"), s.outer_diameter_m).err());
-            found.extend(positive(file, q("length_m"), s.length_m).err());
             if s.inner_diameter_m >= s.outer_diameter_m {
                 return Err(invalid(
                     file,
@@ -620,9 +624,17 @@ impl ThermalSpec {
                     format!("{} is not a shaft node", d.shaft_node),
                 ));
             }
-            found.extend(positive(file, q("mass_kg"), d.mass_kg).err());
-            found.extend(positive(file, q("polar_inertia_kg_m2"), d.polar_inertia_kg_m2).err());
-            found.extend(positive(file, q("bore_diameter_m"), d.bore_diameter_m).err());
+            let at = format!("thermal.disks[{k}]");
+            for (key, v) in [
+                (key!("thermal.disks", "mass_kg"), d.mass_kg),
+                (
+                    key!("thermal.disks", "polar_inertia_kg_m2"),
+                    d.polar_inertia_kg_m2,
+                ),
+                (key!("thermal.disks", "bore_diameter_m"), d.bore_diameter_m),
+            ] {
+                found.extend(bounded(file, &at, key, v).err());
+            }
             let r_b = 0.5 * d.bore_diameter_m;
             if 2.0 * d.polar_inertia_kg_m2 / d.mass_kg <= 2.0 * r_b * r_b {
                 return Err(invalid(
@@ -637,8 +649,16 @@ impl ThermalSpec {
             claim(h.seat_node, q("seat_node"))?;
             claim(h.flank_nodes[0], q("flank_nodes[0]"))?;
             claim(h.flank_nodes[1], q("flank_nodes[1]"))?;
-            found.extend(positive(file, q("bore_diameter_m"), h.bore_diameter_m).err());
-            found.extend(positive(file, q("seat_length_m"), h.seat_length_m).err());
+            let at = format!("thermal.housings[{k}]");
+            for (key, v) in [
+                (
+                    key!("thermal.housings", "bore_diameter_m"),
+                    h.bore_diameter_m,
+                ),
+                (key!("thermal.housings", "seat_length_m"), h.seat_length_m),
+            ] {
+                found.extend(bounded(file, &at, key, v).err());
+            }
             if h.radius_m <= 0.5 * h.bore_diameter_m {
                 return Err(invalid(file, q("radius_m"), "must exceed the bore radius"));
             }
@@ -704,22 +724,42 @@ impl ThermalSpec {
             return Err(invalid(file, q("n_elements"), "must be > 0"));
         }
         b.heat_split.check(file, &q("heat_split"))?;
-        for (f, v) in [
-            ("seat_diameter_m", b.seat_diameter_m),
-            ("element_diameter_m", b.element_diameter_m),
-            ("inner_raceway_m", b.inner_raceway_m),
-            ("outer_raceway_m", b.outer_raceway_m),
-            ("pitch_diameter_m", b.pitch_diameter_m),
-            ("bore_diameter_m", b.bore_diameter_m),
-            ("outer_diameter_m", b.outer_diameter_m),
-            ("width_m", b.width_m),
-            ("f_l", b.f_l),
-            ("f_v", b.f_v),
+        let at = format!("thermal.bearings[{k}]");
+        for (key, v) in [
+            (
+                key!("thermal.bearings", "seat_diameter_m"),
+                b.seat_diameter_m,
+            ),
+            (
+                key!("thermal.bearings", "element_diameter_m"),
+                b.element_diameter_m,
+            ),
+            (
+                key!("thermal.bearings", "inner_raceway_m"),
+                b.inner_raceway_m,
+            ),
+            (
+                key!("thermal.bearings", "outer_raceway_m"),
+                b.outer_raceway_m,
+            ),
+            (
+                key!("thermal.bearings", "pitch_diameter_m"),
+                b.pitch_diameter_m,
+            ),
+            (
+                key!("thermal.bearings", "bore_diameter_m"),
+                b.bore_diameter_m,
+            ),
+            (
+                key!("thermal.bearings", "outer_diameter_m"),
+                b.outer_diameter_m,
+            ),
+            (key!("thermal.bearings", "width_m"), b.width_m),
+            (key!("thermal.bearings", "f_l"), b.f_l),
+            (key!("thermal.bearings", "f_v"), b.f_v),
+            (key!("thermal.bearings", "cage_mass_kg"), b.cage_mass_kg),
         ] {
-            found.extend(positive(file, q(f), v).err());
-        }
-        if !non_negative(b.cage_mass_kg) {
-            return Err(invalid(file, q("cage_mass_kg"), "must be >= 0"));
+            found.extend(bounded(file, &at, key, v).err());
         }
         if !(b.bore_diameter_m < b.inner_raceway_m
             && b.inner_raceway_m < b.outer_raceway_m
