@@ -387,115 +387,27 @@ pub fn run(
     let mut unreached = Vec::new();
     let mut thermal_ids = Vec::new();
     let mut dynamic_ids = Vec::new();
-    let span = (settings.sweep.omega_end - settings.sweep.omega_start).abs();
     for (oi, &order) in opts.orders.iter().enumerate() {
-        let start = std::time::Instant::now();
-        let mut study = settings.clone();
-        study.harmonic.order = order;
-        study.floquet.stability = false;
-        let problem = SweepProblem::new(&study)?;
-        let nodes = resolve_nodes(&problem, opts)?;
+        let Traced {
+            problem,
+            nodes,
+            sols,
+            summary,
+            unreached: not_reached,
+        } = trace_order(
+            settings,
+            opts,
+            &targets,
+            oi,
+            order,
+            &mut progress,
+            &mut missed,
+        )?;
         thermal_ids.clone_from(&nodes.thermal_ids);
         dynamic_ids.clone_from(&nodes.dynamic_ids);
-        let mut cont = problem.continuation(None)?;
-        // per target: crossings seen, and the distinct solutions in branch order
-        let mut seen = vec![0usize; targets.len()];
-        let mut found: Vec<Vec<HbSolution>> = vec![Vec::new(); targets.len()];
-        // the first crossing could not be solved: no later solution stands in for it
-        let mut first_missed = vec![false; targets.len()];
-        let mut prev: Option<HbSolution> = None;
-        let mut prog = TruncationProgress {
-            order,
-            order_index: oi,
-            n_orders: opts.orders.len(),
-            ..Default::default()
-        };
-        let mut rejected = 0;
-        let finish = loop {
-            match cont.step().map_err(SweepError::from)? {
-                StepOutcome::Accepted { point, .. } => {
-                    let sol = point.solution;
-                    prog.crossed.clear();
-                    for (ti, &w) in targets.iter().enumerate() {
-                        let hit = match &prev {
-                            None => sol.omega == w,
-                            Some(p) => crosses(p.omega, sol.omega, w),
-                        };
-                        if !hit {
-                            continue;
-                        }
-                        seen[ti] += 1;
-                        prog.crossed.push(w);
-                        let solved = match &prev {
-                            Some(p) if sol.omega != w => solve_at(&cont, p, &sol, w),
-                            _ => Ok(sol.clone()),
-                        };
-                        match solved {
-                            Ok(s) => {
-                                if !found[ti].iter().any(|f| same_solution(f, &s)) {
-                                    found[ti].push(s);
-                                }
-                            }
-                            Err(reason) => {
-                                first_missed[ti] |= found[ti].is_empty();
-                                missed.push(MissedCrossing {
-                                    order,
-                                    omega_rad_s: w,
-                                    crossing: seen[ti],
-                                    reason,
-                                });
-                            }
-                        }
-                    }
-                    prog.points += 1;
-                    prog.omega_rad_s = sol.omega;
-                    prog.crossings = seen.iter().sum();
-                    let f = ((sol.omega - settings.sweep.omega_start).abs() / span).clamp(0.0, 1.0);
-                    prog.fraction = (oi as f64 + f) / opts.orders.len() as f64;
-                    progress(&prog);
-                    prev = Some(sol);
-                }
-                StepOutcome::Rejected(_) => {
-                    rejected += 1;
-                    prog.crossed.clear();
-                    progress(&prog);
-                }
-                StepOutcome::Finished(f) => break f,
-            }
-        };
-        for (&w, _) in targets.iter().zip(&seen).filter(|(_, n)| **n == 0) {
-            unreached.push((order, w));
-        }
+        unreached.extend(not_reached);
         max_default_samples = max_default_samples.max(Aft::default_samples(&problem.basis));
-        let sols = found
-            .into_iter()
-            .enumerate()
-            .flat_map(|(ti, sols)| {
-                let (w, n, c) = (targets[ti], sols.len(), seen[ti]);
-                let keep = match (opts.all_solutions, first_missed[ti]) {
-                    (true, _) => usize::MAX,
-                    (false, false) => 1,
-                    (false, true) => 0,
-                };
-                sols.into_iter()
-                    .take(keep)
-                    .enumerate()
-                    .map(move |(i, sol)| Found {
-                        solution: sol,
-                        target_rad_s: w,
-                        index: i + 1,
-                        distinct: n,
-                        crossings: c,
-                    })
-            })
-            .collect();
-        summaries.push(OrderSummary {
-            order,
-            points: prog.points,
-            rejected_steps: rejected,
-            seconds: start.elapsed().as_secs_f64(),
-            finish,
-        });
+        summaries.push(summary);
         kept.push((problem, nodes, sols));
     }
     let samples = opts
@@ -521,6 +433,158 @@ pub fn run(
         dynamic_nodes: dynamic_ids,
         thermal_nodes: thermal_ids,
     })
+}
+
+/// One order's traced branch (see [`trace_order`]): its problem and nodes, the solutions
+/// kept at the target speeds, how the branch went, and `(order, ω)` of the targets it
+/// never reached.
+struct Traced {
+    problem: SweepProblem,
+    nodes: Nodes,
+    sols: Vec<Found>,
+    summary: OrderSummary,
+    unreached: Vec<(u32, f64)>,
+}
+
+/// Traces the branch at truncation order `order` (the `oi`-th of `opts.orders`, Floquet
+/// stability off) over the study range, re-solving it at every target speed it crosses;
+/// calls `progress` after every step, and adds the crossings that could not be re-solved
+/// to `missed`.
+fn trace_order(
+    settings: &StudySettings,
+    opts: &TruncationOptions,
+    targets: &[f64],
+    oi: usize,
+    order: u32,
+    progress: &mut dyn FnMut(&TruncationProgress),
+    missed: &mut Vec<MissedCrossing>,
+) -> Result<Traced, TruncationError> {
+    let start = std::time::Instant::now();
+    let span = (settings.sweep.omega_end - settings.sweep.omega_start).abs();
+    let mut study = settings.clone();
+    study.harmonic.order = order;
+    study.floquet.stability = false;
+    let problem = SweepProblem::new(&study)?;
+    let nodes = resolve_nodes(&problem, opts)?;
+    let mut cont = problem.continuation(None)?;
+    // per target: crossings seen, and the distinct solutions in branch order
+    let mut seen = vec![0usize; targets.len()];
+    let mut found: Vec<Vec<HbSolution>> = vec![Vec::new(); targets.len()];
+    // the first crossing could not be solved: no later solution stands in for it
+    let mut first_missed = vec![false; targets.len()];
+    let mut prev: Option<HbSolution> = None;
+    let mut prog = TruncationProgress {
+        order,
+        order_index: oi,
+        n_orders: opts.orders.len(),
+        ..Default::default()
+    };
+    let mut rejected = 0;
+    let finish = loop {
+        match cont.step().map_err(SweepError::from)? {
+            StepOutcome::Accepted { point, .. } => {
+                let sol = point.solution;
+                prog.crossed.clear();
+                for (ti, &w) in targets.iter().enumerate() {
+                    let hit = match &prev {
+                        None => sol.omega == w,
+                        Some(p) => crosses(p.omega, sol.omega, w),
+                    };
+                    if !hit {
+                        continue;
+                    }
+                    seen[ti] += 1;
+                    prog.crossed.push(w);
+                    let solved = match &prev {
+                        Some(p) if sol.omega != w => solve_at(&cont, p, &sol, w),
+                        _ => Ok(sol.clone()),
+                    };
+                    match solved {
+                        Ok(s) => {
+                            if !found[ti].iter().any(|f| same_solution(f, &s)) {
+                                found[ti].push(s);
+                            }
+                        }
+                        Err(reason) => {
+                            first_missed[ti] |= found[ti].is_empty();
+                            missed.push(MissedCrossing {
+                                order,
+                                omega_rad_s: w,
+                                crossing: seen[ti],
+                                reason,
+                            });
+                        }
+                    }
+                }
+                prog.points += 1;
+                prog.omega_rad_s = sol.omega;
+                prog.crossings = seen.iter().sum();
+                let f = ((sol.omega - settings.sweep.omega_start).abs() / span).clamp(0.0, 1.0);
+                prog.fraction = (oi as f64 + f) / opts.orders.len() as f64;
+                progress(&prog);
+                prev = Some(sol);
+            }
+            StepOutcome::Rejected(_) => {
+                rejected += 1;
+                prog.crossed.clear();
+                progress(&prog);
+            }
+            StepOutcome::Finished(f) => break f,
+        }
+    };
+    let mut unreached = Vec::new();
+    for (&w, _) in targets.iter().zip(&seen).filter(|(_, n)| **n == 0) {
+        unreached.push((order, w));
+    }
+    let sols = kept_solutions(opts, targets, found, &seen, &first_missed);
+    let summary = OrderSummary {
+        order,
+        points: prog.points,
+        rejected_steps: rejected,
+        seconds: start.elapsed().as_secs_f64(),
+        finish,
+    };
+    Ok(Traced {
+        problem,
+        nodes,
+        sols,
+        summary,
+        unreached,
+    })
+}
+
+/// The solutions kept at each of `targets` (`found` there in branch order, `seen`
+/// crossings): the first, none when the first crossing could not be re-solved
+/// (`first_missed`), or every one with [`TruncationOptions::all_solutions`].
+fn kept_solutions(
+    opts: &TruncationOptions,
+    targets: &[f64],
+    found: Vec<Vec<HbSolution>>,
+    seen: &[usize],
+    first_missed: &[bool],
+) -> Vec<Found> {
+    found
+        .into_iter()
+        .enumerate()
+        .flat_map(|(ti, sols)| {
+            let (w, n, c) = (targets[ti], sols.len(), seen[ti]);
+            let keep = match (opts.all_solutions, first_missed[ti]) {
+                (true, _) => usize::MAX,
+                (false, false) => 1,
+                (false, true) => 0,
+            };
+            sols.into_iter()
+                .take(keep)
+                .enumerate()
+                .map(move |(i, sol)| Found {
+                    solution: sol,
+                    target_rad_s: w,
+                    index: i + 1,
+                    distinct: n,
+                    crossings: c,
+                })
+        })
+        .collect()
 }
 
 /// Offsets (rad/s) tried, in this order, when Newton fails at exactly the target speed.

@@ -600,191 +600,34 @@ impl SweepProblem {
         } else {
             None
         };
-        let mut cont = self.continuation(stab)?;
+        let cont = self.continuation(stab)?;
 
         sink.begin_run(&self.run)?;
-        let mut rec = Recorder::new(&self.run);
-        let mut finish = None;
-        let mut lead_in_from = None;
-        let mut branches = Vec::new();
         let interrupted = || {
             interrupt
                 .as_ref()
                 .is_some_and(|f| f.load(Ordering::Relaxed))
         };
-        // the pool a drive runs in; a campaign's last run is moved to a wider one
-        let same_pool = |a: Option<&rayon::ThreadPool>, b: Option<&rayon::ThreadPool>| match (a, b)
-        {
-            (Some(a), Some(b)) => std::ptr::eq(a, b),
-            (None, None) => true,
-            _ => false,
+        let mut run = Running {
+            problem: self,
+            stab,
+            pools,
+            interrupted: &interrupted,
+            sink,
+            progress: &mut progress,
+            cont,
+            rec: Recorder::new(&self.run),
+            finish: None,
+            lead_in_from: None,
+            branches: Vec::new(),
+            truncation: Vec::new(),
+            verify_seconds: 0.0,
         };
-        let result: Result<RunStatus, SweepError> = (|| loop {
-            if interrupted() {
-                return Ok(RunStatus::Interrupted);
-            }
-            let pool = pools.for_next_step();
-            let mut failure: Option<SweepError> = None;
-            let mut observe = |out: StepOutcome| -> Result<(), SweepError> {
-                match out {
-                    StepOutcome::Accepted {
-                        point,
-                        bifurcations,
-                    } => {
-                        rec.accept(self, sink, &point, &bifurcations)?;
-                        rec.prog.fraction = ((point.solution.omega - s.sweep.omega_start)
-                            / (s.sweep.omega_end - s.sweep.omega_start))
-                            .clamp(0.0, 1.0);
-                        progress(&rec.prog);
-                    }
-                    StepOutcome::Rejected(_) => {
-                        rec.prog.rejected_steps += 1;
-                        progress(&rec.prog);
-                    }
-                    StepOutcome::Finished(f) => finish = Some(f),
-                }
-                Ok(())
-            };
-            let mut observer = |out: StepOutcome| {
-                if failure.is_none()
-                    && let Err(e) = observe(out)
-                {
-                    failure = Some(e);
-                }
-                if failure.is_some() || interrupted() || !same_pool(pools.for_next_step(), pool) {
-                    ControlFlow::Break(())
-                } else {
-                    ControlFlow::Continue(())
-                }
-            };
-            let end = cont.drive(pool, &mut observer);
-            if let Some(e) = failure {
-                return Err(e);
-            }
-            match end {
-                Ok(DriveEnd::Finished(_)) => return Ok(RunStatus::Completed),
-                // interrupted (checked above) or moved to another pool
-                Ok(DriveEnd::Paused) => continue,
-                Err(ContinuationError::Start { .. }) if lead_in_from.is_none() => {
-                    // reach the start by continuation from where the response is milder
-                    rec.prog.lead_in = true;
-                    let mut at = |w: f64| {
-                        rec.prog.omega_rad_s = w;
-                        progress(&rec.prog);
-                    };
-                    let found = self.lead_in(&interrupted, &mut at, pools)?;
-                    rec.prog.lead_in = false;
-                    let (from, guess) = match found {
-                        LeadIn::Reached { from, coeffs } => (from, coeffs),
-                        // (`lead_in` hands out only a reached start or an interruption)
-                        _ => return Ok(RunStatus::Interrupted),
-                    };
-                    lead_in_from = Some(from);
-                    cont = self.continuation_over(
-                        s.sweep.omega_start,
-                        s.sweep.omega_end,
-                        Some(guess),
-                        stab,
-                        s.sweep.max_points,
-                    )?;
-                }
-                Err(e) => return Err(e.into()),
-            }
-        })()
-        .and_then(|status| {
-            if status != RunStatus::Completed || !self.switches_branches() {
-                return Ok(status);
-            }
-            let mut progress = |p: &Progress| progress(p);
-            branches = self.follow_period_doublings(
-                &mut rec,
-                sink,
-                stab,
-                pools,
-                &interrupted,
-                &mut progress,
-            )?;
-            Ok(if interrupted() {
-                RunStatus::Interrupted
-            } else {
-                status
-            })
-        });
-        // the run's events re-solved at higher orders, recorded before the end status
-        let mut truncation = Vec::new();
-        let mut verify_seconds = 0.0;
-        let result = result.and_then(|status| {
-            if status != RunStatus::Completed
-                || !(s.floquet.verify && s.floquet.stability)
-                || rec.events.is_empty()
-            {
-                return Ok(status);
-            }
-            let t0 = std::time::Instant::now();
-            rec.prog.verifying = true;
-            progress(&rec.prog);
-            let points: Vec<verify::StartPoint> = rec
-                .starts
-                .iter()
-                .map(|(index, w, m, t)| verify::StartPoint {
-                    index: *index,
-                    omega_rad_s: *w,
-                    coeffs_mech: m,
-                    coeffs_therm: t,
-                })
-                .collect();
-            let options = verify::VerifyOptions::for_settings(s);
-            let checks = verify::verify_events(
-                s,
-                &self.model,
-                Some(&self.basis),
-                &points,
-                &rec.events,
-                &options,
-                |_| {},
-                &interrupted,
-            )?;
-            for c in &checks {
-                sink.write_truncation_check(c)?;
-            }
-            truncation = checks;
-            verify_seconds = t0.elapsed().as_secs_f64();
-            rec.prog.verifying = false;
-            Ok(if interrupted() {
-                RunStatus::Interrupted
-            } else {
-                status
-            })
-        });
-        match result {
-            Ok(status) => {
-                sink.finish(status.clone())?;
-                Ok(SweepReport {
-                    points: rec.prog.points,
-                    bifurcations: rec.bifurcations,
-                    status,
-                    finish,
-                    total_seconds: start.elapsed().as_secs_f64(),
-                    stability_note: None,
-                    rejected_steps: rec.prog.rejected_steps,
-                    period_doubled: period_doubled_stretches(rec.shares),
-                    lead_in_from,
-                    timings: cont.timings(),
-                    record_seconds: rec.record_seconds,
-                    stable_points: rec.stable_points,
-                    unstable_points: rec.unstable_points,
-                    warnings: rec.warnings,
-                    branches,
-                    truncation,
-                    verify_seconds,
-                })
-            }
-            Err(e) => {
-                let _ = sink.finish(RunStatus::Failed(e.to_string()));
-                Err(e)
-            }
-        }
-        .map(|mut r| {
+        let result = run
+            .own_branch()
+            .and_then(|status| run.period_doubled_branches(status))
+            .and_then(|status| run.truncation_check(status));
+        run.report(result, start).map(|mut r| {
             r.stability_note = sip.reason();
             r
         })
@@ -962,6 +805,230 @@ impl SweepProblem {
             rec.floquet_counts = Some(FloquetCounts::of(f));
         }
         Ok(rec)
+    }
+}
+
+/// A sweep's run as it goes (see [`SweepProblem::run_in`]): the problem and its stability
+/// method, where the steps run, how the run is stopped, where its points are written and
+/// its progress told, the continuation of the run's own branch, and what the run has
+/// recorded and found so far.
+struct Running<'s, 'a> {
+    problem: &'s SweepProblem,
+    stab: Option<&'s dyn StabilityMethod>,
+    pools: &'a dyn StepPools,
+    interrupted: &'a (dyn Fn() -> bool + Sync),
+    sink: &'a mut dyn Sink,
+    progress: &'a mut dyn FnMut(&Progress),
+    cont: Continuation<'s>,
+    rec: Recorder,
+    finish: Option<FinishReason>,
+    lead_in_from: Option<f64>,
+    branches: Vec<FollowedBranch>,
+    truncation: Vec<crate::record::TruncationCheck>,
+    verify_seconds: f64,
+}
+
+impl Running<'_, '_> {
+    /// Drives the run's own branch until it ends, is interrupted or fails, in the pool
+    /// `pools` names (a drive pauses when that changes and goes on in the new one); a
+    /// start that does not converge from the linear response is reached once by a lead-in
+    /// ([`SweepProblem::lead_in`]).
+    fn own_branch(&mut self) -> Result<RunStatus, SweepError> {
+        let problem = self.problem;
+        let s = &problem.settings;
+        // the pool a drive runs in; a campaign's last run is moved to a wider one
+        let same_pool = |a: Option<&rayon::ThreadPool>, b: Option<&rayon::ThreadPool>| match (a, b)
+        {
+            (Some(a), Some(b)) => std::ptr::eq(a, b),
+            (None, None) => true,
+            _ => false,
+        };
+        loop {
+            if (self.interrupted)() {
+                return Ok(RunStatus::Interrupted);
+            }
+            let pool = self.pools.for_next_step();
+            let mut failure: Option<SweepError> = None;
+            let mut observe = |out: StepOutcome| -> Result<(), SweepError> {
+                match out {
+                    StepOutcome::Accepted {
+                        point,
+                        bifurcations,
+                    } => {
+                        self.rec.accept(problem, self.sink, &point, &bifurcations)?;
+                        self.rec.prog.fraction = ((point.solution.omega - s.sweep.omega_start)
+                            / (s.sweep.omega_end - s.sweep.omega_start))
+                            .clamp(0.0, 1.0);
+                        (self.progress)(&self.rec.prog);
+                    }
+                    StepOutcome::Rejected(_) => {
+                        self.rec.prog.rejected_steps += 1;
+                        (self.progress)(&self.rec.prog);
+                    }
+                    StepOutcome::Finished(f) => self.finish = Some(f),
+                }
+                Ok(())
+            };
+            let mut observer = |out: StepOutcome| {
+                if failure.is_none()
+                    && let Err(e) = observe(out)
+                {
+                    failure = Some(e);
+                }
+                if failure.is_some()
+                    || (self.interrupted)()
+                    || !same_pool(self.pools.for_next_step(), pool)
+                {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                }
+            };
+            let end = self.cont.drive(pool, &mut observer);
+            if let Some(e) = failure {
+                return Err(e);
+            }
+            match end {
+                Ok(DriveEnd::Finished(_)) => return Ok(RunStatus::Completed),
+                // interrupted (checked above) or moved to another pool
+                Ok(DriveEnd::Paused) => continue,
+                Err(ContinuationError::Start { .. }) if self.lead_in_from.is_none() => {
+                    // reach the start by continuation from where the response is milder
+                    self.rec.prog.lead_in = true;
+                    let mut at = |w: f64| {
+                        self.rec.prog.omega_rad_s = w;
+                        (self.progress)(&self.rec.prog);
+                    };
+                    let found = problem.lead_in(self.interrupted, &mut at, self.pools)?;
+                    self.rec.prog.lead_in = false;
+                    let (from, guess) = match found {
+                        LeadIn::Reached { from, coeffs } => (from, coeffs),
+                        // (`lead_in` hands out only a reached start or an interruption)
+                        _ => return Ok(RunStatus::Interrupted),
+                    };
+                    self.lead_in_from = Some(from);
+                    self.cont = problem.continuation_over(
+                        s.sweep.omega_start,
+                        s.sweep.omega_end,
+                        Some(guess),
+                        self.stab,
+                        s.sweep.max_points,
+                    )?;
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
+    }
+
+    /// After a completed run's own branch (`status`), follows the period-doubled branches
+    /// when the run switches branches ([`SweepProblem::follow_period_doublings`]); the
+    /// status is then interrupted when the run was by the end of that.
+    fn period_doubled_branches(&mut self, status: RunStatus) -> Result<RunStatus, SweepError> {
+        if status != RunStatus::Completed || !self.problem.switches_branches() {
+            return Ok(status);
+        }
+        self.branches = self.problem.follow_period_doublings(
+            &mut self.rec,
+            self.sink,
+            self.stab,
+            self.pools,
+            self.interrupted,
+            self.progress,
+        )?;
+        Ok(if (self.interrupted)() {
+            RunStatus::Interrupted
+        } else {
+            status
+        })
+    }
+
+    /// After a completed run (`status`), re-solves the run's branch's events at higher
+    /// truncation orders ([`verify::verify_events`]) when the study asks for it (`verify`
+    /// with stability) and there are events, writing each check to the sink (before the
+    /// end status) and timing the whole; the status is then interrupted when the run was
+    /// by the end of that.
+    fn truncation_check(&mut self, status: RunStatus) -> Result<RunStatus, SweepError> {
+        let s = &self.problem.settings;
+        if status != RunStatus::Completed
+            || !(s.floquet.verify && s.floquet.stability)
+            || self.rec.events.is_empty()
+        {
+            return Ok(status);
+        }
+        let t0 = std::time::Instant::now();
+        self.rec.prog.verifying = true;
+        (self.progress)(&self.rec.prog);
+        let points: Vec<verify::StartPoint> = self
+            .rec
+            .starts
+            .iter()
+            .map(|(index, w, m, t)| verify::StartPoint {
+                index: *index,
+                omega_rad_s: *w,
+                coeffs_mech: m,
+                coeffs_therm: t,
+            })
+            .collect();
+        let options = verify::VerifyOptions::for_settings(s);
+        let checks = verify::verify_events(
+            s,
+            &self.problem.model,
+            Some(&self.problem.basis),
+            &points,
+            &self.rec.events,
+            &options,
+            |_| {},
+            self.interrupted,
+        )?;
+        for c in &checks {
+            self.sink.write_truncation_check(c)?;
+        }
+        self.truncation = checks;
+        self.verify_seconds = t0.elapsed().as_secs_f64();
+        self.rec.prog.verifying = false;
+        Ok(if (self.interrupted)() {
+            RunStatus::Interrupted
+        } else {
+            status
+        })
+    }
+
+    /// Ends the recording with the run's status (`result`; a failure ends it as failed)
+    /// and reports what the run found, its wall time counted from `start`.
+    fn report(
+        self,
+        result: Result<RunStatus, SweepError>,
+        start: std::time::Instant,
+    ) -> Result<SweepReport, SweepError> {
+        let rec = self.rec;
+        match result {
+            Ok(status) => {
+                self.sink.finish(status.clone())?;
+                Ok(SweepReport {
+                    points: rec.prog.points,
+                    bifurcations: rec.bifurcations,
+                    status,
+                    finish: self.finish,
+                    total_seconds: start.elapsed().as_secs_f64(),
+                    stability_note: None,
+                    rejected_steps: rec.prog.rejected_steps,
+                    period_doubled: period_doubled_stretches(rec.shares),
+                    lead_in_from: self.lead_in_from,
+                    timings: self.cont.timings(),
+                    record_seconds: rec.record_seconds,
+                    stable_points: rec.stable_points,
+                    unstable_points: rec.unstable_points,
+                    warnings: rec.warnings,
+                    branches: self.branches,
+                    truncation: self.truncation,
+                    verify_seconds: self.verify_seconds,
+                })
+            }
+            Err(e) => {
+                let _ = self.sink.finish(RunStatus::Failed(e.to_string()));
+                Err(e)
+            }
+        }
     }
 }
 

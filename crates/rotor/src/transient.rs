@@ -21,7 +21,7 @@ use crate::integrate::{
 };
 use crate::record::convert::to_micrometres;
 use crate::record::transient::{Revolution, Samples, TransientInfo, TransientSink};
-use crate::record::{RecordError, RunStatus};
+use crate::record::{RecordError, RunInfo, RunStatus};
 use crate::study::SweepProblem;
 use crate::system::{PeriodicOrbit, System};
 
@@ -460,6 +460,116 @@ pub fn run_transient(
     Ok(report)
 }
 
+/// Adds step `s` of length `h` to the revolution under way, `current`: its span and step
+/// count, and at each dynamic node of `run` the trapezoidal integrals of x, y, x² and y²
+/// from the node's previous position in `last_xy` (moved on to this step's) and the
+/// extremes.
+fn add_step(
+    current: &mut RevolutionSums,
+    run: &RunInfo,
+    s: &StepView<'_>,
+    h: f64,
+    last_xy: &mut [(f64, f64)],
+) {
+    current.span += h;
+    current.steps += 1;
+    for (k, n) in run.nodes.iter().enumerate() {
+        let (x, y) = (s.x[n.dof_x], s.x[n.dof_y]);
+        let (x0, y0) = last_xy[k];
+        let acc = &mut current.sums[k];
+        acc[0] += 0.5 * h * (x + x0);
+        acc[1] += 0.5 * h * (y + y0);
+        acc[2] += 0.5 * h * (x * x + x0 * x0);
+        acc[3] += 0.5 * h * (y * y + y0 * y0);
+        widen(&mut current.extremes[k], &[x, x, y, y]);
+        last_xy[k] = (x, y);
+    }
+}
+
+/// The displacement samples of step `s` at the dynamic nodes of `run`.
+fn samples(run: &RunInfo, s: &StepView<'_>) -> Samples {
+    let x_m: Vec<f64> = run.nodes.iter().map(|n| s.x[n.dof_x]).collect();
+    let y_m: Vec<f64> = run.nodes.iter().map(|n| s.x[n.dof_y]).collect();
+    Samples {
+        time_s: s.t,
+        omega_rad_s: s.omega,
+        x_um: to_micrometres(&x_m),
+        y_um: to_micrometres(&y_m),
+        x_m,
+        y_m,
+    }
+}
+
+/// The record of revolution `revolution`, which step `s` (of length `h`) completes after
+/// `steps` steps: each dynamic node's RMS and peak amplitude over the window `history` (the
+/// revolution's sums last), and at `s` the temperatures, the bearings' clearance changes,
+/// their clearances (from `clearances0`) and loads, with each load's largest value over the
+/// revolution.
+fn revolution_record(
+    problem: &SweepProblem,
+    clearances0: &[f64],
+    history: &std::collections::VecDeque<RevolutionSums>,
+    s: &StepView<'_>,
+    revolution: u64,
+    steps: u32,
+    h: f64,
+) -> Revolution {
+    let sys = &problem.system;
+    let run = &problem.run;
+    let n_nodes = run.nodes.len();
+    let ts = s.phase / s.omega;
+    let span: f64 = history.iter().map(|r| r.span).sum();
+    let mut rms = Vec::with_capacity(n_nodes);
+    let mut peak = Vec::with_capacity(n_nodes);
+    for k in 0..n_nodes {
+        let mut acc = [0.0; 4];
+        let mut ext = NO_EXTREMES;
+        for r in history {
+            for (a, v) in acc.iter_mut().zip(&r.sums[k]) {
+                *a += v;
+            }
+            widen(&mut ext, &r.extremes[k]);
+        }
+        let (mx, my) = (acc[0] / span, acc[1] / span);
+        let var = (acc[2] / span - mx * mx).max(0.0) + (acc[3] / span - my * my).max(0.0);
+        rms.push(var.sqrt());
+        let dx = (ext[0] - mx).abs().max((ext[1] - mx).abs());
+        let dy = (ext[2] - my).abs().max((ext[3] - my).abs());
+        peak.push(dx.hypot(dy));
+    }
+    let states = sys.bearing_states(s.omega, ts, s.x, s.temp);
+    let delta_v_m: Vec<f64> = states.iter().map(|b| b.delta_v_m).collect();
+    let effective_clearance_m: Vec<f64> = states
+        .iter()
+        .zip(clearances0)
+        .map(|(b, c0)| c0 + b.delta_v_m)
+        .collect();
+    Revolution {
+        index: revolution,
+        time_s: s.t,
+        omega_rad_s: s.omega,
+        amplitude_rms_um: to_micrometres(&rms),
+        amplitude_max_um: to_micrometres(&peak),
+        delta_v_um: to_micrometres(&delta_v_m),
+        effective_clearance_um: to_micrometres(&effective_clearance_m),
+        amplitude_rms_m: rms,
+        amplitude_max_m: peak,
+        temperature_c: run.thermal_nodes.iter().map(|n| s.temp[n.dof]).collect(),
+        delta_v_m,
+        effective_clearance_m,
+        bearing_load_n: states.iter().map(|b| b.fb_n).collect(),
+        bearing_load_max_n: history
+            .back()
+            .map_or(&[][..], |r| &r.load_max)
+            .iter()
+            .zip(&states)
+            .map(|(m, b)| m.max(b.fb_n))
+            .collect(),
+        step_count: steps,
+        last_step_s: h,
+    }
+}
+
 fn drive(
     problem: &SweepProblem,
     integ: &mut Transient<'_>,
@@ -502,19 +612,7 @@ fn drive(
         }
         let h = s.t - last_t;
         last_t = s.t;
-        current.span += h;
-        current.steps += 1;
-        for (k, n) in run.nodes.iter().enumerate() {
-            let (x, y) = (s.x[n.dof_x], s.x[n.dof_y]);
-            let (x0, y0) = last_xy[k];
-            let acc = &mut current.sums[k];
-            acc[0] += 0.5 * h * (x + x0);
-            acc[1] += 0.5 * h * (y + y0);
-            acc[2] += 0.5 * h * (x * x + x0 * x0);
-            acc[3] += 0.5 * h * (y * y + y0 * y0);
-            widen(&mut current.extremes[k], &[x, x, y, y]);
-            last_xy[k] = (x, y);
-        }
+        add_step(&mut current, run, s, h, &mut last_xy);
         let ts = s.phase / s.omega;
         if samples_per_rev > 0 && s.phase >= next_sample_phase {
             // on a grid of phases: the first step at or past each grid angle
@@ -522,16 +620,7 @@ fn drive(
             while next_sample_phase <= s.phase {
                 next_sample_phase += spacing;
             }
-            let x_m: Vec<f64> = run.nodes.iter().map(|n| s.x[n.dof_x]).collect();
-            let y_m: Vec<f64> = run.nodes.iter().map(|n| s.x[n.dof_y]).collect();
-            let msg = Samples {
-                time_s: s.t,
-                omega_rad_s: s.omega,
-                x_um: to_micrometres(&x_m),
-                y_um: to_micrometres(&y_m),
-                x_m,
-                y_m,
-            };
+            let msg = samples(run, s);
             if let Err(e) = sink.write_samples(&msg) {
                 failure = Some(e.into());
                 return false;
@@ -560,56 +649,7 @@ fn drive(
         while history.len() > window as usize {
             history.pop_front();
         }
-        let span: f64 = history.iter().map(|r| r.span).sum();
-        let mut rms = Vec::with_capacity(n_nodes);
-        let mut peak = Vec::with_capacity(n_nodes);
-        for k in 0..n_nodes {
-            let mut acc = [0.0; 4];
-            let mut ext = NO_EXTREMES;
-            for r in &history {
-                for (a, v) in acc.iter_mut().zip(&r.sums[k]) {
-                    *a += v;
-                }
-                widen(&mut ext, &r.extremes[k]);
-            }
-            let (mx, my) = (acc[0] / span, acc[1] / span);
-            let var = (acc[2] / span - mx * mx).max(0.0) + (acc[3] / span - my * my).max(0.0);
-            rms.push(var.sqrt());
-            let dx = (ext[0] - mx).abs().max((ext[1] - mx).abs());
-            let dy = (ext[2] - my).abs().max((ext[3] - my).abs());
-            peak.push(dx.hypot(dy));
-        }
-        let states = sys.bearing_states(s.omega, ts, s.x, s.temp);
-        let delta_v_m: Vec<f64> = states.iter().map(|b| b.delta_v_m).collect();
-        let effective_clearance_m: Vec<f64> = states
-            .iter()
-            .zip(&clearances0)
-            .map(|(b, c0)| c0 + b.delta_v_m)
-            .collect();
-        let msg = Revolution {
-            index: revolution,
-            time_s: s.t,
-            omega_rad_s: s.omega,
-            amplitude_rms_um: to_micrometres(&rms),
-            amplitude_max_um: to_micrometres(&peak),
-            delta_v_um: to_micrometres(&delta_v_m),
-            effective_clearance_um: to_micrometres(&effective_clearance_m),
-            amplitude_rms_m: rms,
-            amplitude_max_m: peak,
-            temperature_c: run.thermal_nodes.iter().map(|n| s.temp[n.dof]).collect(),
-            delta_v_m,
-            effective_clearance_m,
-            bearing_load_n: states.iter().map(|b| b.fb_n).collect(),
-            bearing_load_max_n: history
-                .back()
-                .map_or(&[][..], |r| &r.load_max)
-                .iter()
-                .zip(&states)
-                .map(|(m, b)| m.max(b.fb_n))
-                .collect(),
-            step_count: steps,
-            last_step_s: h,
-        };
+        let msg = revolution_record(problem, &clearances0, &history, s, revolution, steps, h);
         if let Err(e) = sink.write_revolution(&msg) {
             failure = Some(e.into());
             return false;

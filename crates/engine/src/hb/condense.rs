@@ -31,7 +31,8 @@ use rayon::prelude::*;
 use std::sync::Arc;
 use thiserror::Error;
 
-use super::residual::{HarmonicBalance, JacobianParts, fields};
+use super::Basis;
+use super::residual::{Field, HarmonicBalance, JacobianParts, fields};
 use crate::system::DenseMatrix;
 
 /// Errors of the linear solves.
@@ -368,7 +369,6 @@ impl Condensed {
             }
             at[(pn, pn)] = bd.corner;
         }
-        let coeff = |hs: usize, part: usize| coeff_index(nh, hs, part);
         let flds = fields(&parts.linear, hb.n_mech(), hb.n_therm());
         let mut jobs = Vec::new();
         for (fi, fld) in flds.iter().enumerate() {
@@ -376,118 +376,32 @@ impl Condensed {
                 jobs.extend((0..=nh).map(|hs| (fi, hs)));
             }
         }
-        // One block per (field, harmonic slot): the linear-DoF solves are independent and
-        // run in parallel; their contributions are added to the condensed matrix in order.
-        // Returns the block and its Schur complement `Z_NN − Z_NL W` plus `Z_NL Z_LL⁻¹ c_L`.
-        let build =
-            |&(fi, hs): &(usize, usize)| -> Result<(Block, Mat<f64>, Mat<f64>), SolveError> {
-                let fld = &flds[fi];
-                let nl: Vec<usize> = (0..fld.n)
-                    .filter(|&i| pos[fld.offset + i] != usize::MAX)
-                    .collect();
-                let lin: Vec<usize> = (0..fld.n)
-                    .filter(|&i| pos[fld.offset + i] == usize::MAX)
-                    .collect();
-                let w = if hs == 0 {
-                    0.0
-                } else {
-                    basis.harmonics()[hs - 1].value() * omega
-                };
-                let np = if hs == 0 { 1 } else { 2 };
-                let z = |i: usize, j: usize, pr: usize, pc: usize| {
-                    z_entry(fld.stiffness, fld.damping, fld.mass, w, i, j, pr, pc)
-                };
-                let (nn, nl_len) = (lin.len(), nl.len());
-                let (sl, sn) = (np * nn, np * nl_len);
-                let mut schur = z_block(&nl, &nl, np, z);
-                let mut corr_c = Mat::<f64>::zeros(sn, usize::from(has_border));
-                let mut block = Block {
-                    lin: lin.iter().map(|&i| fld.offset + i).collect(),
-                    nl: nl.iter().map(|&i| fld.offset + i).collect(),
-                    hs,
-                    parts: np,
-                    zll: None,
-                    znl: z_block(&nl, &lin, np, z),
-                    w: Mat::zeros(sl, sn),
-                    yc: Mat::zeros(sl, usize::from(has_border)),
-                };
-                if nn > 0 {
-                    // [Z_LN, c_L]
-                    let mut rhs = Mat::<f64>::zeros(sl, sn + usize::from(has_border));
-                    rhs.as_mut()
-                        .subcols_mut(0, sn)
-                        .copy_from(z_block(&lin, &nl, np, z));
-                    if let Some(bd) = border {
-                        for pr in 0..np {
-                            for (ti, &i) in lin.iter().enumerate() {
-                                let gi = (fld.offset + i) * nc + coeff(hs, pr);
-                                rhs[(pr * nn + ti, sn)] = bd.column[gi];
-                            }
-                        }
-                    }
-                    // small (≤ 2·72 rows) and already one of many parallel jobs
-                    let lu = Lu::factor(z_block(&lin, &lin, np, z), false, Par::Seq);
-                    let x = lu.solve(&rhs);
-                    check_finite(&x, "linear-DoF block", sl, omega)?;
-                    let prod = &block.znl * &x; // sn × ncol
-                    for r in 0..sn {
-                        for c in 0..sn {
-                            schur[(r, c)] -= prod[(r, c)];
-                        }
-                        if has_border {
-                            corr_c[(r, 0)] = prod[(r, sn)];
-                        }
-                    }
-                    block.w = x.subcols(0, sn).to_owned();
-                    if has_border {
-                        block.yc = x.subcols(sn, 1).to_owned();
-                    }
-                    block.zll = Some(lu);
-                }
-                Ok((block, schur, corr_c))
-            };
+        // One block per (field, harmonic slot) ([`Condensing::block`]): the linear-DoF
+        // solves are independent and run in parallel; their contributions are added to the
+        // condensed matrix in order ([`Condensing::add`]).
+        let condensing = Condensing {
+            omega,
+            nc,
+            nh,
+            basis,
+            flds: &flds,
+            pos: &pos,
+            pn,
+            border,
+            has_border,
+        };
         let built: Vec<(Block, Mat<f64>, Mat<f64>)> = if hb.n_unknowns() >= 256 {
-            jobs.par_iter().map(build).collect::<Result<_, _>>()?
+            jobs.par_iter()
+                .map(|job| condensing.block(job))
+                .collect::<Result<_, _>>()?
         } else {
-            jobs.iter().map(build).collect::<Result<_, _>>()?
+            jobs.iter()
+                .map(|job| condensing.block(job))
+                .collect::<Result<_, _>>()?
         };
         let mut blocks = Vec::with_capacity(built.len());
         for (bl, schur, corr_c) in built {
-            let (nl_len, np, hs) = (bl.nl.len(), bl.parts, bl.hs);
-            let crow = |t: usize, part: usize| pos[bl.nl[t]] * nc + coeff(hs, part);
-            for pr in 0..np {
-                for ti in 0..nl_len {
-                    let (r, ar) = (pr * nl_len + ti, crow(ti, pr));
-                    let mut col = at.col_mut(ar);
-                    for pc in 0..np {
-                        for tj in 0..nl_len {
-                            col[crow(tj, pc)] += schur[(r, pc * nl_len + tj)];
-                        }
-                    }
-                    if has_border {
-                        col[pn] -= corr_c[(r, 0)];
-                    }
-                }
-            }
-            if let (Some(bd), true) = (border, bl.zll.is_some()) {
-                let nn = bl.lin.len();
-                for pr in 0..np {
-                    for (ti, &gi) in bl.lin.iter().enumerate() {
-                        let rl = bd.row[gi * nc + coeff(hs, pr)];
-                        if rl == 0.0 {
-                            continue;
-                        }
-                        let li = pr * nn + ti;
-                        let mut col = at.col_mut(pn);
-                        for pc in 0..np {
-                            for tj in 0..nl_len {
-                                col[crow(tj, pc)] -= rl * bl.w[(li, pc * nl_len + tj)];
-                            }
-                        }
-                        col[pn] -= rl * bl.yc[(li, 0)];
-                    }
-                }
-            }
+            condensing.add(&mut at, &bl, &schur, &corr_c);
             blocks.push(bl);
         }
         Ok(Self {
@@ -583,6 +497,158 @@ impl Condensed {
             }
         }
         Ok((x, mu))
+    }
+}
+
+/// What the blocks of a condensed factorization are built from and added to its matrix
+/// with (see [`Condensed::new`]): the speed, the coefficient layout, the fields, each
+/// DoF's position among the nonlinear ones, the condensed size `pn` (the border's row and
+/// column next) and the border.
+struct Condensing<'a> {
+    omega: f64,
+    nc: usize,
+    nh: usize,
+    basis: &'a Basis,
+    flds: &'a [Field<'a>; 2],
+    pos: &'a [usize],
+    pn: usize,
+    border: Option<Border<'a>>,
+    has_border: bool,
+}
+
+impl Condensing<'_> {
+    /// One block of the linear dynamic stiffness, of field `fi` and harmonic slot `hs`:
+    /// the block, with its linear-DoF part factored and solved against `[Z_LN, c_L]`, its
+    /// Schur complement `Z_NN − Z_NL W` and `Z_NL Z_LL⁻¹ c_L` (one column with a border,
+    /// none without).
+    fn block(&self, &(fi, hs): &(usize, usize)) -> Result<(Block, Mat<f64>, Mat<f64>), SolveError> {
+        let Self {
+            omega,
+            nc,
+            nh,
+            basis,
+            flds,
+            pos,
+            border,
+            has_border,
+            ..
+        } = *self;
+        let coeff = |hs: usize, part: usize| coeff_index(nh, hs, part);
+        let fld = &flds[fi];
+        let nl: Vec<usize> = (0..fld.n)
+            .filter(|&i| pos[fld.offset + i] != usize::MAX)
+            .collect();
+        let lin: Vec<usize> = (0..fld.n)
+            .filter(|&i| pos[fld.offset + i] == usize::MAX)
+            .collect();
+        let w = if hs == 0 {
+            0.0
+        } else {
+            basis.harmonics()[hs - 1].value() * omega
+        };
+        let np = if hs == 0 { 1 } else { 2 };
+        let z = |i: usize, j: usize, pr: usize, pc: usize| {
+            z_entry(fld.stiffness, fld.damping, fld.mass, w, i, j, pr, pc)
+        };
+        let (nn, nl_len) = (lin.len(), nl.len());
+        let (sl, sn) = (np * nn, np * nl_len);
+        let mut schur = z_block(&nl, &nl, np, z);
+        let mut corr_c = Mat::<f64>::zeros(sn, usize::from(has_border));
+        let mut block = Block {
+            lin: lin.iter().map(|&i| fld.offset + i).collect(),
+            nl: nl.iter().map(|&i| fld.offset + i).collect(),
+            hs,
+            parts: np,
+            zll: None,
+            znl: z_block(&nl, &lin, np, z),
+            w: Mat::zeros(sl, sn),
+            yc: Mat::zeros(sl, usize::from(has_border)),
+        };
+        if nn > 0 {
+            // [Z_LN, c_L]
+            let mut rhs = Mat::<f64>::zeros(sl, sn + usize::from(has_border));
+            rhs.as_mut()
+                .subcols_mut(0, sn)
+                .copy_from(z_block(&lin, &nl, np, z));
+            if let Some(bd) = border {
+                for pr in 0..np {
+                    for (ti, &i) in lin.iter().enumerate() {
+                        let gi = (fld.offset + i) * nc + coeff(hs, pr);
+                        rhs[(pr * nn + ti, sn)] = bd.column[gi];
+                    }
+                }
+            }
+            // small (≤ 2·72 rows) and already one of many parallel jobs
+            let lu = Lu::factor(z_block(&lin, &lin, np, z), false, Par::Seq);
+            let x = lu.solve(&rhs);
+            check_finite(&x, "linear-DoF block", sl, omega)?;
+            let prod = &block.znl * &x; // sn × ncol
+            for r in 0..sn {
+                for c in 0..sn {
+                    schur[(r, c)] -= prod[(r, c)];
+                }
+                if has_border {
+                    corr_c[(r, 0)] = prod[(r, sn)];
+                }
+            }
+            block.w = x.subcols(0, sn).to_owned();
+            if has_border {
+                block.yc = x.subcols(sn, 1).to_owned();
+            }
+            block.zll = Some(lu);
+        }
+        Ok((block, schur, corr_c))
+    }
+
+    /// Adds a block's Schur complement `schur` and border terms (`corr_c`, and with a
+    /// border the border row's linear part through `W` and `Z_LL⁻¹ c_L`) to the transposed
+    /// condensed matrix `at`.
+    fn add(&self, at: &mut Mat<f64>, bl: &Block, schur: &Mat<f64>, corr_c: &Mat<f64>) {
+        let Self {
+            nc,
+            nh,
+            pos,
+            pn,
+            border,
+            has_border,
+            ..
+        } = *self;
+        let coeff = |hs: usize, part: usize| coeff_index(nh, hs, part);
+        let (nl_len, np, hs) = (bl.nl.len(), bl.parts, bl.hs);
+        let crow = |t: usize, part: usize| pos[bl.nl[t]] * nc + coeff(hs, part);
+        for pr in 0..np {
+            for ti in 0..nl_len {
+                let (r, ar) = (pr * nl_len + ti, crow(ti, pr));
+                let mut col = at.col_mut(ar);
+                for pc in 0..np {
+                    for tj in 0..nl_len {
+                        col[crow(tj, pc)] += schur[(r, pc * nl_len + tj)];
+                    }
+                }
+                if has_border {
+                    col[pn] -= corr_c[(r, 0)];
+                }
+            }
+        }
+        if let (Some(bd), true) = (border, bl.zll.is_some()) {
+            let nn = bl.lin.len();
+            for pr in 0..np {
+                for (ti, &gi) in bl.lin.iter().enumerate() {
+                    let rl = bd.row[gi * nc + coeff(hs, pr)];
+                    if rl == 0.0 {
+                        continue;
+                    }
+                    let li = pr * nn + ti;
+                    let mut col = at.col_mut(pn);
+                    for pc in 0..np {
+                        for tj in 0..nl_len {
+                            col[crow(tj, pc)] -= rl * bl.w[(li, pc * nl_len + tj)];
+                        }
+                    }
+                    col[pn] -= rl * bl.yc[(li, 0)];
+                }
+            }
+        }
     }
 }
 

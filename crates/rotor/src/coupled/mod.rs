@@ -410,6 +410,179 @@ fn every_rotor_held(model: &Model) -> Result<(), CoupledError> {
     Ok(())
 }
 
+/// The thermal network of `model` with the study overrides `study`, checked against the
+/// mechanical model (contact laws, geometry, speed ratios), when `options` couple the
+/// thermal field and the model has one.
+fn thermal_network(
+    model: &Model,
+    study: &StudyOverrides,
+    options: CouplingOptions,
+) -> Result<Option<ThermalNetwork>, CoupledError> {
+    let spec = match options.thermal {
+        true => ThermalSpec::of_model(model)?,
+        false => None,
+    };
+    let network = match spec {
+        Some(mut spec) => {
+            apply_overrides(&mut spec, study)?;
+            same_contact_laws(model, &spec)?;
+            same_geometry(model, &spec)?;
+            same_speed_ratios(model, &spec)?;
+            Some(ThermalNetwork::new(&spec)?)
+        }
+        None => None,
+    };
+    Ok(network)
+}
+
+/// The nodes with nonlinear mechanical DoFs (every bearing node and every node of a
+/// `[[nonlinear]]` element), sorted, and their DoFs in `assembly`: x and y of each node in
+/// that order.
+fn nonlinear_nodes(
+    model: &Model,
+    assembly: &Assembly,
+) -> Result<(Vec<u32>, Vec<usize>), CoupledError> {
+    let mut nodes: Vec<u32> = Vec::new();
+    for b in &model.spec.bearings {
+        nodes.push(b.inner_node);
+        if let Some(o) = b.outer_node {
+            nodes.push(o);
+        }
+    }
+    for e in &model.spec.nonlinear {
+        nodes.push(e.node);
+        if let Some(o) = e.to_node {
+            nodes.push(o);
+        }
+    }
+    nodes.sort_unstable();
+    nodes.dedup();
+    let mut mech = Vec::new();
+    for &id in &nodes {
+        let dx = assembly
+            .dof(id, Dir::X)
+            .ok_or_else(|| mismatch(model, "bearings", format!("node {id} is not in the model")))?;
+        let dy = assembly
+            .dof(id, Dir::Y)
+            .ok_or_else(|| mismatch(model, "bearings", format!("node {id} is not in the model")))?;
+        mech.push(dx);
+        mech.push(dy);
+    }
+    Ok((nodes, mech))
+}
+
+/// The coupled bearings in model order: each one's Hertz law (validated), its nodes'
+/// positions among the nonlinear mechanical DoFs (`pos`), its rings' speed ratios
+/// (`ratio_of` a node), and with a thermal `network` its bearing there and the positions
+/// of its four expansion nodes among the nonlinear thermal DoFs `therm`.
+fn coupled_bearings(
+    model: &Model,
+    network: Option<&ThermalNetwork>,
+    therm: &[usize],
+    pos: &dyn Fn(u32) -> Option<usize>,
+    ratio_of: &dyn Fn(u32) -> f64,
+) -> Result<Vec<CoupledBearing>, CoupledError> {
+    let mut bearings = Vec::new();
+    for (k, b) in model.spec.bearings.iter().enumerate() {
+        let field = format!("bearings[{k}] ({})", b.id);
+        let law = b.kind;
+        let hertz = HertzBearing {
+            law,
+            n_elements: b.element_count as usize,
+            stiffness: b.hertz_stiffness,
+            clearance_m: b.initial_clearance_m,
+            inner_raceway_m: b.inner_race_diameter_m,
+            outer_raceway_m: b.outer_race_diameter_m,
+        };
+        hertz
+            .validate()
+            .map_err(|e| mismatch(model, &field, e.to_string()))?;
+        let inner = pos(b.inner_node)
+            .ok_or_else(|| mismatch(model, &field, "inner node missing".into()))?;
+        let outer = b.outer_node.and_then(pos);
+        let (thermal, expansion) = match network {
+            Some(net) => {
+                let names = net.bearing_names();
+                let t = names.iter().position(|n| *n == b.id).ok_or_else(|| {
+                    mismatch(
+                        model,
+                        "thermal.bearings",
+                        format!(
+                            "no thermal bearing named {:?} (mechanical bearing {field})",
+                            b.id
+                        ),
+                    )
+                })?;
+                let nodes4 = net.expansion_nodes(t);
+                let mut local = [0usize; 4];
+                for (slot, node) in local.iter_mut().zip(nodes4) {
+                    *slot = therm.iter().position(|&p| p == node).ok_or_else(|| {
+                        mismatch(
+                            model,
+                            "thermal.bearings",
+                            format!(
+                                "expansion node {} of {:?} is not a nonlinear node",
+                                node + 1,
+                                b.id
+                            ),
+                        )
+                    })?;
+                }
+                (Some((t, local)), Some(net.expansion_geometry(t).clone()))
+            }
+            None => (None, None),
+        };
+        bearings.push(CoupledBearing {
+            id: b.id.clone(),
+            hertz,
+            inner,
+            outer,
+            inner_ratio: ratio_of(b.inner_node),
+            outer_ratio: b.outer_node.map_or(0.0, ratio_of),
+            thermal,
+            expansion,
+        });
+    }
+    Ok(bearings)
+}
+
+/// The coupled `[[nonlinear]]` elements in model order: each one's law and its nodes'
+/// positions among the nonlinear mechanical DoFs (`pos`; a rub's spin from the speed
+/// ratio of its node, `ratio_of`).
+fn coupled_elements(
+    model: &Model,
+    pos: &dyn Fn(u32) -> Option<usize>,
+    ratio_of: &dyn Fn(u32) -> f64,
+) -> Result<Vec<CoupledElement>, CoupledError> {
+    let mut elements = Vec::new();
+    for (k, e) in model.spec.nonlinear.iter().enumerate() {
+        let field = format!("nonlinear[{k}] ({})", e.id);
+        let a = pos(e.node).ok_or_else(|| mismatch(model, &field, "node missing".into()))?;
+        let b = e.to_node.and_then(pos);
+        let law = match e.kind {
+            NonlinearKind::Rub => ElementLaw::Rub {
+                gap_m: e.gap_m.unwrap_or(0.0),
+                stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
+                friction: e.friction_coefficient.unwrap_or(0.0),
+                spin_sign: spin_sign(ratio_of(e.node)),
+            },
+            NonlinearKind::Polynomial => ElementLaw::Polynomial {
+                coefficients: e.coefficients.clone().unwrap_or_default(),
+            },
+            NonlinearKind::Unilateral => {
+                let a = e.direction_deg.unwrap_or(0.0).to_radians();
+                ElementLaw::Unilateral {
+                    gap_m: e.gap_m.unwrap_or(0.0),
+                    stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
+                    direction: [a.cos(), a.sin()],
+                }
+            }
+        };
+        elements.push(CoupledElement { law, a, b });
+    }
+    Ok(elements)
+}
+
 impl CoupledRotor {
     /// Builds the coupled system from a validated model, study overrides and coupling
     /// options.
@@ -420,50 +593,10 @@ impl CoupledRotor {
     ) -> Result<Self, CoupledError> {
         every_rotor_held(model)?;
         let assembly = Assembly::new(model)?;
-        let spec = match options.thermal {
-            true => ThermalSpec::of_model(model)?,
-            false => None,
-        };
-        let network = match spec {
-            Some(mut spec) => {
-                apply_overrides(&mut spec, study)?;
-                same_contact_laws(model, &spec)?;
-                same_geometry(model, &spec)?;
-                same_speed_ratios(model, &spec)?;
-                Some(ThermalNetwork::new(&spec)?)
-            }
-            None => None,
-        };
+        let network = thermal_network(model, study, options)?;
         let ambient_temp_c = network.as_ref().map_or(25.0, |n| n.ambient_temp_c());
 
-        // Nonlinear mechanical DoFs: x, y of every bearing node and of every node of a
-        // `[[nonlinear]]` element.
-        let mut nodes: Vec<u32> = Vec::new();
-        for b in &model.spec.bearings {
-            nodes.push(b.inner_node);
-            if let Some(o) = b.outer_node {
-                nodes.push(o);
-            }
-        }
-        for e in &model.spec.nonlinear {
-            nodes.push(e.node);
-            if let Some(o) = e.to_node {
-                nodes.push(o);
-            }
-        }
-        nodes.sort_unstable();
-        nodes.dedup();
-        let mut mech = Vec::new();
-        for &id in &nodes {
-            let dx = assembly.dof(id, Dir::X).ok_or_else(|| {
-                mismatch(model, "bearings", format!("node {id} is not in the model"))
-            })?;
-            let dy = assembly.dof(id, Dir::Y).ok_or_else(|| {
-                mismatch(model, "bearings", format!("node {id} is not in the model"))
-            })?;
-            mech.push(dx);
-            mech.push(dy);
-        }
+        let (nodes, mech) = nonlinear_nodes(model, &assembly)?;
         let pos = |id: u32| -> Option<usize> { nodes.iter().position(|&n| n == id).map(|p| 2 * p) };
         let therm: Vec<usize> = network
             .as_ref()
@@ -476,93 +609,8 @@ impl CoupledRotor {
                 .map_or(0.0, |i| model.speed_ratio(model.rotor_of(i)).value())
         };
 
-        let mut bearings = Vec::new();
-        for (k, b) in model.spec.bearings.iter().enumerate() {
-            let field = format!("bearings[{k}] ({})", b.id);
-            let law = b.kind;
-            let hertz = HertzBearing {
-                law,
-                n_elements: b.element_count as usize,
-                stiffness: b.hertz_stiffness,
-                clearance_m: b.initial_clearance_m,
-                inner_raceway_m: b.inner_race_diameter_m,
-                outer_raceway_m: b.outer_race_diameter_m,
-            };
-            hertz
-                .validate()
-                .map_err(|e| mismatch(model, &field, e.to_string()))?;
-            let inner = pos(b.inner_node)
-                .ok_or_else(|| mismatch(model, &field, "inner node missing".into()))?;
-            let outer = b.outer_node.and_then(pos);
-            let (thermal, expansion) = match &network {
-                Some(net) => {
-                    let names = net.bearing_names();
-                    let t = names.iter().position(|n| *n == b.id).ok_or_else(|| {
-                        mismatch(
-                            model,
-                            "thermal.bearings",
-                            format!(
-                                "no thermal bearing named {:?} (mechanical bearing {field})",
-                                b.id
-                            ),
-                        )
-                    })?;
-                    let nodes4 = net.expansion_nodes(t);
-                    let mut local = [0usize; 4];
-                    for (slot, node) in local.iter_mut().zip(nodes4) {
-                        *slot = therm.iter().position(|&p| p == node).ok_or_else(|| {
-                            mismatch(
-                                model,
-                                "thermal.bearings",
-                                format!(
-                                    "expansion node {} of {:?} is not a nonlinear node",
-                                    node + 1,
-                                    b.id
-                                ),
-                            )
-                        })?;
-                    }
-                    (Some((t, local)), Some(net.expansion_geometry(t).clone()))
-                }
-                None => (None, None),
-            };
-            bearings.push(CoupledBearing {
-                id: b.id.clone(),
-                hertz,
-                inner,
-                outer,
-                inner_ratio: ratio_of(b.inner_node),
-                outer_ratio: b.outer_node.map_or(0.0, ratio_of),
-                thermal,
-                expansion,
-            });
-        }
-        let mut elements = Vec::new();
-        for (k, e) in model.spec.nonlinear.iter().enumerate() {
-            let field = format!("nonlinear[{k}] ({})", e.id);
-            let a = pos(e.node).ok_or_else(|| mismatch(model, &field, "node missing".into()))?;
-            let b = e.to_node.and_then(pos);
-            let law = match e.kind {
-                NonlinearKind::Rub => ElementLaw::Rub {
-                    gap_m: e.gap_m.unwrap_or(0.0),
-                    stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
-                    friction: e.friction_coefficient.unwrap_or(0.0),
-                    spin_sign: spin_sign(ratio_of(e.node)),
-                },
-                NonlinearKind::Polynomial => ElementLaw::Polynomial {
-                    coefficients: e.coefficients.clone().unwrap_or_default(),
-                },
-                NonlinearKind::Unilateral => {
-                    let a = e.direction_deg.unwrap_or(0.0).to_radians();
-                    ElementLaw::Unilateral {
-                        gap_m: e.gap_m.unwrap_or(0.0),
-                        stiffness_n_m: e.stiffness_n_m.unwrap_or(0.0),
-                        direction: [a.cos(), a.sin()],
-                    }
-                }
-            };
-            elements.push(CoupledElement { law, a, b });
-        }
+        let bearings = coupled_bearings(model, network.as_ref(), &therm, &pos, &ratio_of)?;
+        let elements = coupled_elements(model, &pos, &ratio_of)?;
         Ok(Self {
             assembly,
             network,

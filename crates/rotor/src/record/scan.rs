@@ -352,31 +352,7 @@ pub fn scan<R: Read + Seek, E>(
         )));
     }
     let mut report = ScanReport::default();
-    if size >= 16 {
-        r.seek(SeekFrom::Start(size - 8)).map_err(ScanError::Io)?;
-        let mut tail = [0u8; 8];
-        r.read_exact(&mut tail).map_err(ScanError::Io)?;
-        report.end_magic = tail == MAGIC;
-    }
-    // The summary section is checked against the footer's CRC before it is read: its
-    // records (channel definitions among them) are used only when it is intact.
-    let mut untrusted_from = None;
-    const FOOTER_LEN: u64 = 1 + 8 + 20;
-    if report.end_magic && size >= 8 + FOOTER_LEN + 8 {
-        let footer_pos = size - 8 - FOOTER_LEN;
-        r.seek(SeekFrom::Start(footer_pos)).map_err(ScanError::Io)?;
-        let mut footer = [0u8; FOOTER_LEN as usize];
-        r.read_exact(&mut footer).map_err(ScanError::Io)?;
-        if footer[0] == OP_FOOTER && footer[1..9] == 20u64.to_le_bytes() {
-            let body = &footer[9..];
-            if let Some(why) = check_summary_crc(&mut r, body, footer_pos).map_err(ScanError::Io)? {
-                report
-                    .damage
-                    .push(format!("{why}; the summary section is not used"));
-                untrusted_from = Some(le_u64(body, 0));
-            }
-        }
-    }
+    let untrusted_from = check_end(&mut r, size, &mut report)?;
     let summary_notes = report.damage.len();
     let mut pos = 8u64;
     let mut body = Vec::new();
@@ -418,24 +394,12 @@ pub fn scan<R: Read + Seek, E>(
                 format!("record length {len} runs past the end of the file ({left} bytes left)")
             };
             in_sequence = false;
-            match resync(&mut r, pos + 1, size).map_err(ScanError::Io)? {
+            match skip_damage(&mut r, &mut report, pos, size, &why, fits)? {
                 Some(next) => {
-                    report.damage.push(format!(
-                        "bytes {pos}–{next}: {why}; skipped to the next record found"
-                    ));
                     pos = next;
                     continue;
                 }
-                None if fits => {
-                    report
-                        .damage
-                        .push(format!("byte {pos}: {why}; nothing readable follows"));
-                    break;
-                }
-                None => {
-                    report.cut = Some(format!("byte {pos}: {why}"));
-                    break;
-                }
+                None => break,
             }
         }
         body.clear();
@@ -460,44 +424,124 @@ pub fn scan<R: Read + Seek, E>(
             data_crc.update(&head);
             data_crc.update(&body);
         }
-        if op == OP_CHUNK {
-            let unpacked = unpack_chunk(&body);
-            let items = unpacked
-                .as_deref()
-                .map_err(Clone::clone)
-                .and_then(chunk_items);
-            match items {
-                Ok(items) => {
-                    report.chunks += 1;
-                    for item in items {
-                        if let Err(e) = visit(item) {
-                            return Ok(Err(e));
-                        }
-                    }
-                }
-                Err(why) => {
-                    report.damaged_chunks += 1;
-                    report
-                        .damage
-                        .push(format!("chunk at byte {pos}: {why}; skipped"));
-                }
-            }
-        } else {
-            match top_item(op, &body) {
-                Ok(Some(item)) => {
-                    if let Err(e) = visit(item) {
-                        return Ok(Err(e));
-                    }
-                }
-                Ok(None) => {}
-                Err(why) => report
-                    .damage
-                    .push(format!("record {op:#04x} at byte {pos}: {why}; skipped")),
-            }
+        if let Err(e) = hand_on(op, &body, pos, &mut report, &mut visit) {
+            return Ok(Err(e));
         }
         pos = next;
     }
     Ok(Ok(report))
+}
+
+/// Checks the end of `r` (of `size` bytes): whether it ends with the MCAP magic
+/// (`report.end_magic`), and then the summary section against the footer's CRC. Returns
+/// where the summary section starts when it is damaged (its records are not to be used),
+/// the damage noted in `report`.
+fn check_end<R: Read + Seek>(
+    r: &mut R,
+    size: u64,
+    report: &mut ScanReport,
+) -> Result<Option<u64>, ScanError> {
+    if size >= 16 {
+        r.seek(SeekFrom::Start(size - 8)).map_err(ScanError::Io)?;
+        let mut tail = [0u8; 8];
+        r.read_exact(&mut tail).map_err(ScanError::Io)?;
+        report.end_magic = tail == MAGIC;
+    }
+    // The summary section is checked against the footer's CRC before it is read: its
+    // records (channel definitions among them) are used only when it is intact.
+    let mut untrusted_from = None;
+    const FOOTER_LEN: u64 = 1 + 8 + 20;
+    if report.end_magic && size >= 8 + FOOTER_LEN + 8 {
+        let footer_pos = size - 8 - FOOTER_LEN;
+        r.seek(SeekFrom::Start(footer_pos)).map_err(ScanError::Io)?;
+        let mut footer = [0u8; FOOTER_LEN as usize];
+        r.read_exact(&mut footer).map_err(ScanError::Io)?;
+        if footer[0] == OP_FOOTER && footer[1..9] == 20u64.to_le_bytes() {
+            let body = &footer[9..];
+            if let Some(why) = check_summary_crc(r, body, footer_pos).map_err(ScanError::Io)? {
+                report
+                    .damage
+                    .push(format!("{why}; the summary section is not used"));
+                untrusted_from = Some(le_u64(body, 0));
+            }
+        }
+    }
+    Ok(untrusted_from)
+}
+
+/// Skips a damaged record header at `pos` (`why` it is; `fits`: its length stays inside
+/// the file of `size` bytes) to the next chunk or data-end record found, noting the
+/// skipped bytes in `report`; with nothing found after it, notes why the scan stops there
+/// (damage when the length fitted, a cut otherwise). Returns where the scan goes on.
+fn skip_damage<R: Read + Seek>(
+    r: &mut R,
+    report: &mut ScanReport,
+    pos: u64,
+    size: u64,
+    why: &str,
+    fits: bool,
+) -> Result<Option<u64>, ScanError> {
+    match resync(r, pos + 1, size).map_err(ScanError::Io)? {
+        Some(next) => {
+            report.damage.push(format!(
+                "bytes {pos}–{next}: {why}; skipped to the next record found"
+            ));
+            Ok(Some(next))
+        }
+        None if fits => {
+            report
+                .damage
+                .push(format!("byte {pos}: {why}; nothing readable follows"));
+            Ok(None)
+        }
+        None => {
+            report.cut = Some(format!("byte {pos}: {why}"));
+            Ok(None)
+        }
+    }
+}
+
+/// Hands the intact items of the record at `pos` (opcode `op`, `body`) to `visit`: a
+/// chunk's records once the whole chunk is checked, or another top-level record; a damaged
+/// chunk or record is counted and noted in `report` and skipped. `visit` returning an
+/// error stops with it.
+fn hand_on<E>(
+    op: u8,
+    body: &[u8],
+    pos: u64,
+    report: &mut ScanReport,
+    visit: &mut impl FnMut(Item<'_>) -> Result<(), E>,
+) -> Result<(), E> {
+    if op == OP_CHUNK {
+        let unpacked = unpack_chunk(body);
+        let items = unpacked
+            .as_deref()
+            .map_err(Clone::clone)
+            .and_then(chunk_items);
+        match items {
+            Ok(items) => {
+                report.chunks += 1;
+                for item in items {
+                    visit(item)?;
+                }
+            }
+            Err(why) => {
+                report.damaged_chunks += 1;
+                report
+                    .damage
+                    .push(format!("chunk at byte {pos}: {why}; skipped"));
+            }
+        }
+    } else {
+        match top_item(op, body) {
+            Ok(Some(item)) => visit(item)?,
+            Ok(None) => {}
+            Err(why) => report
+                .damage
+                .push(format!("record {op:#04x} at byte {pos}: {why}; skipped")),
+        }
+    }
+    Ok(())
 }
 
 /// Checks the summary section's CRC stated in the footer (`body`, at `footer_pos`): the

@@ -255,18 +255,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
         coeffs_mech[nc + 1 + nh + h1] = a * phi.cos();
         coeffs_mech[nc + 1 + nh + hl] = c;
 
-        // ω/2, 3ω/5, ω, 6ω/5 are multiples of ω/10: the period is 2π·10/ω.
-        let period_s = 2.0 * std::f64::consts::PI * 10.0 / w;
-        let s = options.orbit_samples.max(1);
-        let times: Vec<f64> = (0..s).map(|k| period_s * k as f64 / s as f64).collect();
-        let x: Vec<f64> = times
-            .iter()
-            .map(|t| a * (w * t - phi).cos() + c * (lambda * w * t).cos())
-            .collect();
-        let y: Vec<f64> = times
-            .iter()
-            .map(|t| a * (w * t - phi).sin() + c * (lambda * w * t).sin())
-            .collect();
+        let (period_s, x, y) = orbit(a, w, phi, c, lambda, options.orbit_samples);
 
         let stable = options.stability.then_some(forward[i]);
         let bifurcation = if options.stability && i > 0 && forward[i] != forward[i - 1] {
@@ -275,15 +264,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
             None
         };
         let multipliers = if options.stability {
-            let r = (-2.0 * std::f64::consts::PI * ZETA * OMEGA_N / w).exp();
-            let theta = 2.0 * std::f64::consts::PI * OMEGA_N / w;
-            let real = if forward[i] { 0.8 } else { 1.25 };
-            vec![
-                Complex64::from_polar(r, theta),
-                Complex64::from_polar(r, -theta),
-                Complex64::new(real, 0.0),
-                Complex64::new(0.5, 0.0),
-            ]
+            synthetic_multipliers(w, forward[i])
         } else {
             Vec::new()
         };
@@ -308,47 +289,7 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
 
         let (coeffs_therm, temperatures, clearances, bearing_loads, thermal_forces) =
             if options.thermal {
-                let t0 = 25.0 + 2.0e9 * a * a;
-                let dt = 0.1;
-                let mut ct = vec![0.0; nc];
-                ct[0] = t0;
-                ct[1 + hhalf] = dt;
-                let ub = 1.2e-5 * 0.02 * (t0 - 25.0);
-                let ui = 1.2e-5 * 0.03 * (t0 - 25.0);
-                let uo = 1.2e-5 * 0.01 * (t0 - 25.0);
-                let dv = -(ub + (ui - uo) / 2.0);
-                let radial: Vec<f64> = x
-                    .iter()
-                    .zip(&y)
-                    .map(|(x, y)| BEARING_STIFFNESS * (x * x + y * y).sqrt())
-                    .collect();
-                let mean = radial.iter().sum::<f64>() / radial.len() as f64;
-                let gen_w = 1e-3 * mean * w * 0.01;
-                (
-                    ct,
-                    vec![TemperatureStats {
-                        mean_c: t0,
-                        min_c: t0 - dt,
-                        max_c: t0 + dt,
-                    }],
-                    vec![ClearanceVariation {
-                        delta_v_m: dv,
-                        ub_m: ub,
-                        ui_m: ui,
-                        uo_m: uo,
-                        effective_m: 5e-6 + dv,
-                    }],
-                    vec![BearingLoad {
-                        mean_n: mean,
-                        radial_n: radial,
-                    }],
-                    vec![ThermalForces {
-                        bearing_w: 0.4 * gen_w,
-                        lubricant_w: -0.4 * gen_w,
-                        generation_w: gen_w,
-                        dissipation_w: gen_w,
-                    }],
-                )
+                thermal_values(a, w, &x, &y, nc, hhalf)
             } else {
                 (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new())
             };
@@ -387,6 +328,105 @@ pub fn generate(options: &SyntheticOptions) -> SyntheticRun {
         points,
         bifurcations,
     }
+}
+
+/// The orbit over one period at whirl radius `a`, phase lag `phi` and speed `w`, with the
+/// λω component of amplitude `c` at `lambda`: the period and `samples` (at least 1)
+/// equally spaced samples of x and y.
+fn orbit(
+    a: f64,
+    w: f64,
+    phi: f64,
+    c: f64,
+    lambda: f64,
+    samples: usize,
+) -> (f64, Vec<f64>, Vec<f64>) {
+    // ω/2, 3ω/5, ω, 6ω/5 are multiples of ω/10: the period is 2π·10/ω.
+    let period_s = 2.0 * std::f64::consts::PI * 10.0 / w;
+    let s = samples.max(1);
+    let times: Vec<f64> = (0..s).map(|k| period_s * k as f64 / s as f64).collect();
+    let x: Vec<f64> = times
+        .iter()
+        .map(|t| a * (w * t - phi).cos() + c * (lambda * w * t).cos())
+        .collect();
+    let y: Vec<f64> = times
+        .iter()
+        .map(|t| a * (w * t - phi).sin() + c * (lambda * w * t).sin())
+        .collect();
+    (period_s, x, y)
+}
+
+/// The synthetic Floquet multipliers at speed `w`: a damped complex pair, a real one
+/// inside the unit circle where ω goes `forward` along the branch (outside where it runs
+/// backwards), and 0.5.
+fn synthetic_multipliers(w: f64, forward: bool) -> Vec<Complex64> {
+    let r = (-2.0 * std::f64::consts::PI * ZETA * OMEGA_N / w).exp();
+    let theta = 2.0 * std::f64::consts::PI * OMEGA_N / w;
+    let real = if forward { 0.8 } else { 1.25 };
+    vec![
+        Complex64::from_polar(r, theta),
+        Complex64::from_polar(r, -theta),
+        Complex64::new(real, 0.0),
+        Complex64::new(0.5, 0.0),
+    ]
+}
+
+/// A point's thermal part, as [`thermal_values`] gives it: temperature coefficients,
+/// temperature statistics, clearance variations, bearing loads and thermal forces.
+type ThermalValues = (
+    Vec<f64>,
+    Vec<TemperatureStats>,
+    Vec<ClearanceVariation>,
+    Vec<BearingLoad>,
+    Vec<ThermalForces>,
+);
+
+/// The thermal part of the point at whirl radius `a` and speed `w` (orbit samples `x`,
+/// `y`): the temperature coefficients (`nc` per node, the ω/2 one at `1 + hhalf`), the
+/// temperature statistics, the bearing's clearance variation and load, and the thermal
+/// forces.
+fn thermal_values(a: f64, w: f64, x: &[f64], y: &[f64], nc: usize, hhalf: usize) -> ThermalValues {
+    let t0 = 25.0 + 2.0e9 * a * a;
+    let dt = 0.1;
+    let mut ct = vec![0.0; nc];
+    ct[0] = t0;
+    ct[1 + hhalf] = dt;
+    let ub = 1.2e-5 * 0.02 * (t0 - 25.0);
+    let ui = 1.2e-5 * 0.03 * (t0 - 25.0);
+    let uo = 1.2e-5 * 0.01 * (t0 - 25.0);
+    let dv = -(ub + (ui - uo) / 2.0);
+    let radial: Vec<f64> = x
+        .iter()
+        .zip(y)
+        .map(|(x, y)| BEARING_STIFFNESS * (x * x + y * y).sqrt())
+        .collect();
+    let mean = radial.iter().sum::<f64>() / radial.len() as f64;
+    let gen_w = 1e-3 * mean * w * 0.01;
+    (
+        ct,
+        vec![TemperatureStats {
+            mean_c: t0,
+            min_c: t0 - dt,
+            max_c: t0 + dt,
+        }],
+        vec![ClearanceVariation {
+            delta_v_m: dv,
+            ub_m: ub,
+            ui_m: ui,
+            uo_m: uo,
+            effective_m: 5e-6 + dv,
+        }],
+        vec![BearingLoad {
+            mean_n: mean,
+            radial_n: radial,
+        }],
+        vec![ThermalForces {
+            bearing_w: 0.4 * gen_w,
+            lubricant_w: -0.4 * gen_w,
+            generation_w: gen_w,
+            dissipation_w: gen_w,
+        }],
+    )
 }
 
 /// Writes the synthetic run to an MCAP file (finished with status `completed` when
