@@ -395,8 +395,8 @@ fn grid_errors_name_the_key_or_the_run() {
 use std::process::Command;
 
 use tmrotor::campaign::CampaignError;
-use tmrotor::campaign::figures::{FigureOptions, plot_campaign};
 use tmrotor::figure::PALETTE;
+use tmrotor::figure::campaign::{FigureOptions, plot_campaign};
 
 /// Two short coupled runs (thermal network on, so temperatures and clearances are
 /// recorded), order 1, no stability.
@@ -791,7 +791,7 @@ fn a_damaged_manifest_stops_the_campaign_and_keeps_the_recordings() {
 
 #[test]
 fn a_grid_of_twelve_runs_is_drawn_in_twelve_colours() {
-    use tmrotor::campaign::figures::run_colour;
+    use tmrotor::figure::campaign::run_colour;
     // twenty distinct colours, then again
     let colours: Vec<_> = (0..20).map(run_colour).collect();
     for (i, a) in colours.iter().enumerate() {

@@ -7,7 +7,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use tmrotor::campaign::figures::read_manifest_file;
+use tmrotor::campaign::read_manifest_file;
 
 fn tmrotor(args: &[&str], dir: &Path) -> (bool, String) {
     let o = Command::new(env!("CARGO_BIN_EXE_tmrotor"))

@@ -8,8 +8,8 @@ use std::process::Command;
 mod common;
 use common::{has_colour, png_pixels, replay_in_process};
 
-use tmrotor::campaign::figures::{FigureOptions, plot_campaign};
 use tmrotor::campaign::{self, sha256_file};
+use tmrotor::figure::campaign::{FigureOptions, plot_campaign};
 use tmrotor::figure::{self, Format, NOT_ASSESSED, Output, PixelBox, STABLE, UNSTABLE};
 use tmrotor::record::synthetic::{self, SyntheticOptions};
 

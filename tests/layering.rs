@@ -32,11 +32,11 @@ const RANKS: &[(&str, u32)] = &[
     ("derive", 40),
     ("sweep", 50),
     ("transient", 50),
-    // applications (the root crate)
-    ("figure", 60),
+    // applications (the root crate); the figures of every kind draw what those compute
     ("campaign", 61),
     ("truncation", 61),
     ("report", 62),
+    ("figure", 65),
     // command line
     ("cli", 70),
 ];

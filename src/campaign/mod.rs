@@ -54,7 +54,6 @@
 //! * [`figures::plot_campaign`] overlays the runs' recordings in PNG figures like the
 //!   paper's (amplitude of node 8, clearances, temperatures).
 
-pub mod figures;
 pub mod map;
 
 use std::collections::BTreeMap;
@@ -67,7 +66,6 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 use thiserror::Error;
 
-use crate::figure::FigureError;
 use crate::record::{McapOptions, McapSink, ReadError};
 use crate::sweep::{CurrentPool, Progress, StepPools, StudySettings, SweepProblem};
 
@@ -348,8 +346,10 @@ pub enum CampaignError {
         status: String,
         error: ReadError,
     },
+    /// A figure could not be drawn or written (the figures' own error, whose message
+    /// names the file).
     #[error(transparent)]
-    Figure(#[from] FigureError),
+    Figure(Box<dyn std::error::Error + Send + Sync>),
     /// A recording the record layer refused (its message names the file).
     #[error(transparent)]
     Record(#[from] crate::record::RecordError),
@@ -993,7 +993,7 @@ pub fn run(
         out,
         manifest_path,
     } = prepare(campaign_path, shard)?;
-    crate::figure::ensure_dir(&out).map_err(|source| CampaignError::Io {
+    crate::input::ensure_dir(&out).map_err(|source| CampaignError::Io {
         path: out.display().to_string(),
         source,
     })?;
@@ -1384,6 +1384,19 @@ pub fn merge_manifests(dir: &Path) -> Result<Manifest, CampaignError> {
     merged.runs.sort_by(|a, b| a.name.cmp(&b.name));
     write_manifest(&dir.join("manifest.toml"), &merged)?;
     Ok(merged)
+}
+
+/// Reads `path` as a campaign manifest; errors name the file.
+pub fn read_manifest_file(path: &Path) -> Result<Manifest, CampaignError> {
+    let file = path.display().to_string();
+    let manifest = parse_manifest(path)?;
+    if manifest.runs.is_empty() {
+        return Err(CampaignError::File {
+            file,
+            reason: "the manifest lists no runs".into(),
+        });
+    }
+    Ok(manifest)
 }
 
 #[cfg(test)]

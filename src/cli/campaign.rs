@@ -1,5 +1,5 @@
 //! `tmrotor campaign`: several sweeps from one file, in parallel, with a manifest; and
-//! `campaign plot DIR`: the runs overlaid in figures (PNG and SVG) ([`campaign::figures`]).
+//! `campaign plot DIR`: the runs overlaid in figures (PNG and SVG) ([`crate::figure::campaign`]).
 
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -10,9 +10,9 @@ use clap::{Args, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
 use crate::campaign;
-use crate::campaign::figures::{CampaignFigures, FigureOptions, plot_campaign};
 use crate::cli::interrupt::install_interrupt_flag;
 use crate::cli::sweep::progress_message;
+use crate::figure::campaign::{CampaignFigures, FigureOptions, plot_campaign};
 
 #[derive(Debug, Clone, Args)]
 pub struct CampaignArgs {
@@ -118,11 +118,15 @@ fn report(figures: &CampaignFigures, out: &mut impl std::io::Write) -> std::io::
     Ok(())
 }
 
+/// The operating map figure's size in pixels.
+const MAP_FIGURE_SIZE: (u32, u32) = (1200, 800);
+
 /// `campaign map DIR`: the map's files, then a line per curve and per fold-pair end.
 fn map(
     dir: &std::path::Path,
     map_dir: Option<&std::path::Path>,
     options: crate::campaign::map::MapOptions,
+    output: &crate::figure::Output,
     out: &mut impl std::io::Write,
 ) -> anyhow::Result<()> {
     use crate::campaign::map::operating_map;
@@ -132,7 +136,11 @@ fn map(
         anyhow::bail!("--tolerance {t}: must be a positive number of rad/s");
     }
     let map_dir = map_dir.map_or_else(|| dir.join("map"), std::path::Path::to_path_buf);
-    let (m, files) = operating_map(dir, &map_dir, &options)?;
+    let (m, mut files) = operating_map(dir, &map_dir, &options)?;
+    let (written, notes) =
+        crate::figure::map::write_map_figure(&m, &map_dir, MAP_FIGURE_SIZE, output)?;
+    files.written.extend(written);
+    files.notes.extend(notes);
     for note in &files.notes {
         writeln!(out, "note: {note}")?;
     }
@@ -251,10 +259,8 @@ pub fn run(args: &CampaignArgs, out: &mut impl std::io::Write) -> anyhow::Result
                     e.omega, e.p_with, e.p_without, e.refined
                 )
             },
-            output: figures.output()?,
-            ..Default::default()
         };
-        return map(dir, map_dir.as_deref(), options, out);
+        return map(dir, map_dir.as_deref(), options, &figures.output()?, out);
     }
     let file = args.file.as_ref().ok_or_else(|| {
         anyhow::anyhow!("campaign: give a campaign file (or `merge DIR`, `plot DIR`, `map DIR`)")

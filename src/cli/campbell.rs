@@ -75,15 +75,15 @@ pub fn run(args: &CampbellArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     let asm = Assembly::new(&model)?;
     let diagram = linear::campbell(&asm, &speeds, args.count)?;
     if let Some(path) = &args.csv {
-        std::fs::write(path, super::linear_figures::campbell_csv(&diagram))
+        std::fs::write(path, super::linear_outputs::campbell_csv(&diagram))
             .with_context(|| format!("writing {}", path.display()))?;
     }
     if let Some(stem) = &args.figure {
-        let fig = super::linear_figures::campbell_figure(
+        let fig = crate::figure::linear::campbell_figure(
             &diagram,
             &format!("Campbell diagram of {}", model.spec.name),
         );
-        for f in super::linear_figures::draw(stem, &fig, &args.figure_args)? {
+        for f in super::linear_outputs::draw(stem, &fig, &args.figure_args)? {
             writeln!(out, "wrote {}", f.display())?;
         }
     }

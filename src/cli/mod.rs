@@ -4,7 +4,7 @@
 pub mod campaign;
 pub mod campbell;
 pub mod interrupt;
-pub mod linear_figures;
+pub mod linear_outputs;
 pub mod model;
 pub mod modes;
 pub mod replay;

@@ -98,7 +98,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some(path) = &args.shapes {
         std::fs::write(
             path,
-            super::linear_figures::shapes_csv(&modes, model.node_ids(), &axial),
+            super::linear_outputs::shapes_csv(&modes, model.node_ids(), &axial),
         )
         .with_context(|| format!("writing {}", path.display()))?;
         eprintln!("wrote {}", path.display());
@@ -117,7 +117,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 (r.id.clone(), idx)
             })
             .collect();
-        let fig = super::linear_figures::shapes_figure(
+        let fig = crate::figure::linear::shapes_figure(
             &modes,
             &axial,
             &rotors,
@@ -126,7 +126,7 @@ pub fn run(args: &ModesArgs, out: &mut dyn Write) -> anyhow::Result<()> {
                 model.spec.name, args.speed
             ),
         );
-        for f in super::linear_figures::draw(stem, &fig, &args.figure_args)? {
+        for f in super::linear_outputs::draw(stem, &fig, &args.figure_args)? {
             eprintln!("wrote {}", f.display());
         }
     }

@@ -62,7 +62,7 @@ pub fn run(args: &UnbalanceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
     if let Some(path) = &args.csv {
         std::fs::write(
             path,
-            super::linear_figures::unbalance_csv(&resp, model.node_ids()),
+            super::linear_outputs::unbalance_csv(&resp, model.node_ids()),
         )
         .with_context(|| format!("writing {}", path.display()))?;
     }
@@ -106,12 +106,12 @@ pub fn run(args: &UnbalanceArgs, out: &mut dyn Write) -> anyhow::Result<()> {
         }
     }
     if let Some(stem) = &args.figure {
-        let fig = super::linear_figures::unbalance_figure(
+        let fig = crate::figure::linear::unbalance_figure(
             &resp,
             &nodes,
             &format!("Unbalance response of {}", model.spec.name),
         );
-        for f in super::linear_figures::draw(stem, &fig, &args.figure_args)? {
+        for f in super::linear_outputs::draw(stem, &fig, &args.figure_args)? {
             writeln!(out, "wrote {}", f.display())?;
         }
     }

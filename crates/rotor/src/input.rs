@@ -99,6 +99,19 @@ pub fn flag_note(field: &str) -> String {
         .map_or(String::new(), |(_, f)| format!(" (flag {f})"))
 }
 
+/// Creates the output directory `dir` (with its parents) for figures, tables or recordings. A path
+/// that exists but is not a directory (a file, `/dev/full`) is named as such, where
+/// `create_dir_all` says only "File exists".
+pub fn ensure_dir(dir: &Path) -> std::io::Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "it exists and is not a directory (the output is a directory of files)",
+        ));
+    }
+    std::fs::create_dir_all(dir)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

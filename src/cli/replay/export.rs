@@ -14,7 +14,7 @@ use crate::record::reader::Recording;
 /// it wrote on `out`. Each file is written under a temporary name and renamed into place,
 /// so a file that is there is complete.
 pub fn run(rec: &Recording, dir: &Path, out: &mut dyn Write) -> anyhow::Result<()> {
-    crate::figure::ensure_dir(dir)
+    crate::input::ensure_dir(dir)
         .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     for t in table::tables(rec) {
         let mut bytes = Vec::new();
@@ -53,7 +53,7 @@ pub fn map(
     dir: &Path,
     out: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    crate::figure::ensure_dir(dir)
+    crate::input::ensure_dir(dir)
         .with_context(|| format!("cannot create the output directory {}", dir.display()))?;
     for path in crate::campaign::map::write_map_csvs(map, dir)? {
         writeln!(out, "{}", path.display())?;

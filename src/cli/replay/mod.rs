@@ -21,10 +21,8 @@ pub mod branch;
 pub mod export;
 pub mod info;
 pub mod orbit;
-pub mod plot;
 pub mod recover;
 pub mod stability;
-pub mod transient;
 pub mod verify;
 
 use std::io::Write;
@@ -255,7 +253,14 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut (dyn Write + Send)) -> anyho
                 .map(|f| Ok((f.clone(), open(f, err)?)))
                 .collect::<anyhow::Result<Vec<_>>>()?;
             let branch = branch.as_ref().map(|b| open(b, err)).transpose()?;
-            transient::run(&runs, branch.as_ref(), node, &dir, &figures.output()?, out)
+            crate::figure::transient::run(
+                &runs,
+                branch.as_ref(),
+                node,
+                &dir,
+                &figures.output()?,
+                out,
+            )
         }
         Command::Recover { file, out: target } => {
             // Everything, stored orbits included: the recovered file keeps the original form.
@@ -270,13 +275,13 @@ pub fn run(cli: Cli, out: &mut dyn Write, err: &mut (dyn Write + Send)) -> anyho
             thermal_node,
             point,
         } => {
-            let options = plot::PlotOptions {
+            let options = crate::figure::recording::PlotOptions {
                 output: figures.output()?,
                 node,
                 thermal_node,
                 point,
             };
-            plot::run(&open(&file, err)?, &dir, &options, out, err)
+            crate::figure::recording::run(&open(&file, err)?, &dir, &options, out, err)
         }
         Command::Synthetic {
             file,

@@ -44,7 +44,7 @@
 //!
 //! Also here: the logarithmic decrement of each mode, and the unbalance response of the
 //! linearised rotor ([`unbalance_response`]). Their figures and CSVs are drawn by the
-//! commands (`cli::linear_figures`).
+//! commands (figures in the application's `figure::linear`, CSVs in `cli::linear_outputs`).
 
 mod unbalance;
 

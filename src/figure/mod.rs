@@ -1,5 +1,15 @@
-//! Figures as PNG and SVG: the drawing helpers shared by `replay plot` (one recording) and
-//! `tmrotor campaign plot` (several runs).
+//! Figures as PNG and SVG, all in this module: the drawing helpers here, and a module per
+//! family of figures, each a function per figure that the commands call:
+//!
+//! * [`recording`]: one recording's figures (`replay plot`);
+//! * [`transient`]: transient runs over a branch (`replay transient`);
+//! * [`campaign`]: a campaign's runs overlaid (`tmrotor campaign plot`, and at the end of a
+//!   campaign);
+//! * [`map`]: the operating map (`tmrotor campaign map`);
+//! * [`linear`]: the Campbell diagram, mode shapes and unbalance response (`campbell`,
+//!   `modes`, `unbalance`).
+//!
+//! The helpers:
 //!
 //! * [`Chart`] is one set of axes: polylines ([`Series`], solid, dashed or as points),
 //!   labelled [`Marker`]s, optional reference lines, optional category labels on the
@@ -21,6 +31,12 @@
 //! Debian/Fedora paths ([`font`]). Without one (or with `TMROTOR_FONT=none`) figures are
 //! drawn without any text; callers tell the user. SVG files name the font family
 //! (`sans-serif`) instead of embedding glyphs, so their text stays text.
+
+pub mod campaign;
+pub mod linear;
+pub mod map;
+pub mod recording;
+pub mod transient;
 
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
@@ -60,19 +76,6 @@ pub fn flag_legend_text(flags: impl IntoIterator<Item = char>) -> Option<String>
     .map(|(_, t)| t)
     .collect();
     (!parts.is_empty()).then(|| parts.join("; "))
-}
-
-/// Creates the output directory `dir` (with its parents) for figures or tables. A path
-/// that exists but is not a directory (a file, `/dev/full`) is named as such, where
-/// `create_dir_all` says only "File exists".
-pub fn ensure_dir(dir: &Path) -> std::io::Result<()> {
-    if dir.exists() && !dir.is_dir() {
-        return Err(std::io::Error::new(
-            std::io::ErrorKind::AlreadyExists,
-            "it exists and is not a directory (the output is a directory of files)",
-        ));
-    }
-    std::fs::create_dir_all(dir)
 }
 
 use plotters::coord::Shift;
@@ -130,6 +133,12 @@ pub enum FigureError {
         path: PathBuf,
         source: png::EncodingError,
     },
+}
+
+impl From<FigureError> for crate::campaign::CampaignError {
+    fn from(e: FigureError) -> Self {
+        crate::campaign::CampaignError::Figure(Box::new(e))
+    }
 }
 
 /// What drawing functions return: any plotters error, turned into

@@ -62,7 +62,7 @@ pub fn run(
         None => nodes.iter().position(|n| n.id == 8).unwrap_or(0),
     };
     let node_name = nodes.get(k).map_or("?".to_string(), |n| n.name.clone());
-    figure::ensure_dir(dir).with_context(|| format!("creating {}", dir.display()))?;
+    crate::input::ensure_dir(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut chart = Chart {
         x_desc: "ω (rad/s)".into(),
         y_desc: format!("RMS amplitude, {node_name} (µm)"),

@@ -947,8 +947,7 @@ pub fn run(
     out: &mut dyn Write,
     err: &mut dyn Write,
 ) -> anyhow::Result<()> {
-    crate::figure::ensure_dir(dir)
-        .with_context(|| format!("output directory {}", dir.display()))?;
+    crate::input::ensure_dir(dir).with_context(|| format!("output directory {}", dir.display()))?;
     if rec.points.is_empty() {
         anyhow::bail!("{} has no points to plot", rec.file.display());
     }

@@ -37,7 +37,7 @@ use std::path::{Path, PathBuf};
 use plotters::style::{BLACK, RGBColor};
 use rayon::prelude::*;
 
-use super::{CampaignError, Manifest, ManifestEntry, sha256_file};
+use crate::campaign::{CampaignError, ManifestEntry, read_manifest_file, sha256_file};
 use crate::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::figure::{
     self, BranchStyle, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker,
@@ -162,19 +162,6 @@ impl RunData {
             .position(|(_, n)| n == name)
             .map(|k| (k, self.thermal[k].0))
     }
-}
-
-/// Reads `path` as a campaign manifest; errors name the file.
-pub fn read_manifest_file(path: &Path) -> Result<Manifest, CampaignError> {
-    let file = path.display().to_string();
-    let manifest = super::parse_manifest(path)?;
-    if manifest.runs.is_empty() {
-        return Err(CampaignError::File {
-            file,
-            reason: "the manifest lists no runs".into(),
-        });
-    }
-    Ok(manifest)
 }
 
 /// The settings of a run: the manifest's, else the recording's embedded ones.
@@ -581,7 +568,7 @@ pub fn plot_campaign(
         sink.result.legends.push(run.legend.clone());
         runs.push(run);
     }
-    figure::ensure_dir(out).map_err(|source| CampaignError::Io {
+    crate::input::ensure_dir(out).map_err(|source| CampaignError::Io {
         path: out.display().to_string(),
         source,
     })?;
