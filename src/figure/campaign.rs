@@ -41,7 +41,7 @@ use crate::campaign::{CampaignError, ManifestEntry, read_manifest_file, sha256_f
 use crate::derive::{PERIOD_DOUBLED_SHARE, is_period_doubled};
 use crate::figure::{
     self, BranchStyle, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker,
-    Output, Series, share_axes, thermal_groups, tick,
+    OMEGA, Output, Series, share_axes, tick,
 };
 use crate::record::{ReadError, RunInfo, read_recording};
 use crate::stability::BifurcationKind;
@@ -494,8 +494,6 @@ fn per_run_panels(
     panels
 }
 
-const OMEGA: &str = "speed ω (rad/s)";
-
 /// Names and labels of a figure of runs against ω: [`overlay_and_per_run`].
 struct OverlayText {
     /// File stem of the overlay; the per-run figure adds `_per_run`.
@@ -911,27 +909,11 @@ fn node_temperature_figures(sink: &mut FigureSink, runs: &[RunData]) -> Result<(
     {
         let names: Vec<(u32, &str)> = r.thermal.iter().map(|(id, n)| (*id, n.as_str())).collect();
         let bearing_names: Vec<&str> = r.bearings.iter().map(|(n, _)| n.as_str()).collect();
-        let groups = thermal_groups(&names, &bearing_names);
-        let mut panels: Vec<Chart> = groups
-            .iter()
-            .map(|g| {
-                let mut chart = panel(g.title.clone(), OMEGA, "mean temperature (°C)", true);
-                for (t, label, c) in &g.members {
-                    let mut s = figure::branch_series(
-                        r.points
-                            .iter()
-                            .map(|p| (p.omega_rad_s, p.temp_c.get(*t).copied(), p.stable)),
-                        BranchStyle::Dashes(*c),
-                    );
-                    if let Some(first) = s.iter_mut().find(|s| s.colour == *c) {
-                        first.label = Some(label.clone());
-                    }
-                    chart.series.extend(s);
-                }
-                chart
-            })
-            .collect();
-        share_y(&mut panels);
+        let panels = figure::node_temperature_panels(&names, &bearing_names, |t| {
+            r.points
+                .iter()
+                .map(move |p| (p.omega_rad_s, p.temp_c.get(t).copied(), p.stable))
+        });
         let mut legend = Figure::legend_from_series(&panels);
         legend.extend(style_legend(std::slice::from_ref(r), false));
         sink.write(

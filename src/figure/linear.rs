@@ -4,7 +4,8 @@
 use num_complex::Complex;
 
 use crate::figure::{
-    Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker, PALETTE, Series, colour,
+    Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker, OMEGA, PALETTE, Series,
+    colour,
 };
 use crate::linear::{Campbell, Mode, NodeOrbit, UnbalanceResponse, Whirl};
 
@@ -26,7 +27,7 @@ fn whirl_colour(w: Whirl) -> plotters::style::RGBColor {
 /// label for those unbalance does not excite).
 pub fn campbell_figure(c: &Campbell, title: &str) -> Figure {
     let mut chart = Chart {
-        x_desc: "speed ω (rad/s)".into(),
+        x_desc: OMEGA.into(),
         y_desc: "frequency (rad/s)".into(),
         ..Chart::default()
     };
@@ -185,13 +186,13 @@ fn major_axis(x: Complex<f64>, y: Complex<f64>) -> f64 {
 pub fn unbalance_figure(resp: &[UnbalanceResponse], nodes: &[(usize, u32)], title: &str) -> Figure {
     let mut amp = Chart {
         title: "orbit semi-major axis".into(),
-        x_desc: "speed ω (rad/s)".into(),
+        x_desc: OMEGA.into(),
         y_desc: "µm".into(),
         ..Chart::default()
     };
     let mut phase = Chart {
         title: "phase of x".into(),
-        x_desc: "speed ω (rad/s)".into(),
+        x_desc: OMEGA.into(),
         y_desc: "degrees".into(),
         y_range: Some((-180.0, 180.0)),
         ..Chart::default()

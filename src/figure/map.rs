@@ -8,7 +8,9 @@ use plotters::style::RGBColor;
 
 use crate::campaign::CampaignError;
 use crate::campaign::map::OperatingMap;
-use crate::figure::{self, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Series};
+use crate::figure::{
+    self, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, OMEGA, Series,
+};
 use crate::stability::BifurcationKind;
 
 /// Draws `map` as `out/operating_map.<format>` (`out` must exist) at `size` pixels;
@@ -65,7 +67,7 @@ fn map_panel(
         title_px: 16,
         font_px: 14,
         x_desc: param_description(&map.param),
-        y_desc: "speed ω (rad/s)".into(),
+        y_desc: OMEGA.into(),
         x_range: Some(x_range),
         y_range: Some(y_range),
         ..Chart::default()

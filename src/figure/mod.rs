@@ -85,6 +85,9 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters_backend::DrawingErrorKind;
 use thiserror::Error;
 
+/// The speed axis's description, the same on every figure.
+pub const OMEGA: &str = "speed ω (rad/s)";
+
 /// Family name under which the font is registered with plotters.
 pub const FONT: &str = "sans-serif";
 
@@ -1347,6 +1350,52 @@ pub fn thermal_groups(nodes: &[(u32, &str)], bearings: &[&str]) -> Vec<ThermalGr
         });
     }
     groups
+}
+
+/// The panels of the mean temperatures of every thermal node against ω (`replay plot`'s
+/// `temperatures`, a campaign's `node_temperatures_<run>`): a panel per bearing and one of
+/// the shafts and disks ([`thermal_groups`] of `nodes` and `bearings`), each node in its
+/// own colour and named in the legend, unstable parts dashed, the y axes shared; panel
+/// titles only when there are several. `points(t)` gives thermal node `t`'s (ω, mean
+/// temperature in °C, stable) along the branches (a `None` temperature breaks the line).
+pub fn node_temperature_panels<I>(
+    nodes: &[(u32, &str)],
+    bearings: &[&str],
+    points: impl Fn(usize) -> I,
+) -> Vec<Chart>
+where
+    I: IntoIterator<Item = (f64, Option<f64>, Option<bool>)>,
+{
+    let groups = thermal_groups(nodes, bearings);
+    let several = groups.len() > 1;
+    let mut panels: Vec<Chart> = groups
+        .iter()
+        .map(|g| {
+            let mut series = Vec::new();
+            for (t, label, c) in &g.members {
+                let mut s = branch_series(points(*t), BranchStyle::Dashes(*c));
+                if let Some(first) = s.iter_mut().find(|s| s.colour == *c) {
+                    first.label = Some(label.clone());
+                }
+                series.extend(s);
+            }
+            Chart {
+                title: if several {
+                    g.title.clone()
+                } else {
+                    String::new()
+                },
+                x_desc: OMEGA.into(),
+                y_desc: "mean temperature (°C)".into(),
+                series,
+                font_px: if several { 14 } else { 16 },
+                title_px: 16,
+                ..Chart::default()
+            }
+        })
+        .collect();
+    share_axes(&mut panels, false, true);
+    panels
 }
 
 #[cfg(test)]

@@ -27,7 +27,7 @@ use plotters::style::{BLACK, RGBColor};
 use crate::derive::{self, PERIOD_DOUBLED_SHARE, is_period_doubled, rederivers_for};
 use crate::figure::{
     self, BranchStyle, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, Marker,
-    Output, PALETTE, Series, branch_series, colour, font, share_axes, thermal_groups, tick,
+    OMEGA, Output, PALETTE, Series, branch_series, colour, font, node_temperature_panels, tick,
     write_figure,
 };
 use crate::record::reader::Recording;
@@ -51,7 +51,6 @@ pub struct PlotOptions {
 }
 
 const SIZE: (u32, u32) = (1100, 650);
-const OMEGA: &str = "speed ω (rad/s)";
 const PERIOD_DOUBLED: RGBColor = RGBColor(148, 103, 189);
 const BEFORE: RGBColor = PALETTE[0];
 const AFTER: RGBColor = PALETTE[1];
@@ -885,44 +884,16 @@ fn temperature_groups(rec: &Recording) -> Figure {
         .map(|n| (n.id, n.name.as_str()))
         .collect();
     let bearings: Vec<&str> = run.bearings.iter().map(|b| b.name.as_str()).collect();
-    let groups = thermal_groups(&names, &bearings);
-    let several = groups.len() > 1;
-    let mut panels: Vec<Chart> = groups
-        .iter()
-        .map(|g| {
-            let mut series = Vec::new();
-            for (t, label, c) in &g.members {
-                let mut s = branch_series(
-                    per_branch(rec, |_, p| {
-                        (
-                            p.omega_rad_s,
-                            p.temperatures.get(*t).map(|s| s.mean_c),
-                            p.stable,
-                        )
-                    }),
-                    BranchStyle::Dashes(*c),
-                );
-                if let Some(first) = s.iter_mut().find(|s| s.colour == *c) {
-                    first.label = Some(label.clone());
-                }
-                series.extend(s);
-            }
-            Chart {
-                title: if several {
-                    g.title.clone()
-                } else {
-                    String::new()
-                },
-                x_desc: OMEGA.into(),
-                y_desc: "mean temperature (°C)".into(),
-                series,
-                font_px: if several { 14 } else { 16 },
-                title_px: 16,
-                ..Chart::default()
-            }
+    let panels = node_temperature_panels(&names, &bearings, |t| {
+        per_branch(rec, |_, p| {
+            (
+                p.omega_rad_s,
+                p.temperatures.get(t).map(|s| s.mean_c),
+                p.stable,
+            )
         })
-        .collect();
-    share_axes(&mut panels, false, true);
+    });
+    let several = panels.len() > 1;
     let mut legend = Figure::legend_from_series(&panels);
     legend.extend(dashes_entry(rec));
     Figure {

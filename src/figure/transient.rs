@@ -64,7 +64,7 @@ pub fn run(
     let node_name = nodes.get(k).map_or("?".to_string(), |n| n.name.clone());
     crate::input::ensure_dir(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut chart = Chart {
-        x_desc: "ω (rad/s)".into(),
+        x_desc: figure::OMEGA.into(),
         y_desc: format!("RMS amplitude, {node_name} (µm)"),
         ..Chart::default()
     };
