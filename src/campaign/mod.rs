@@ -993,36 +993,10 @@ pub fn run(
         out,
         manifest_path,
     } = prepare(campaign_path, shard)?;
-    crate::input::ensure_dir(&out).map_err(|source| CampaignError::Io {
-        path: out.display().to_string(),
-        source,
-    })?;
-    // one campaign per output directory at a time (the lock is released on return, or by
-    // the OS when the process dies)
-    let _lock = crate::record::output::lock(
-        &out.join(CAMPAIGN_LOCK),
-        &format!("campaign directory {}", out.display()),
-    )
-    .map_err(|e| CampaignError::File {
-        file: campaign_path.display().to_string(),
-        reason: e.to_string(),
-    })?;
+    let _lock = lock_output(campaign_path, &out)?;
     let names: Vec<String> = selected.iter().map(|r| r.name.clone()).collect();
     progress(Event::Plan { runs: &names });
-    let manifest = Mutex::new(Manifest {
-        campaign: campaign_path.display().to_string(),
-        tool_version: env!("CARGO_PKG_VERSION").to_string(),
-        runs: selected
-            .iter()
-            .map(|r| ManifestEntry {
-                name: r.name.clone(),
-                status: "pending".into(),
-                recording: format!("{}.mcap", r.name),
-                settings: recording_and_settings(r, &out).1,
-                ..Default::default()
-            })
-            .collect(),
-    });
+    let manifest = Mutex::new(pending_manifest(campaign_path, &selected, &out));
     // One OS thread per concurrent run, taking runs from a shared counter in file order;
     // each run's own parallel parts (Floquet products, orbit sampling, condensed blocks)
     // go to a rayon pool of its own. Running the runs themselves as rayon tasks would let
@@ -1106,24 +1080,7 @@ pub fn run(
             });
             return;
         }
-        let entry = match &run_pool {
-            Some(threads) => match rayon::ThreadPoolBuilder::new()
-                .num_threads(*threads)
-                .build()
-            {
-                Ok(pool) => {
-                    tail.active
-                        .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    let entry =
-                        pool.install(|| run_one(r, &rec_path, interrupt.clone(), progress, &tail));
-                    tail.active
-                        .fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
-                    entry
-                }
-                Err(_) => run_one(r, &rec_path, interrupt.clone(), progress, &CurrentPool),
-            },
-            None => run_one(r, &rec_path, interrupt.clone(), progress, &CurrentPool),
-        };
+        let entry = run_in_pool(run_pool, &tail, r, &rec_path, interrupt.clone(), progress);
         let entry = ManifestEntry {
             settings: settings_table,
             model_sha256: r.model_sha256.clone(),
@@ -1131,15 +1088,7 @@ pub fn run(
         };
         finish(k, r, entry);
     };
-    // runs that start from another run's points go last, so that every run they wait
-    // for has started before them (no slot waits on a run that has no slot)
-    let mut order: Vec<usize> = (0..selected.len()).collect();
-    order.sort_by_key(|&k| {
-        selected[k]
-            .transient
-            .as_ref()
-            .is_some_and(|t| t.from.is_some())
-    });
+    let order = run_order(&selected);
     std::thread::scope(|scope| {
         for _ in 0..slots {
             scope.spawn(|| {
@@ -1160,6 +1109,84 @@ pub fn run(
     }
     write_manifest(&manifest_path, &m)?;
     Ok(m)
+}
+
+/// Creates the output directory `out` and takes its lock: one campaign per output
+/// directory at a time (the lock is released when the guard drops, or by the OS when the
+/// process dies).
+fn lock_output(
+    campaign_path: &Path,
+    out: &Path,
+) -> Result<crate::record::output::WriterLock, CampaignError> {
+    crate::input::ensure_dir(out).map_err(|source| CampaignError::Io {
+        path: out.display().to_string(),
+        source,
+    })?;
+    crate::record::output::lock(
+        &out.join(CAMPAIGN_LOCK),
+        &format!("campaign directory {}", out.display()),
+    )
+    .map_err(|e| CampaignError::File {
+        file: campaign_path.display().to_string(),
+        reason: e.to_string(),
+    })
+}
+
+/// The manifest before any run starts: every selected run pending, with its recording's
+/// name and its settings.
+fn pending_manifest(campaign_path: &Path, selected: &[CampaignRun], out: &Path) -> Manifest {
+    Manifest {
+        campaign: campaign_path.display().to_string(),
+        tool_version: env!("CARGO_PKG_VERSION").to_string(),
+        runs: selected
+            .iter()
+            .map(|r| ManifestEntry {
+                name: r.name.clone(),
+                status: "pending".into(),
+                recording: format!("{}.mcap", r.name),
+                settings: recording_and_settings(r, out).1,
+                ..Default::default()
+            })
+            .collect(),
+    }
+}
+
+/// The order in which the runs are taken: file order, with the runs that start from
+/// another run's points last, so that every run they wait for has started before them (no
+/// slot waits on a run that has no slot).
+fn run_order(selected: &[CampaignRun]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..selected.len()).collect();
+    order.sort_by_key(|&k| {
+        selected[k]
+            .transient
+            .as_ref()
+            .is_some_and(|t| t.from.is_some())
+    });
+    order
+}
+
+/// Runs `r` ([`run_one`]) in a rayon pool of its own of `threads` threads (counted as
+/// active in `tail` meanwhile), or on the calling thread when there is no such pool.
+fn run_in_pool(
+    threads: Option<usize>,
+    tail: &Tail<'_>,
+    r: &CampaignRun,
+    rec_path: &Path,
+    interrupt: Option<Arc<AtomicBool>>,
+    progress: &(dyn Fn(Event<'_>) + Sync),
+) -> ManifestEntry {
+    let pool = threads.and_then(|n| rayon::ThreadPoolBuilder::new().num_threads(n).build().ok());
+    match pool {
+        Some(pool) => {
+            tail.active
+                .fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+            let entry = pool.install(|| run_one(r, rec_path, interrupt, progress, tail));
+            tail.active
+                .fetch_sub(1, std::sync::atomic::Ordering::SeqCst);
+            entry
+        }
+        None => run_one(r, rec_path, interrupt, progress, &CurrentPool),
+    }
 }
 
 /// The campaign's tail: once every run has started and only one is still running, that

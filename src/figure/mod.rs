@@ -79,6 +79,7 @@ pub fn flag_legend_text(flags: impl IntoIterator<Item = char>) -> Option<String>
 }
 
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::element::{Drawable, PointCollection};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -777,6 +778,42 @@ where
             REFERENCE.stroke_width(1),
         ))?;
     }
+    let mut obstacles = draw_series(&mut ctx, chart)?;
+    ctx.draw_series(
+        chart
+            .markers
+            .iter()
+            .map(|m| Circle::new((m.x, m.y), 6, m.colour.stroke_width(2))),
+    )?;
+    let (px, py) = ctx.plotting_area().get_pixel_range();
+    let plot = PixelBox {
+        x0: px.start,
+        y0: py.start,
+        x1: px.end,
+        y1: py.end,
+    };
+    let mut layout = ChartLayout {
+        plot,
+        labels: vec![None; chart.markers.len()],
+    };
+    if !text {
+        return Ok(layout);
+    }
+    layout.labels = draw_marker_labels(&mut ctx, &area, chart, &mut obstacles, plot)?;
+    if categories {
+        draw_categories(&mut ctx, chart, y0)?;
+    }
+    Ok(layout)
+}
+
+/// The chart's plotting context: f64 axes.
+type Axes<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Draws the chart's series; returns what they cover, for the placing of labels.
+fn draw_series<DB: DrawingBackend>(ctx: &mut Axes<'_, DB>, chart: &Chart) -> DrawResult<Obstacles>
+where
+    DB::ErrorType: 'static,
+{
     let mut obstacles = Obstacles::default();
     for s in &chart.series {
         let style = ShapeStyle::from(&s.colour).stroke_width(s.width);
@@ -809,26 +846,23 @@ where
             _ => obstacles.lines.push(pixels),
         }
     }
-    ctx.draw_series(
-        chart
-            .markers
-            .iter()
-            .map(|m| Circle::new((m.x, m.y), 6, m.colour.stroke_width(2))),
-    )?;
-    let (px, py) = ctx.plotting_area().get_pixel_range();
-    let plot = PixelBox {
-        x0: px.start,
-        y0: py.start,
-        x1: px.end,
-        y1: py.end,
-    };
-    let mut layout = ChartLayout {
-        plot,
-        labels: vec![None; chart.markers.len()],
-    };
-    if !text {
-        return Ok(layout);
-    }
+    Ok(obstacles)
+}
+
+/// Draws the labels of the chart's markers where [`place_labels`] finds room (each
+/// marker's circle an obstacle too), with a leader line for a label set off from its
+/// circle; returns where each went.
+fn draw_marker_labels<DB: DrawingBackend>(
+    ctx: &mut Axes<'_, DB>,
+    area: &DrawingArea<DB, Shift>,
+    chart: &Chart,
+    obstacles: &mut Obstacles,
+    plot: PixelBox,
+) -> DrawResult<Vec<Option<PixelBox>>>
+where
+    DB::ErrorType: 'static,
+{
+    let mut labels = vec![None; chart.markers.len()];
     let font = (FONT, chart.font_px).into_font();
     let measure = TextStyle::from(font.clone());
     let mut candidates = Vec::with_capacity(chart.markers.len());
@@ -857,7 +891,7 @@ where
         );
         centres.push((cx, cy));
     }
-    let placed = place_labels(&candidates, &obstacles, plot);
+    let placed = place_labels(&candidates, obstacles, plot);
     for (k, (m, at)) in chart.markers.iter().zip(&placed).enumerate() {
         let Some(i) = *at else { continue };
         let b = candidates[k][i];
@@ -885,9 +919,18 @@ where
             EmptyElement::at((m.x, m.y))
                 + Text::new(m.label.clone(), (dx, dy), font.color(&m.colour)),
         ))?;
-        layout.labels[k] = Some(b);
+        labels[k] = Some(b);
     }
-    if categories {
+    Ok(labels)
+}
+
+/// Writes the chart's category names under the x-axis, one per integer x, a line of text
+/// per line of the name.
+fn draw_categories<DB: DrawingBackend>(ctx: &mut Axes<'_, DB>, chart: &Chart, y0: f64) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    {
         let style = TextStyle::from((FONT, chart.font_px).into_font())
             .pos(Pos::new(HPos::Center, VPos::Top));
         for (i, name) in chart.x_categories.iter().enumerate() {
@@ -900,7 +943,7 @@ where
             }
         }
     }
-    Ok(layout)
+    Ok(())
 }
 
 /// The small picture in front of a legend entry: a line, a dashed line or a dot

@@ -678,73 +678,94 @@ impl Plotter<'_> {
             return Ok(());
         }
         let hooks = rederivers_for(run);
-        // over one period at the chosen point
         if let Some(p) = point {
-            let loads = match &hooks.model {
-                Some(model) => Some(model.bearings(p, period_samples(run))?.loads),
-                None => {
-                    let recorded = p.bearing_loads.iter().any(|l| !l.radial_n.is_empty());
-                    self.notes.push(format!(
-                        "bearing loads of point {} {}: {}",
-                        p.index,
-                        if recorded {
-                            "drawn from the recorded samples"
-                        } else {
-                            "not drawn"
-                        },
-                        hooks.unavailable_reason
-                    ));
-                    recorded.then(|| p.bearing_loads.clone())
-                }
-            };
-            if let Some(loads) = loads {
-                let series: Vec<Series> = loads
-                    .iter()
-                    .zip(&run.bearings)
-                    .enumerate()
-                    .map(|(b, (l, info))| {
-                        let n = l.radial_n.len().max(1) as f64;
-                        let revs = period_revolutions(run);
-                        let mut pts: Vec<(f64, f64)> = l
-                            .radial_n
-                            .iter()
-                            .enumerate()
-                            .map(|(k, f)| (revs * k as f64 / n, *f))
-                            .collect();
-                        if let Some(&(_, f)) = pts.first() {
-                            pts.push((revs, f));
-                        }
-                        Series {
-                            label: Some(format!("bearing {}", info.name)),
-                            ..Series::new(pts, colour(b))
-                        }
-                    })
-                    .collect();
-                let chart = Chart {
-                    x_desc: "revolutions, ωt / 2π (one response period)".into(),
-                    y_desc: "radial bearing load (N)".into(),
-                    series,
-                    x_range: Some((0.0, period_revolutions(run))),
-                    ..Chart::default()
-                };
-                let legend = Figure::legend_from_series(std::slice::from_ref(&chart));
-                self.write(
-                    &format!("bearing_loads_point{}", p.index),
-                    &Figure {
-                        title: format!(
-                            "Radial bearing loads over one period, point {}, {}",
-                            p.index,
-                            omega_at(p.omega_rad_s)
-                        ),
-                        panels: vec![chart],
-                        legend,
-                        size: SIZE,
-                        ..Figure::default()
-                    },
-                )?;
-            }
+            self.bearing_loads_at(run, &hooks, p)?;
         }
-        // mean (and range) against ω: recorded, else re-derived
+        self.bearing_loads_mean(run, &hooks)
+    }
+
+    /// `bearing_loads_point<N>`: the radial load of each bearing over one response period
+    /// at point `p` (re-derived through the embedded model, else the recorded samples).
+    fn bearing_loads_at(
+        &mut self,
+        run: &RunInfo,
+        hooks: &derive::Rederivers,
+        p: &PointRecord,
+    ) -> anyhow::Result<()> {
+        let loads = match &hooks.model {
+            Some(model) => Some(model.bearings(p, period_samples(run))?.loads),
+            None => {
+                let recorded = p.bearing_loads.iter().any(|l| !l.radial_n.is_empty());
+                self.notes.push(format!(
+                    "bearing loads of point {} {}: {}",
+                    p.index,
+                    if recorded {
+                        "drawn from the recorded samples"
+                    } else {
+                        "not drawn"
+                    },
+                    hooks.unavailable_reason
+                ));
+                recorded.then(|| p.bearing_loads.clone())
+            }
+        };
+        if let Some(loads) = loads {
+            let series: Vec<Series> = loads
+                .iter()
+                .zip(&run.bearings)
+                .enumerate()
+                .map(|(b, (l, info))| {
+                    let n = l.radial_n.len().max(1) as f64;
+                    let revs = period_revolutions(run);
+                    let mut pts: Vec<(f64, f64)> = l
+                        .radial_n
+                        .iter()
+                        .enumerate()
+                        .map(|(k, f)| (revs * k as f64 / n, *f))
+                        .collect();
+                    if let Some(&(_, f)) = pts.first() {
+                        pts.push((revs, f));
+                    }
+                    Series {
+                        label: Some(format!("bearing {}", info.name)),
+                        ..Series::new(pts, colour(b))
+                    }
+                })
+                .collect();
+            let chart = Chart {
+                x_desc: "revolutions, ωt / 2π (one response period)".into(),
+                y_desc: "radial bearing load (N)".into(),
+                series,
+                x_range: Some((0.0, period_revolutions(run))),
+                ..Chart::default()
+            };
+            let legend = Figure::legend_from_series(std::slice::from_ref(&chart));
+            self.write(
+                &format!("bearing_loads_point{}", p.index),
+                &Figure {
+                    title: format!(
+                        "Radial bearing loads over one period, point {}, {}",
+                        p.index,
+                        omega_at(p.omega_rad_s)
+                    ),
+                    panels: vec![chart],
+                    legend,
+                    size: SIZE,
+                    ..Figure::default()
+                },
+            )?;
+        }
+        Ok(())
+    }
+
+    /// `bearing_loads_mean`: the mean radial load of each bearing against ω (stability
+    /// colours) with its range over a period: recorded, else re-derived.
+    fn bearing_loads_mean(
+        &mut self,
+        run: &RunInfo,
+        hooks: &derive::Rederivers,
+    ) -> anyhow::Result<()> {
+        let rec = self.rec;
         let recorded = rec
             .points
             .iter()
