@@ -2,7 +2,8 @@
 //! model file (mechanical and `[thermal]`) has exactly one entry in
 //! `tmrotor::model::reference::KEYS` and vice versa; `docs/model-reference.md` is what
 //! `tmrotor model reference` prints; each key the reference calls required is one the
-//! loader asks for when it is missing from the built-in file, and each optional one is not.
+//! loader asks for when it is missing from the built-in file, and each optional one is not;
+//! each bound is enforced and each numeric default is the one the model computes with.
 
 use std::collections::BTreeSet;
 
@@ -388,4 +389,161 @@ fn every_bound_of_the_reference_is_enforced_by_the_loader() {
         "bounded keys met in no shipped model: {unmet:?}"
     );
     eprintln!("{tried} values outside their bounds refused, naming their paths");
+}
+
+/// What a model computes, for comparing two files: the coupled rotor a sweep builds from
+/// it, as its linear matrices at ω = 300 rad/s, its external and thermal loads, and its
+/// nonlinear forces and heat with their derivatives at one fixed state (small
+/// displacements and velocities, temperatures a few kelvin above ambient), at three
+/// instants.
+fn loaded(file: &std::path::Path, set: &tmrotor::model::ModelSet) -> Option<String> {
+    use tmrotor::system::{NonlinearEval, System};
+    let model = tmrotor::model::Model::load(Some(file), set).ok()?;
+    let rotor =
+        tmrotor::coupled::CoupledRotor::new(&model, &Default::default(), Default::default())
+            .ok()?;
+    let omega = 300.0;
+    let dofs = rotor.nonlinear_dofs();
+    let (p, q) = (dofs.mech.len(), dofs.therm.len());
+    let x: Vec<f64> = (0..p).map(|i| 1e-5 * ((i % 7) as f64 - 3.0)).collect();
+    let v: Vec<f64> = (0..p).map(|i| 1e-3 * ((i % 5) as f64 - 2.0)).collect();
+    let temp: Vec<f64> = (0..q).map(|i| 25.0 + (i % 4) as f64).collect();
+    let mut out = format!("{:?}", rotor.linear(omega));
+    for t in [0.0, 0.004, 0.011] {
+        let mut eval = NonlinearEval::new(p, q);
+        rotor.eval_nonlinear(omega, t, &x, &v, &temp, &mut eval);
+        let mut force = vec![0.0; rotor.n_mech()];
+        rotor.forcing(omega, t, &mut force);
+        out += &format!(
+            "\n{:?} {:?} {:?} {:?} {force:?}",
+            eval.f, eval.g, eval.df_dx, eval.dg_dt
+        );
+    }
+    let mut heat = vec![0.0; rotor.n_therm()];
+    rotor.thermal_load(omega, &mut heat);
+    out += &format!("\n{heat:?}");
+    Some(out)
+}
+
+/// The model file `file` with the key at `path` (`thermal.bearings[2].f_v`) taken out,
+/// as TOML text.
+fn without_path(file: &std::path::Path, path: &str) -> String {
+    let text = std::fs::read_to_string(file).expect("model file");
+    let mut table: toml::Table = toml::from_str(&text).expect("model TOML");
+    let parts: Vec<&str> = path.split('.').collect();
+    let mut at = &mut table;
+    for part in &parts[..parts.len() - 1] {
+        let (name, index) = match part.split_once('[') {
+            Some((n, i)) => (
+                n,
+                Some(i.trim_end_matches(']').parse::<usize>().expect("index")),
+            ),
+            None => (*part, None),
+        };
+        let value = at.get_mut(name).expect("table on the path");
+        let value = match index {
+            Some(i) => &mut value.as_array_mut().expect("array")[i],
+            None => value,
+        };
+        at = value.as_table_mut().expect("table");
+    }
+    at.remove(parts[parts.len() - 1]);
+    toml::to_string(&table).expect("TOML")
+}
+
+/// For keys that cannot be left out one at a time (the heat split's fractions must sum to
+/// 1): a shipped table of `table` taken out of its file, against the same table with every
+/// key written with its numeric default. (file, the table's path, with, without).
+fn whole_table<'a>(
+    places: &[(&'a std::path::Path, Instance)],
+    table: &str,
+) -> Option<(&'a std::path::Path, String, String, String)> {
+    let keys: Vec<(&str, f64)> = KEYS
+        .iter()
+        .filter(|k| k.table == table)
+        .map(|k| Some((k.key, k.default.parse::<f64>().ok()?)))
+        .collect::<Option<_>>()?;
+    places.iter().find_map(|&(file, ref i)| {
+        if i.table != table {
+            return None;
+        }
+        let set: tmrotor::model::ModelSet = keys
+            .iter()
+            .map(|&(k, v)| (format!("{}.{k}", i.at), toml::Value::Float(v)))
+            .collect();
+        let with_keys = loaded(file, &set)?;
+        let dir = tempfile::tempdir().expect("temporary directory");
+        let cut = dir.path().join("cut.toml");
+        std::fs::write(&cut, without_path(file, &i.at)).expect("write");
+        let without = loaded(&cut, &Default::default())?;
+        Some((file, i.at.clone(), with_keys, without))
+    })
+}
+
+/// Each number the reference gives as a key's default is the loader's: in a table of a
+/// shipped model file that leaves the key out (or else one that gives it, the key then
+/// taken out), the file computes the same as with the key written with that number.
+#[test]
+fn every_numeric_default_of_the_reference_is_the_loaders() {
+    let models = shipped_models();
+    let mut places: Vec<(&std::path::Path, Instance)> = Vec::new();
+    for (path, table) in &models {
+        let generated = table
+            .get("thermal")
+            .and_then(|t| t.get("generate"))
+            .and_then(toml::Value::as_bool)
+            .unwrap_or(false);
+        let mut found = Vec::new();
+        instances(table, "", "", generated, &mut found);
+        places.extend(found.into_iter().map(|i| (path.as_path(), i)));
+    }
+    let mut unmet = Vec::new();
+    let mut tried = 0;
+    for key in KEYS.iter().filter(|k| k.need == Need::Optional) {
+        let Ok(default) = key.default.parse::<f64>() else {
+            continue;
+        };
+        let path_in = |i: &Instance| match i.at.as_str() {
+            "" => key.key.to_string(),
+            at => format!("{at}.{}", key.key),
+        };
+        let written = |i: &Instance| {
+            tmrotor::model::ModelSet::from([(path_in(i), toml::Value::Float(default))])
+        };
+        // a table that leaves the key out and where writing it is allowed, else one that
+        // gives it, the key then taken out of the file
+        let compared = places.iter().find_map(|(file, i)| {
+            if i.table != key.table {
+                return None;
+            }
+            let with_key = loaded(file, &written(i))?;
+            let without = if i.keys.contains(key.key) {
+                let dir = tempfile::tempdir().expect("temporary directory");
+                let cut = dir.path().join("cut.toml");
+                std::fs::write(&cut, without_path(file, &path_in(i))).expect("write");
+                loaded(&cut, &Default::default())?
+            } else {
+                loaded(file, &Default::default())?
+            };
+            Some((*file, path_in(i), with_key, without))
+        });
+        let Some((file, path, with_key, without)) =
+            compared.or_else(|| whole_table(&places, key.table))
+        else {
+            unmet.push(format!("{}.{}", key.table, key.key));
+            continue;
+        };
+        assert_eq!(
+            without,
+            with_key,
+            "{}: leaving out {path} is not the same as {path} = {default}",
+            file.display()
+        );
+        tried += 1;
+    }
+    assert!(
+        unmet.is_empty(),
+        "numeric defaults left out in no shipped model: {unmet:?}"
+    );
+    eprintln!("{tried} numeric defaults are the loader's");
 }

@@ -1,8 +1,14 @@
 //! The model-file reference: every key with its meaning, unit, default, whether it is
-//! required and the range the loader checks, generated from [`KEYS`] (one entry per serde
-//! field; `tests/model_reference.rs` fails when a field of the serde structures has no
-//! entry or an entry names no field, and when `docs/model-reference.md` differs from
-//! [`markdown`]). Print it with `tmrotor model reference`.
+//! required and what the loader checks, generated from [`KEYS`]. Print it with `tmrotor
+//! model reference`.
+//!
+//! Each numeric bound ([`Bound`]) is written only here: the validators look it up with
+//! `reference_key!` (a key the table lacks, or one without a bound, stops the build).
+//! `tests/model_reference.rs` holds the rest of the table to the code: it fails when a field
+//! of the serde structures has no entry or an entry names no field, when
+//! `docs/model-reference.md` differs from [`markdown`], when a required key is not asked
+//! for, when a value just outside a bound loads, and when a numeric default is not what
+//! the loader computes with.
 
 pub use super::reference_keys::KEYS;
 
@@ -277,7 +283,8 @@ pub fn markdown() -> String {
     let mut out = String::from(
         "# Model-file reference\n\n\
          Generated from the code (`crates/rotor/src/model/reference_keys.rs`) by `tmrotor model reference`;\n\
-         a test fails when this file, the table in the code and the loader's keys disagree.\n\n\
+         the loader takes its numeric bounds from that table, and a test fails when this file,\n\
+         the table and the loader disagree (keys, required keys, bounds, numeric defaults).\n\n\
          A model file is TOML. Units are SI and appear in the key names (`length_m`,\n\
          `mass_kg`); every table rejects keys it does not know. Start from the built-in dual\n\
          rotor (`tmrotor model show > my_rotor.toml`, its comments give the paper's sources)\n\
