@@ -319,7 +319,7 @@ fn chunk_items(records: &[u8]) -> Result<Vec<Item<'_>>, String> {
     Ok(items)
 }
 
-/// Whether `head` (at least 45 bytes) starts a zstd chunk whose record fits in `left`
+/// Whether `head` (at least 54 bytes: up to the compressed size) starts a zstd chunk whose record fits in `left`
 /// bytes: opcode, record length, compression `zstd`, compressed size = record length − 44.
 fn chunk_signature(head: &[u8], left: u64) -> bool {
     if head.len() < 54 || head[0] != OP_CHUNK {
