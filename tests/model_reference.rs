@@ -229,6 +229,22 @@ fn shipped_models() -> Vec<(std::path::PathBuf, toml::Table)> {
     files
 }
 
+/// Every table of every shipped model, with its file.
+fn places(models: &[(std::path::PathBuf, toml::Table)]) -> Vec<(&std::path::Path, Instance)> {
+    let mut places = Vec::new();
+    for (path, table) in models {
+        let generated = table
+            .get("thermal")
+            .and_then(|t| t.get("generate"))
+            .and_then(toml::Value::as_bool)
+            .unwrap_or(false);
+        let mut found = Vec::new();
+        instances(table, "", "", generated, &mut found);
+        places.extend(found.into_iter().map(|i| (path.as_path(), i)));
+    }
+    places
+}
+
 /// One table of a model file: its path with indices (`thermal.bearings[2]`, `""` at the
 /// top level), the reference's name of its table, and its keys.
 struct Instance {
@@ -333,17 +349,7 @@ fn load_with(file: &std::path::Path, path: &str, value: f64) -> Result<(), Strin
 #[test]
 fn every_bound_of_the_reference_is_enforced_by_the_loader() {
     let models = shipped_models();
-    let mut places: Vec<(&std::path::Path, Instance)> = Vec::new();
-    for (path, table) in &models {
-        let generated = table
-            .get("thermal")
-            .and_then(|t| t.get("generate"))
-            .and_then(toml::Value::as_bool)
-            .unwrap_or(false);
-        let mut found = Vec::new();
-        instances(table, "", "", generated, &mut found);
-        places.extend(found.into_iter().map(|i| (path.as_path(), i)));
-    }
+    let places = places(&models);
     let mut unmet = Vec::new();
     let mut tried = 0;
     for key in KEYS.iter().filter(|k| k.bound != Bound::Free) {
@@ -486,17 +492,7 @@ fn whole_table<'a>(
 #[test]
 fn every_numeric_default_of_the_reference_is_the_loaders() {
     let models = shipped_models();
-    let mut places: Vec<(&std::path::Path, Instance)> = Vec::new();
-    for (path, table) in &models {
-        let generated = table
-            .get("thermal")
-            .and_then(|t| t.get("generate"))
-            .and_then(toml::Value::as_bool)
-            .unwrap_or(false);
-        let mut found = Vec::new();
-        instances(table, "", "", generated, &mut found);
-        places.extend(found.into_iter().map(|i| (path.as_path(), i)));
-    }
+    let places = places(&models);
     let mut unmet = Vec::new();
     let mut tried = 0;
     for key in KEYS.iter().filter(|k| k.need == Need::Optional) {
