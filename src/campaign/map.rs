@@ -558,8 +558,9 @@ fn sweep_window(
     Ok(bifs.iter().map(|b| (b.kind, b.omega_rad_s)).collect())
 }
 
-/// Reads `dir` and writes `map_curves.csv`, `map_pair_ends.csv`, `map_regions.csv` and
-/// the figure `operating_map` into `out`.
+/// Reads `dir`, builds the map (refining its fold-pair ends when asked) and writes
+/// `map_curves.csv`, `map_pair_ends.csv`, `map_regions.csv` and `operating_map.mcap` into
+/// `out` ([`write_map`]); the command then draws its figure.
 pub fn operating_map(
     dir: &Path,
     out: &Path,

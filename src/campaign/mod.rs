@@ -51,8 +51,8 @@
 //! * `shard = (i, n)` runs only the runs whose position `p` satisfies `p mod n = i`
 //!   (deterministic, so a cluster scheduler can split a campaign into `n` jobs), writing
 //!   `manifest-shard-i-of-n.toml`; [`merge_manifests`] joins the shard manifests;
-//! * [`figures::plot_campaign`] overlays the runs' recordings in PNG figures like the
-//!   paper's (amplitude of node 8, clearances, temperatures).
+//! * the figure module's `plot_campaign` (one layer up) overlays the runs' recordings in
+//!   PNG figures like the paper's (amplitude of node 8, clearances, temperatures).
 
 pub mod map;
 

@@ -37,6 +37,7 @@ use thiserror::Error;
 
 use crate::bearing::{ExpansionGeometry, HertzBearing};
 use crate::model::file::NonlinearKind;
+use crate::model::reference::reference_key;
 use crate::model::{Assembly, Dir, Model, ModelError};
 use crate::system::{DenseMatrix, LinearPart, NonlinearDofs, NonlinearEval, System};
 use crate::thermal::{
@@ -64,7 +65,7 @@ pub enum CoupledError {
     Study {
         field: &'static str,
         value: f64,
-        reason: &'static str,
+        reason: String,
     },
 }
 
@@ -754,34 +755,30 @@ impl CoupledRotor {
 }
 
 fn apply_overrides(spec: &mut ThermalSpec, study: &StudyOverrides) -> Result<(), CoupledError> {
-    if let Some(q) = study.flow_l_min {
-        if !(q.is_finite() && q > 0.0 && q <= crate::thermal::spec::MAX_FLOW_L_MIN) {
-            return Err(CoupledError::Study {
-                field: "flow_l_min",
-                value: q,
-                reason: "the lubricant flow rate must lie in (0, 1000] L/min",
-            });
-        }
-        spec.flow_l_min = q;
-    }
-    for (field, value, target) in [
+    // the bounds of the `[thermal]` keys these values replace, from the model-file reference
+    for (key, value, target) in [
         (
-            "cooling_temp_c",
+            reference_key!("thermal", "flow_l_min"),
+            study.flow_l_min,
+            &mut spec.flow_l_min,
+        ),
+        (
+            reference_key!("thermal", "cooling_temp_c"),
             study.cooling_temp_c,
             &mut spec.cooling_temp_c,
         ),
         (
-            "ambient_temp_c",
+            reference_key!("thermal", "ambient_temp_c"),
             study.ambient_temp_c,
             &mut spec.ambient_temp_c,
         ),
     ] {
         if let Some(v) = value {
-            if !(v.is_finite() && v > -273.15 && v < 1000.0) {
+            if !key.bound.admits(v) {
                 return Err(CoupledError::Study {
-                    field,
+                    field: key.key,
                     value: v,
-                    reason: "a temperature must lie between absolute zero and 1000 °C",
+                    reason: format!("must lie {}", key.bound.text()),
                 });
             }
             *target = v;

@@ -493,7 +493,7 @@ impl<'a> Validator<'a> {
         Ok(())
     }
 
-    /// Records a problem of `path` when `v` is negative or not finite; the checks go on.
+    /// Stops the checks with a problem of `path` when `v` is not finite.
     fn finite(&self, path: impl Into<String>, v: f64) -> VResult<()> {
         if v.is_finite() {
             Ok(())
@@ -667,8 +667,10 @@ impl<'a> Validator<'a> {
     }
 
     /// Checks `v`, the value of `key` in the entry whose keys `p` names, against the
-    /// bound the reference gives the key: too small a value is recorded and the checks go
-    /// on (as [`Validator::positive`]); a value out of a finite range stops them.
+    /// bound the reference gives the key: a value not positive or negative where it must
+    /// not be is recorded and the checks go on ([`Validator::positive`],
+    /// [`Validator::non_negative`]); a value not finite where it must be, or out of an
+    /// interval, stops them.
     fn bounded(&self, p: &dyn Fn(&str) -> String, key: &Key, v: f64) -> VResult<()> {
         let path = p(key.key);
         match key.bound {
