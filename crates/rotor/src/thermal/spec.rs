@@ -300,6 +300,14 @@ pub(super) fn bounded(file: &str, at: &str, key: &Key, v: f64) -> Result<(), The
     }
 }
 
+/// Records in `found` each of `values` (a key of the table at `at` and its value) that is
+/// outside the key's bound ([`bounded`]); the checks go on.
+fn record_bounds(file: &str, at: &str, values: &[(&Key, f64)], found: &mut Vec<ThermalError>) {
+    for &(key, v) in values {
+        found.extend(bounded(file, at, key, v).err());
+    }
+}
+
 /// The reference's keys of `[thermal.materials.bearing]` in the order of
 /// [`MaterialSpec`]'s fields.
 const BEARING_MATERIAL: [&Key; 6] = [
@@ -474,12 +482,8 @@ impl ThermalSpec {
 
     /// The network's values: temperatures, flow, lubricant, air, materials.
     fn check_values(&self, file: &str, found: &mut Vec<ThermalError>) -> Result<(), ThermalError> {
-        let mut check = |at: &str, values: &[(&Key, f64)]| {
-            for &(key, v) in values {
-                found.extend(bounded(file, at, key, v).err());
-            }
-        };
-        check(
+        record_bounds(
+            file,
             "thermal",
             &[
                 (key!("thermal", "ambient_temp_c"), self.ambient_temp_c),
@@ -492,18 +496,22 @@ impl ThermalSpec {
                     self.min_contact_load_n,
                 ),
             ],
+            found,
         );
         let v = &self.viscosity;
-        check(
+        record_bounds(
+            file,
             "thermal.viscosity",
             &[
                 (key!("thermal.viscosity", "nu0_mm2_s"), v.nu0_mm2_s),
                 (key!("thermal.viscosity", "ref_temp_c"), v.ref_temp_c),
                 (key!("thermal.viscosity", "beta_per_k"), v.beta_per_k),
             ],
+            found,
         );
         let l = &self.lubricant;
-        check(
+        record_bounds(
+            file,
             "thermal.lubricant",
             &[
                 (key!("thermal.lubricant", "density_kg_m3"), l.density_kg_m3),
@@ -520,9 +528,11 @@ impl ThermalSpec {
                     l.diffusivity_m2_s,
                 ),
             ],
+            found,
         );
         let a = &self.air;
-        check(
+        record_bounds(
+            file,
             "thermal.air",
             &[
                 (
@@ -539,6 +549,7 @@ impl ThermalSpec {
                     a.rotor_convection_factor,
                 ),
             ],
+            found,
         );
         for (name, m, keys) in [
             ("bearing", &self.materials.bearing, BEARING_MATERIAL),
@@ -553,7 +564,7 @@ impl ThermalSpec {
                 m.poisson,
             ];
             let pairs: Vec<(&Key, f64)> = keys.iter().copied().zip(values).collect();
-            check(&format!("thermal.materials.{name}"), &pairs);
+            record_bounds(file, &format!("thermal.materials.{name}"), &pairs, found);
         }
 
         Ok(())
@@ -585,20 +596,23 @@ impl ThermalSpec {
         for (k, s) in self.shafts.iter().enumerate() {
             let q = |f: &str| p(&format!("shafts[{k}].{f}"));
             let at = format!("thermal.shafts[{k}]");
-            for (key, v) in [
-                (key!("thermal.shafts", "speed_ratio"), s.speed_ratio),
-                (
-                    key!("thermal.shafts", "inner_diameter_m"),
-                    s.inner_diameter_m,
-                ),
-                (
-                    key!("thermal.shafts", "outer_diameter_m"),
-                    s.outer_diameter_m,
-                ),
-                (key!("thermal.shafts", "length_m"), s.length_m),
-            ] {
-                found.extend(bounded(file, &at, key, v).err());
-            }
+            record_bounds(
+                file,
+                &at,
+                &[
+                    (key!("thermal.shafts", "speed_ratio"), s.speed_ratio),
+                    (
+                        key!("thermal.shafts", "inner_diameter_m"),
+                        s.inner_diameter_m,
+                    ),
+                    (
+                        key!("thermal.shafts", "outer_diameter_m"),
+                        s.outer_diameter_m,
+                    ),
+                    (key!("thermal.shafts", "length_m"), s.length_m),
+                ],
+                found,
+            );
             if s.inner_diameter_m >= s.outer_diameter_m {
                 return Err(invalid(
                     file,
@@ -625,16 +639,19 @@ impl ThermalSpec {
                 ));
             }
             let at = format!("thermal.disks[{k}]");
-            for (key, v) in [
-                (key!("thermal.disks", "mass_kg"), d.mass_kg),
-                (
-                    key!("thermal.disks", "polar_inertia_kg_m2"),
-                    d.polar_inertia_kg_m2,
-                ),
-                (key!("thermal.disks", "bore_diameter_m"), d.bore_diameter_m),
-            ] {
-                found.extend(bounded(file, &at, key, v).err());
-            }
+            record_bounds(
+                file,
+                &at,
+                &[
+                    (key!("thermal.disks", "mass_kg"), d.mass_kg),
+                    (
+                        key!("thermal.disks", "polar_inertia_kg_m2"),
+                        d.polar_inertia_kg_m2,
+                    ),
+                    (key!("thermal.disks", "bore_diameter_m"), d.bore_diameter_m),
+                ],
+                found,
+            );
             let r_b = 0.5 * d.bore_diameter_m;
             if 2.0 * d.polar_inertia_kg_m2 / d.mass_kg <= 2.0 * r_b * r_b {
                 return Err(invalid(
@@ -650,15 +667,18 @@ impl ThermalSpec {
             claim(h.flank_nodes[0], q("flank_nodes[0]"))?;
             claim(h.flank_nodes[1], q("flank_nodes[1]"))?;
             let at = format!("thermal.housings[{k}]");
-            for (key, v) in [
-                (
-                    key!("thermal.housings", "bore_diameter_m"),
-                    h.bore_diameter_m,
-                ),
-                (key!("thermal.housings", "seat_length_m"), h.seat_length_m),
-            ] {
-                found.extend(bounded(file, &at, key, v).err());
-            }
+            record_bounds(
+                file,
+                &at,
+                &[
+                    (
+                        key!("thermal.housings", "bore_diameter_m"),
+                        h.bore_diameter_m,
+                    ),
+                    (key!("thermal.housings", "seat_length_m"), h.seat_length_m),
+                ],
+                found,
+            );
             if h.radius_m <= 0.5 * h.bore_diameter_m {
                 return Err(invalid(file, q("radius_m"), "must exceed the bore radius"));
             }
@@ -725,42 +745,45 @@ impl ThermalSpec {
         }
         b.heat_split.check(file, &q("heat_split"))?;
         let at = format!("thermal.bearings[{k}]");
-        for (key, v) in [
-            (
-                key!("thermal.bearings", "seat_diameter_m"),
-                b.seat_diameter_m,
-            ),
-            (
-                key!("thermal.bearings", "element_diameter_m"),
-                b.element_diameter_m,
-            ),
-            (
-                key!("thermal.bearings", "inner_raceway_m"),
-                b.inner_raceway_m,
-            ),
-            (
-                key!("thermal.bearings", "outer_raceway_m"),
-                b.outer_raceway_m,
-            ),
-            (
-                key!("thermal.bearings", "pitch_diameter_m"),
-                b.pitch_diameter_m,
-            ),
-            (
-                key!("thermal.bearings", "bore_diameter_m"),
-                b.bore_diameter_m,
-            ),
-            (
-                key!("thermal.bearings", "outer_diameter_m"),
-                b.outer_diameter_m,
-            ),
-            (key!("thermal.bearings", "width_m"), b.width_m),
-            (key!("thermal.bearings", "f_l"), b.f_l),
-            (key!("thermal.bearings", "f_v"), b.f_v),
-            (key!("thermal.bearings", "cage_mass_kg"), b.cage_mass_kg),
-        ] {
-            found.extend(bounded(file, &at, key, v).err());
-        }
+        record_bounds(
+            file,
+            &at,
+            &[
+                (
+                    key!("thermal.bearings", "seat_diameter_m"),
+                    b.seat_diameter_m,
+                ),
+                (
+                    key!("thermal.bearings", "element_diameter_m"),
+                    b.element_diameter_m,
+                ),
+                (
+                    key!("thermal.bearings", "inner_raceway_m"),
+                    b.inner_raceway_m,
+                ),
+                (
+                    key!("thermal.bearings", "outer_raceway_m"),
+                    b.outer_raceway_m,
+                ),
+                (
+                    key!("thermal.bearings", "pitch_diameter_m"),
+                    b.pitch_diameter_m,
+                ),
+                (
+                    key!("thermal.bearings", "bore_diameter_m"),
+                    b.bore_diameter_m,
+                ),
+                (
+                    key!("thermal.bearings", "outer_diameter_m"),
+                    b.outer_diameter_m,
+                ),
+                (key!("thermal.bearings", "width_m"), b.width_m),
+                (key!("thermal.bearings", "f_l"), b.f_l),
+                (key!("thermal.bearings", "f_v"), b.f_v),
+                (key!("thermal.bearings", "cage_mass_kg"), b.cage_mass_kg),
+            ],
+            found,
+        );
         if !(b.bore_diameter_m < b.inner_raceway_m
             && b.inner_raceway_m < b.outer_raceway_m
             && b.outer_raceway_m < b.outer_diameter_m)
