@@ -137,10 +137,9 @@ fn map(
     }
     let map_dir = map_dir.map_or_else(|| dir.join("map"), std::path::Path::to_path_buf);
     let (m, mut files) = operating_map(dir, &map_dir, &options)?;
-    let (written, notes) =
-        crate::figure::map::write_map_figure(&m, &map_dir, MAP_FIGURE_SIZE, output)?;
-    files.written.extend(written);
-    files.notes.extend(notes);
+    let figure = crate::figure::map::write_map_figure(&m, &map_dir, MAP_FIGURE_SIZE, output)?;
+    files.written.extend(figure.written);
+    files.notes.extend(figure.notes);
     for note in &files.notes {
         writeln!(out, "note: {note}")?;
     }

@@ -2,25 +2,25 @@
 //! campaign's runs over (parameter, ω), with the fold-pair ends and the regions where
 //! responses coexist or none is stable; the map itself is [`crate::campaign::map`]'s.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use plotters::style::RGBColor;
 
 use crate::campaign::CampaignError;
-use crate::campaign::map::OperatingMap;
+use crate::campaign::map::{MapFiles, OperatingMap};
 use crate::figure::{
     self, Chart, Figure, LegendAt, LegendEntry, LegendSample, LineStyle, OMEGA, Series,
 };
 use crate::stability::BifurcationKind;
 
 /// Draws `map` as `out/operating_map.<format>` (`out` must exist) at `size` pixels;
-/// returns the files written and a note when no font was found.
+/// returns the files written, with a note when no font was found.
 pub fn write_map_figure(
     map: &OperatingMap,
     out: &Path,
     size: (u32, u32),
     output: &figure::Output,
-) -> Result<(Vec<PathBuf>, Vec<String>), CampaignError> {
+) -> Result<MapFiles, CampaignError> {
     let fig = map_figure(map, size);
     let written = figure::write_figure(&out.join("operating_map"), &fig, output)?;
     let mut notes = Vec::new();
@@ -30,7 +30,10 @@ pub fn write_map_figure(
                 .into(),
         );
     }
-    Ok((written.files, notes))
+    Ok(MapFiles {
+        written: written.files,
+        notes,
+    })
 }
 
 fn kind_colour(kind: BifurcationKind) -> RGBColor {
