@@ -345,3 +345,50 @@ fn the_near_zero_exponents_match_the_coupled_product_and_the_reduction() {
     );
     assert!(worst < 1e-5, "{worst}");
 }
+
+/// The block Arnoldi iteration (the Krylov space grown by several vectors a step, with one
+/// solve of many right-hand sides; the default on large condensed systems) against the
+/// classical one on the dual rotor at order 5 (900 condensed unknowns), 10 L/min, 400
+/// rad/s: the same exponents in the same disk, each to far below the truncation's
+/// accuracy.
+#[test]
+fn block_arnoldi_finds_the_classical_iterations_exponents() {
+    let mut settings = ten_l_min();
+    settings.harmonic.order = 5;
+    let problem = SweepProblem::new(&settings).expect("problem");
+    let hb = HarmonicBalance::new(
+        &problem.system,
+        &problem.basis,
+        settings.harmonic.aft_samples,
+    )
+    .expect("hb");
+    let sol = point(&problem, &hb, 400.0);
+    let near_zero = |block: usize| {
+        let options = tmrotor::stability::HillOptions {
+            block,
+            ..Default::default()
+        };
+        tmrotor::stability::near_zero_exponents(&hb, &sol, None, &options).expect("near zero")
+    };
+    let (one, four, auto) = (near_zero(1), near_zero(4), near_zero(0));
+    eprintln!(
+        "{} exponents: {} steps one at a time, {} in blocks of 4, {} automatic",
+        one.exponents.len(),
+        one.steps,
+        four.steps,
+        auto.steps
+    );
+    assert!(one.exponents.len() >= hb.n_therm(), "{one:?}");
+    assert_eq!(
+        auto, four,
+        "the automatic choice is blocks of 4 at this size"
+    );
+    assert_eq!(four.steps % 4, 0, "{} steps", four.steps);
+    assert_eq!(one.exponents.len(), four.exponents.len());
+    for (a, b) in one.exponents.iter().zip(&four.exponents) {
+        assert!(
+            (a - b).norm() <= 1e-8 * a.norm().max(1.0),
+            "classical {a} against block {b}"
+        );
+    }
+}

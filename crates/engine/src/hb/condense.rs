@@ -235,35 +235,64 @@ impl Factorization {
     /// Solves for right-hand side `b` (and `e` for the border row; ignored without
     /// border). Returns `(x, μ)` (`μ = 0` without border).
     pub fn solve(&self, b: &[f64], e: f64) -> Result<(Vec<f64>, f64), SolveError> {
+        let (x, mu) =
+            self.solve_many(faer::MatRef::from_column_major_slice(b, b.len(), 1), &[e])?;
+        Ok(((0..x.nrows()).map(|i| x[(i, 0)]).collect(), mu[0]))
+    }
+
+    /// Solves for the columns of `b` at once (`n_unknowns × k`; `e[j]` the border
+    /// row's entry of column `j`, ignored without border): the factors are read once for
+    /// all of them, which is what makes a block of right-hand sides cheaper than `k`
+    /// calls of [`Self::solve`]. Returns the solutions as columns and their `μ`.
+    pub fn solve_many(
+        &self,
+        b: faer::MatRef<'_, f64>,
+        e: &[f64],
+    ) -> Result<(Mat<f64>, Vec<f64>), SolveError> {
         let (mut x, mut mu) = self.solve_factored(b, e)?;
         if let Some(ru) = &self.row_update {
-            let f = (dot(&ru.v, &x) + ru.v_corner * mu) / ru.denom;
-            x.iter_mut().zip(&ru.u).for_each(|(xi, ui)| *xi -= f * ui);
-            mu -= f * ru.u_mu;
+            for (col, mu) in mu.iter_mut().enumerate() {
+                let vx: f64 = (0..x.nrows()).map(|i| ru.v[i] * x[(i, col)]).sum();
+                let f = (vx + ru.v_corner * *mu) / ru.denom;
+                for (i, ui) in ru.u.iter().enumerate() {
+                    x[(i, col)] -= f * ui;
+                }
+                *mu -= f * ru.u_mu;
+            }
         }
         Ok((x, mu))
     }
 
-    fn solve_factored(&self, b: &[f64], e: f64) -> Result<(Vec<f64>, f64), SolveError> {
+    fn solve_factored(
+        &self,
+        b: faer::MatRef<'_, f64>,
+        e: &[f64],
+    ) -> Result<(Mat<f64>, Vec<f64>), SolveError> {
         let nu = self.n_unknowns;
+        let k = b.ncols();
         let bordered = self.bordered();
+        let e_of = |col: usize| e.get(col).copied().unwrap_or(0.0);
         match self.inner.as_ref() {
             Factored::Full(lu) => {
                 let m = nu + usize::from(bordered);
-                let mut rhs = Mat::<f64>::zeros(m, 1);
-                for i in 0..nu {
-                    rhs[(i, 0)] = b[i];
-                }
+                let mut rhs = Mat::<f64>::zeros(m, k);
+                rhs.as_mut().submatrix_mut(0, 0, nu, k).copy_from(b);
                 if bordered {
-                    rhs[(nu, 0)] = e;
+                    for col in 0..k {
+                        rhs[(nu, col)] = e_of(col);
+                    }
                 }
                 let x = lu.solve(&rhs);
                 check_finite(&x, "Jacobian", m, self.omega)?;
-                let sol = (0..nu).map(|i| x[(i, 0)]).collect();
-                let mu = if bordered { x[(nu, 0)] } else { 0.0 };
-                Ok((sol, mu))
+                let mu = (0..k)
+                    .map(|col| if bordered { x[(nu, col)] } else { 0.0 })
+                    .collect();
+                Ok((x.as_ref().submatrix(0, 0, nu, k).to_owned(), mu))
             }
-            Factored::Condensed(c) => c.solve(b, e, self.omega),
+            Factored::Condensed(c) => {
+                let e: Vec<f64> = (0..k).map(e_of).collect();
+                c.solve_many(b, &e, self.omega)
+            }
         }
     }
 }
@@ -416,18 +445,29 @@ impl Condensed {
         })
     }
 
-    fn solve(&self, b: &[f64], e: f64, omega: f64) -> Result<(Vec<f64>, f64), SolveError> {
-        let (nc, pn) = (self.nc, self.pn());
+    /// Solves for the right-hand sides `b` (`n_unknowns × k`) and border entries `e` (one
+    /// per column; ignored without border): the per-block solves, the condensed solve and
+    /// the back-substitution each take all `k` columns at once, so the factors are read
+    /// once for the block instead of once per column.
+    fn solve_many(
+        &self,
+        b: faer::MatRef<'_, f64>,
+        e: &[f64],
+        omega: f64,
+    ) -> Result<(Mat<f64>, Vec<f64>), SolveError> {
+        let (nc, pn, k) = (self.nc, self.pn(), b.ncols());
         let has_border = self.border_row.is_some();
         let m = pn + usize::from(has_border);
-        let mut s = Mat::<f64>::zeros(m, 1);
-        for (k, &g) in self.globals.iter().enumerate() {
-            for c in 0..nc {
-                s[(k * nc + c, 0)] = b[g * nc + c];
+        let mut s = Mat::<f64>::zeros(m, k);
+        for col in 0..k {
+            for (kk, &g) in self.globals.iter().enumerate() {
+                for c in 0..nc {
+                    s[(kk * nc + c, col)] = b[(g * nc + c, col)];
+                }
             }
-        }
-        if has_border {
-            s[(pn, 0)] = e;
+            if has_border {
+                s[(pn, col)] = e[col];
+            }
         }
         // y_b = Z_LL⁻¹ b_L per block, and its condensed contributions
         let mut ys = Vec::with_capacity(self.blocks.len());
@@ -437,25 +477,30 @@ impl Condensed {
                 continue;
             };
             let (nn, nl_len, np, hs) = (bl.lin.len(), bl.nl.len(), bl.parts, bl.hs);
-            let mut bl_rhs = Mat::<f64>::zeros(np * nn, 1);
-            for pr in 0..np {
-                for (ti, &gi) in bl.lin.iter().enumerate() {
-                    bl_rhs[(pr * nn + ti, 0)] = b[gi * nc + self.coeff(hs, pr)];
+            let mut bl_rhs = Mat::<f64>::zeros(np * nn, k);
+            for col in 0..k {
+                for pr in 0..np {
+                    for (ti, &gi) in bl.lin.iter().enumerate() {
+                        bl_rhs[(pr * nn + ti, col)] = b[(gi * nc + self.coeff(hs, pr), col)];
+                    }
                 }
             }
             let y = zll.solve(&bl_rhs);
             check_finite(&y, "linear-DoF block", np * nn, omega)?;
             let corr = &bl.znl * &y;
-            for pr in 0..np {
-                for ti in 0..nl_len {
-                    let ar = self.pos[bl.nl[ti]] * nc + self.coeff(hs, pr);
-                    s[(ar, 0)] -= corr[(pr * nl_len + ti, 0)];
-                }
-            }
-            if let Some(row) = &self.border_row {
+            for col in 0..k {
                 for pr in 0..np {
-                    for (ti, &gi) in bl.lin.iter().enumerate() {
-                        s[(pn, 0)] -= row[gi * nc + self.coeff(hs, pr)] * y[(pr * nn + ti, 0)];
+                    for ti in 0..nl_len {
+                        let ar = self.pos[bl.nl[ti]] * nc + self.coeff(hs, pr);
+                        s[(ar, col)] -= corr[(pr * nl_len + ti, col)];
+                    }
+                }
+                if let Some(row) = &self.border_row {
+                    for pr in 0..np {
+                        for (ti, &gi) in bl.lin.iter().enumerate() {
+                            s[(pn, col)] -=
+                                row[gi * nc + self.coeff(hs, pr)] * y[(pr * nn + ti, col)];
+                        }
                     }
                 }
             }
@@ -467,32 +512,42 @@ impl Condensed {
                 check_finite(&xs, "condensed Jacobian", m, omega)?;
                 xs
             }
-            None => Mat::<f64>::zeros(0, 1),
+            None => Mat::<f64>::zeros(0, k),
         };
-        let mu = if has_border { xs[(pn, 0)] } else { 0.0 };
-        let mut x = vec![0.0; self.n_unknowns];
-        for (k, &g) in self.globals.iter().enumerate() {
-            for c in 0..nc {
-                x[g * nc + c] = xs[(k * nc + c, 0)];
+        let mu: Vec<f64> = (0..k)
+            .map(|col| if has_border { xs[(pn, col)] } else { 0.0 })
+            .collect();
+        let mut x = Mat::<f64>::zeros(self.n_unknowns, k);
+        for col in 0..k {
+            for (kk, &g) in self.globals.iter().enumerate() {
+                for c in 0..nc {
+                    x[(g * nc + c, col)] = xs[(kk * nc + c, col)];
+                }
             }
         }
-        // x_L = y_b − y_c μ − W x_N
+        // x_L = y_b − y_c μ − W x_N, per block for all columns: W x_N as one product
         for (bl, y) in self.blocks.iter().zip(&ys) {
             let Some(y) = y else { continue };
-            let (nn, nl_len) = (bl.lin.len(), bl.nl.len());
-            for pr in 0..bl.parts {
-                for (ti, &gi) in bl.lin.iter().enumerate() {
-                    let li = pr * nn + ti;
-                    let mut v = y[(li, 0)];
-                    if has_border {
-                        v -= bl.yc[(li, 0)] * mu;
+            let (nn, nl_len, np, hs) = (bl.lin.len(), bl.nl.len(), bl.parts, bl.hs);
+            let mut xn = Mat::<f64>::zeros(np * nl_len, k);
+            for col in 0..k {
+                for pc in 0..np {
+                    for (tj, &gj) in bl.nl.iter().enumerate() {
+                        xn[(pc * nl_len + tj, col)] = x[(gj * nc + self.coeff(hs, pc), col)];
                     }
-                    for pc in 0..bl.parts {
-                        for (tj, &gj) in bl.nl.iter().enumerate() {
-                            v -= bl.w[(li, pc * nl_len + tj)] * x[gj * nc + self.coeff(bl.hs, pc)];
+                }
+            }
+            let wx = &bl.w * &xn;
+            for col in 0..k {
+                for pr in 0..np {
+                    for (ti, &gi) in bl.lin.iter().enumerate() {
+                        let li = pr * nn + ti;
+                        let mut v = y[(li, col)] - wx[(li, col)];
+                        if has_border {
+                            v -= bl.yc[(li, 0)] * mu[col];
                         }
+                        x[(gi * nc + self.coeff(hs, pr), col)] = v;
                     }
-                    x[gi * nc + self.coeff(bl.hs, pr)] = v;
                 }
             }
         }
@@ -734,10 +789,15 @@ impl Lu {
 
     fn solve_in_place(&self, rhs: MatMut<'_, f64>) {
         let n = self.lu.nrows();
-        // one right-hand side: a triangular solve of a few hundred unknowns is over before
-        // threads could share it (measured: the threads' wake-ups and yields took more
-        // time than the solve)
-        let par = if rhs.ncols() == 1 { Par::Seq } else { self.par };
+        // a few right-hand sides: a triangular solve of a few hundred unknowns is over
+        // before threads could share it (measured: the threads' wake-ups and yields took
+        // more time than the solve), and the blocks of Hill's Arnoldi run beside the
+        // corrector, which has the other thread
+        let par = if rhs.ncols() <= 64 {
+            Par::Seq
+        } else {
+            self.par
+        };
         let perm = PermRef::new_checked(&self.perm, &self.perm_inv, n);
         // the two scratch sizes are the same (one row permutation of the right-hand sides)
         let mut mem = MemBuffer::new(lu_solve::solve_in_place_scratch::<usize, f64>(
