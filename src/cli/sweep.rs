@@ -477,6 +477,17 @@ pub fn progress_message(p: &Progress, omega: &str) -> String {
             "{omega}{:.1} rad/s: reaching the start by continuation (not recorded)",
             p.omega_rad_s
         )
+    } else if let Some((a, z, n)) = p.switching {
+        let which = if a == z {
+            format!("branch {a}")
+        } else {
+            format!("branches {a}–{z}")
+        };
+        format!(
+            "{}, {}: following period-doubled {which} of at most {n}",
+            plural(p.points, "point", "points"),
+            plural(p.bifurcations, "bifurcation", "bifurcations")
+        )
     } else if p.verifying {
         format!(
             "{}, {}: re-solving them at higher truncation orders",

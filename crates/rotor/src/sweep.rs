@@ -110,6 +110,9 @@ pub struct Progress {
     /// While the branch's events are re-solved at higher truncation orders, after the
     /// branch ([`verify`]).
     pub verifying: bool,
+    /// While period-doubled branches are followed, several at once and recorded when
+    /// done: the first and last of them (counted from 1) and how many there are.
+    pub switching: Option<(usize, usize, usize)>,
 }
 
 /// What a finished sweep reports.
@@ -661,126 +664,198 @@ impl SweepProblem {
     /// period doubling or the same), it leaves the range, or a continuation end. A period
     /// doubling where an earlier switched branch rejoined is not switched at again: its
     /// branch is that one. A period doubling without a start is reported as a warning.
+    ///
+    /// The branches are independent once the run's branch is done: as many as the pool
+    /// has threads are followed at once ([`Self::follow_switched`]), then recorded one
+    /// after the other in their order, so the recording is the same as one at a time
+    /// gives. A branch whose period doubling an earlier one of the same batch rejoined at
+    /// is followed but not recorded.
     fn follow_period_doublings(
         &self,
         rec: &mut Recorder,
         sink: &mut dyn Sink,
         stab: Option<&dyn StabilityMethod>,
         pools: &dyn StepPools,
-        interrupted: &dyn Fn() -> bool,
+        interrupted: &(dyn Fn() -> bool + Sync),
         progress: &mut dyn FnMut(&Progress),
     ) -> Result<Vec<FollowedBranch>, SweepError> {
+        use rayon::prelude::*;
         let s = &self.settings;
         let switch = SwitchOptions {
             aft_samples: s.harmonic.aft_samples.map(|n| 2 * n),
             ..SwitchOptions::default()
         };
+        let doublings = std::mem::take(&mut rec.period_doublings);
+        let mut followed: Vec<FollowedBranch> = Vec::new();
+        let rejoined_at = |followed: &[FollowedBranch], w: f64| {
+            followed
+                .iter()
+                .any(|b| b.rejoined.is_some_and(|(a, z)| crosses(a, z, w)))
+        };
+        for batch in doublings.chunks(rayon::current_num_threads().max(1)) {
+            if interrupted() {
+                break;
+            }
+            let todo: Vec<&(u32, crate::hb::HbSolution)> = batch
+                .iter()
+                .filter(|(_, pd)| !rejoined_at(&followed, pd.omega))
+                .collect();
+            if todo.is_empty() {
+                continue;
+            }
+            let first = followed.len() + 1;
+            rec.prog.switching = Some((first, first + todo.len() - 1, doublings.len()));
+            progress(&rec.prog);
+            let runs: Vec<Result<SwitchedRun, SweepError>> = todo
+                .par_iter()
+                .map(|(_, pd)| self.follow_switched(pd, &switch, stab, pools, interrupted))
+                .collect();
+            for (&(number, ref pd), run) in todo.into_iter().zip(runs) {
+                let run = run?;
+                if rejoined_at(&followed, pd.omega) {
+                    continue;
+                }
+                let recording = std::time::Instant::now();
+                let start = match &run.start {
+                    Ok(start) => start,
+                    Err(e) => {
+                        let note = format!(
+                            "period doubling #{number} at ω = {:.4} rad/s: no period-doubled branch followed ({e})",
+                            pd.omega
+                        );
+                        sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
+                        rec.warnings.push(note);
+                        continue;
+                    }
+                };
+                let branch = BranchRecord {
+                    branch: followed.len() as u32 + 1,
+                    kind: "period_doubled".into(),
+                    parent: 0,
+                    origin_bifurcation: number,
+                    origin_omega_rad_s: pd.omega,
+                    harmonics: start.basis.harmonics().to_vec(),
+                };
+                sink.write_branch(&branch)?;
+                rec.begin_branch(branch.branch, &branch.run_of(&self.run));
+                let first_index = rec.prog.points;
+                for step in &run.steps {
+                    match step {
+                        StepOutcome::Accepted {
+                            point,
+                            bifurcations,
+                        } => rec.accept(self, sink, point, bifurcations)?,
+                        _ => rec.prog.rejected_steps += 1,
+                    }
+                    progress(&rec.prog);
+                }
+                if let BranchEnd::Failed(why) = &run.end {
+                    let note = format!("branch {}: {why}", branch.branch);
+                    sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
+                    rec.warnings.push(note);
+                }
+                followed.push(FollowedBranch {
+                    branch: branch.branch,
+                    origin_omega_rad_s: pd.omega,
+                    points: rec.prog.points - first_index,
+                    bifurcations: rec.branch_bifurcations.clone(),
+                    seconds: run.seconds + recording.elapsed().as_secs_f64(),
+                    switch_seconds: run.switch_seconds,
+                    timings: run.timings,
+                    omega_range: rec.branch_range.unwrap_or((start.omega, start.omega)),
+                    rejoined: match run.end {
+                        BranchEnd::Rejoined { between } => Some(between),
+                        _ => None,
+                    },
+                    end: run.end.to_string(),
+                });
+                rec.begin_branch(0, &self.run);
+            }
+        }
+        rec.prog.switching = None;
+        Ok(followed)
+    }
+
+    /// Follows the period-doubled branch of the period doubling at `pd` (see
+    /// [`Self::follow_period_doublings`]) without recording it: its start, the outcome of
+    /// every step, how it ended.
+    fn follow_switched(
+        &self,
+        pd: &crate::hb::HbSolution,
+        switch: &SwitchOptions,
+        stab: Option<&dyn StabilityMethod>,
+        pools: &dyn StepPools,
+        interrupted: &(dyn Fn() -> bool + Sync),
+    ) -> Result<SwitchedRun, SweepError> {
+        let s = &self.settings;
         let (lo, hi) = (
             s.sweep.omega_start.min(s.sweep.omega_end),
             s.sweep.omega_start.max(s.sweep.omega_end),
         );
-        let doublings = std::mem::take(&mut rec.period_doublings);
-        let mut followed: Vec<FollowedBranch> = Vec::new();
-        for (number, pd) in doublings {
+        let started = std::time::Instant::now();
+        let start = match switch_at_period_doubling(&self.system, &self.basis, pd, switch) {
+            Ok(start) => start,
+            Err(e) => {
+                return Ok(SwitchedRun {
+                    start: Err(e.to_string()),
+                    steps: Vec::new(),
+                    end: BranchEnd::Interrupted,
+                    seconds: started.elapsed().as_secs_f64(),
+                    switch_seconds: started.elapsed().as_secs_f64(),
+                    timings: Timings::default(),
+                });
+            }
+        };
+        let to = if start.omega >= pd.omega { hi } else { lo };
+        let hb = HarmonicBalance::new(&self.system, &start.basis, switch.aft_samples)?;
+        let mut opts = ContinuationOptions::new(start.omega, to);
+        opts.ds_max = s.sweep.ds_max;
+        opts.ds_initial = opts.ds_initial.min(s.sweep.ds_max);
+        opts.max_points = s.sweep.max_points;
+        opts.initial_guess = Some(start.unknowns.clone());
+        opts.omega_bounds = Some((lo, hi));
+        opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
+        opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
+        opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;
+        let mut cont = Continuation::new(hb, opts, stab)?;
+        let mut last_omega = start.omega;
+        let switch_seconds = started.elapsed().as_secs_f64();
+        let mut steps = Vec::new();
+        let end = loop {
             if interrupted() {
-                break;
+                break BranchEnd::Interrupted;
             }
-            if followed
-                .iter()
-                .any(|b| b.rejoined.is_some_and(|(a, z)| crosses(a, z, pd.omega)))
-            {
-                continue;
-            }
-            let started = std::time::Instant::now();
-            let start = match switch_at_period_doubling(&self.system, &self.basis, &pd, &switch) {
-                Ok(start) => start,
-                Err(e) => {
-                    let note = format!(
-                        "period doubling #{number} at ω = {:.4} rad/s: no period-doubled branch followed ({e})",
-                        pd.omega
-                    );
-                    sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
-                    rec.warnings.push(note);
-                    continue;
-                }
-            };
-            let branch = BranchRecord {
-                branch: followed.len() as u32 + 1,
-                kind: "period_doubled".into(),
-                parent: 0,
-                origin_bifurcation: number,
-                origin_omega_rad_s: pd.omega,
-                harmonics: start.basis.harmonics().to_vec(),
-            };
-            sink.write_branch(&branch)?;
-            let run = branch.run_of(&self.run);
-            rec.begin_branch(branch.branch, &run);
-            let first_index = rec.prog.points;
-            let to = if start.omega >= pd.omega { hi } else { lo };
-            let hb = HarmonicBalance::new(&self.system, &start.basis, switch.aft_samples)?;
-            let mut opts = ContinuationOptions::new(start.omega, to);
-            opts.ds_max = s.sweep.ds_max;
-            opts.ds_initial = opts.ds_initial.min(s.sweep.ds_max);
-            opts.max_points = s.sweep.max_points;
-            opts.initial_guess = Some(start.unknowns.clone());
-            opts.omega_bounds = Some((lo, hi));
-            opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
-            opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
-            opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;
-            let mut cont = Continuation::new(hb, opts, stab)?;
-            let mut last_omega = start.omega;
-            let switch_seconds = started.elapsed().as_secs_f64();
-            let end = loop {
-                if interrupted() {
-                    break BranchEnd::Interrupted;
-                }
-                match step_in(pools, &mut cont) {
-                    Ok(StepOutcome::Accepted {
+            match step_in(pools, &mut cont) {
+                Ok(StepOutcome::Accepted {
+                    point,
+                    bifurcations,
+                }) => {
+                    let share =
+                        half_order_share(&point.solution.unknowns(), &self.basis, &start.basis);
+                    if share < switch.min_share {
+                        break BranchEnd::Rejoined {
+                            between: (last_omega, point.solution.omega),
+                        };
+                    }
+                    last_omega = point.solution.omega;
+                    steps.push(StepOutcome::Accepted {
                         point,
                         bifurcations,
-                    }) => {
-                        let share =
-                            half_order_share(&point.solution.unknowns(), &self.basis, &start.basis);
-                        if share < switch.min_share {
-                            break BranchEnd::Rejoined {
-                                between: (last_omega, point.solution.omega),
-                            };
-                        }
-                        last_omega = point.solution.omega;
-                        rec.accept(self, sink, &point, &bifurcations)?;
-                        progress(&rec.prog);
-                    }
-                    Ok(StepOutcome::Rejected(_)) => {
-                        rec.prog.rejected_steps += 1;
-                        progress(&rec.prog);
-                    }
-                    Ok(StepOutcome::Finished(f)) => break BranchEnd::Finished(f),
-                    Err(e) => break BranchEnd::Failed(e.to_string()),
+                    });
                 }
-            };
-            if let BranchEnd::Failed(why) = &end {
-                let note = format!("branch {}: {why}", branch.branch);
-                sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
-                rec.warnings.push(note);
+                Ok(rejected @ StepOutcome::Rejected(_)) => steps.push(rejected),
+                Ok(StepOutcome::Finished(f)) => break BranchEnd::Finished(f),
+                Err(e) => break BranchEnd::Failed(e.to_string()),
             }
-            followed.push(FollowedBranch {
-                branch: branch.branch,
-                origin_omega_rad_s: pd.omega,
-                points: rec.prog.points - first_index,
-                bifurcations: rec.branch_bifurcations.clone(),
-                seconds: started.elapsed().as_secs_f64(),
-                switch_seconds,
-                timings: cont.timings(),
-                omega_range: rec.branch_range.unwrap_or((start.omega, start.omega)),
-                rejoined: match end {
-                    BranchEnd::Rejoined { between } => Some(between),
-                    _ => None,
-                },
-                end: end.to_string(),
-            });
-            rec.begin_branch(0, &self.run);
-        }
-        Ok(followed)
+        };
+        Ok(SwitchedRun {
+            start: Ok(start),
+            steps,
+            end,
+            seconds: started.elapsed().as_secs_f64(),
+            switch_seconds,
+            timings: cont.timings(),
+        })
     }
 
     /// Converts one branch point into the recorded form, with bearing loads, clearances
@@ -1056,6 +1131,19 @@ pub struct FollowedBranch {
     pub timings: Timings,
     /// How it ended, in words.
     pub end: String,
+}
+
+/// A period-doubled branch followed and not yet recorded
+/// ([`SweepProblem::follow_switched`]): its start (or why there is none), the accepted and
+/// refused steps in order, how it ended, its wall time (all, and of the start) and where
+/// its continuation's time went.
+struct SwitchedRun {
+    start: Result<crate::continuation::switch::SwitchedStart, String>,
+    steps: Vec<StepOutcome>,
+    end: BranchEnd,
+    seconds: f64,
+    switch_seconds: f64,
+    timings: Timings,
 }
 
 /// How the continuation of a switched branch ended.
