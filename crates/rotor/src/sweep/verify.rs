@@ -387,15 +387,27 @@ impl Checking<'_> {
         // A fold pair or a crossing narrower than a step is passed over unseen: before
         // an event is called vanished, the window is followed again with
         // 1/FINE_STEP_DIVISOR of the step.
-        if let Ok(f) = &found
-            && match_events(g, self.events, f, self.options).contains(&TruncationOutcome::Vanished)
-            && !(self.interrupted)()
-        {
+        let missing: Vec<String> = match &found {
+            Ok(f) => g
+                .iter()
+                .zip(match_events(g, self.events, f, self.options))
+                .filter(|(_, out)| *out == TruncationOutcome::Vanished)
+                .map(|(&i, _)| {
+                    let e = &self.events[i];
+                    let kind = e.kind.map_or("change", |k| k.abbreviation());
+                    format!("{kind} {:.3}", e.omega_rad_s)
+                })
+                .collect(),
+            Err(_) => Vec::new(),
+        };
+        if !missing.is_empty() && !(self.interrupted)() {
             let mut fine = o.settings.clone();
             fine.sweep.ds_max /= FINE_STEP_DIVISOR;
             let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
             say(&format!(
-                "order {order}: again with a step of {:.4}",
+                "order {order}, window {:.3} → {end:.3}: {} not found; again with a step of {:.4}",
+                start.map_or(lo - w, |p| p.omega_rad_s),
+                missing.join(", "),
                 fine.sweep.ds_max
             ));
             let again = Window {
@@ -408,7 +420,8 @@ impl Checking<'_> {
             }
         }
         say(&format!(
-            "order {order}: window done in {:.1} s",
+            "order {order}, window {:.3} → {end:.3}: done in {:.1} s",
+            start.map_or(lo - w, |p| p.omega_rad_s),
             t0.elapsed().as_secs_f64()
         ));
         let outcomes = match &found {
