@@ -22,6 +22,16 @@ use tmrotor::study::{
 };
 use tmrotor::system::{PeriodicOrbit, System};
 
+/// The harmonic balance of `problem` (its basis and AFT samples).
+fn balance(problem: &SweepProblem) -> HarmonicBalance<'_> {
+    HarmonicBalance::new(
+        &problem.system,
+        &problem.basis,
+        problem.settings.harmonic.aft_samples,
+    )
+    .expect("hb")
+}
+
 /// A converged point of `problem` at `omega`.
 fn point(problem: &SweepProblem, hb: &HarmonicBalance<'_>, omega: f64) -> HbSolution {
     let guess = problem.system.initial_guess(problem.basis.n_coeffs());
@@ -110,12 +120,7 @@ fn coupled_product_slowest(
 fn the_slowest_exponent_matches_the_coupled_products_multiplier_nearest_one() {
     let settings = ten_l_min();
     let problem = SweepProblem::new(&settings).expect("problem");
-    let hb = HarmonicBalance::new(
-        &problem.system,
-        &problem.basis,
-        settings.harmonic.aft_samples,
-    )
-    .expect("hb");
+    let hb = balance(&problem);
     let sol = point(&problem, &hb, 400.0);
     let slow = slow_exponents(&hb, &sol).expect("slow exponents");
     let top = slow
@@ -297,12 +302,7 @@ fn an_independent_reader_finds_the_flags_consistent_with_the_folds() {
 fn the_near_zero_exponents_match_the_coupled_product_and_the_reduction() {
     let settings = ten_l_min();
     let problem = SweepProblem::new(&settings).expect("problem");
-    let hb = HarmonicBalance::new(
-        &problem.system,
-        &problem.basis,
-        settings.harmonic.aft_samples,
-    )
-    .expect("hb");
+    let hb = balance(&problem);
     let sol = point(&problem, &hb, 400.0);
     let nz = tmrotor::stability::near_zero_exponents(
         &hb,
@@ -356,12 +356,7 @@ fn block_arnoldi_finds_the_classical_iterations_exponents() {
     let mut settings = ten_l_min();
     settings.harmonic.order = 5;
     let problem = SweepProblem::new(&settings).expect("problem");
-    let hb = HarmonicBalance::new(
-        &problem.system,
-        &problem.basis,
-        settings.harmonic.aft_samples,
-    )
-    .expect("hb");
+    let hb = balance(&problem);
     let sol = point(&problem, &hb, 400.0);
     let near_zero = |block: usize| {
         let options = tmrotor::stability::HillOptions {
