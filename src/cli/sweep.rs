@@ -477,16 +477,12 @@ pub fn progress_message(p: &Progress, omega: &str) -> String {
             "{omega}{:.1} rad/s: reaching the start by continuation (not recorded)",
             p.omega_rad_s
         )
-    } else if let Some((a, z, n)) = p.switching {
-        let which = if a == z {
-            format!("branch {a}")
-        } else {
-            format!("branches {a}–{z}")
-        };
+    } else if let Some((done, batch, n)) = p.switching {
         format!(
-            "{}, {}: following period-doubled {which} of at most {n}",
+            "{}, {}: following {} at once ({done} of at most {n} recorded)",
             plural(p.points, "point", "points"),
-            plural(p.bifurcations, "bifurcation", "bifurcations")
+            plural(p.bifurcations, "bifurcation", "bifurcations"),
+            plural(batch, "period-doubled branch", "period-doubled branches")
         )
     } else if p.verifying {
         format!(

@@ -110,8 +110,9 @@ pub struct Progress {
     /// While the branch's events are re-solved at higher truncation orders, after the
     /// branch ([`verify`]).
     pub verifying: bool,
-    /// While period-doubled branches are followed, several at once and recorded when
-    /// done: the first and last of them (counted from 1) and how many there are.
+    /// While a batch of period-doubled branches is followed (several at once, recorded
+    /// when all are done): the branches recorded so far, how many the batch follows, and
+    /// the run's period doublings (the most there can be).
     pub switching: Option<(usize, usize, usize)>,
 }
 
@@ -703,18 +704,23 @@ impl SweepProblem {
             if todo.is_empty() {
                 continue;
             }
-            let first = followed.len() + 1;
-            rec.prog.switching = Some((first, first + todo.len() - 1, doublings.len()));
+            rec.prog.switching = Some((followed.len(), todo.len(), doublings.len()));
             progress(&rec.prog);
             let runs: Vec<Result<SwitchedRun, SweepError>> = todo
                 .par_iter()
                 .map(|(_, pd)| self.follow_switched(pd, &switch, stab, pools, interrupted))
                 .collect();
+            rec.prog.switching = None;
+            let mut stopped = false;
             for (&(number, ref pd), run) in todo.into_iter().zip(runs) {
-                let run = run?;
-                if rejoined_at(&followed, pd.omega) {
+                // one at a time, this period doubling would not have been switched at
+                // (an earlier branch rejoined there) or reached (the run was interrupted
+                // during an earlier branch): what it gave is dropped
+                if stopped || rejoined_at(&followed, pd.omega) {
                     continue;
                 }
+                let run = run?;
+                stopped = matches!(run.end, BranchEnd::Interrupted) && run.start.is_ok();
                 let recording = std::time::Instant::now();
                 let start = match &run.start {
                     Ok(start) => start,
@@ -772,7 +778,6 @@ impl SweepProblem {
                 rec.begin_branch(0, &self.run);
             }
         }
-        rec.prog.switching = None;
         Ok(followed)
     }
 

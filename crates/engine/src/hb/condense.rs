@@ -276,7 +276,9 @@ impl Factorization {
             Factored::Full(lu) => {
                 let m = nu + usize::from(bordered);
                 let mut rhs = Mat::<f64>::zeros(m, k);
-                rhs.as_mut().submatrix_mut(0, 0, nu, k).copy_from(b);
+                rhs.as_mut()
+                    .submatrix_mut(0, 0, nu, k)
+                    .copy_from(b.subrows(0, nu));
                 if bordered {
                     for col in 0..k {
                         rhs[(nu, col)] = e_of(col);

@@ -75,7 +75,7 @@ pub struct HillOptions {
 
 impl Default for HillOptions {
     /// `extra = 4`, disk up to `0.4 ω_b`, tolerance 1e-10, at most 400 Krylov vectors,
-    /// grown by blocks of 8.
+    /// the block size chosen by the system's size ([`AUTO_BLOCK`]).
     ///
     /// Four fast exponents beyond the thermal ones: with two, the disk's edge fell among
     /// the modes the thermal coupling reorders near a fast fold, and the joined count
@@ -507,7 +507,9 @@ fn start_vectors(dim: usize, k: usize) -> Mat<f64> {
 /// Orthonormalises the columns of `w` against the `q` columns (two passes of classical
 /// Gram–Schmidt as products) and among themselves (two passes of modified Gram–Schmidt):
 /// `w_in = q c + w_out r` with `r` upper triangular. Returns `(c, r, deflated)`. A column that
-/// falls below `1e-13` of its norm is dependent on the others: its `r` diagonal is that
+/// falls below `1e-13` of its norm before the projections is dependent on `q` and the
+/// block's earlier columns (with one column: the Krylov space is invariant, the classical
+/// iteration's breakdown): its `r` diagonal is that
 /// remainder and, when `replace` is given, its place is taken by a vector from `replace`
 /// orthonormalised in the same way (the block grows on past a deflated direction).
 fn orthonormalise(
@@ -532,9 +534,11 @@ fn orthonormalise(
             *c += total;
         }
     };
+    // each column's norm before any projection: what a dependent column is measured by
+    let norms: Vec<f64> = (0..p).map(|i| w.col(i).norm_l2()).collect();
     against_q(w, Some(&mut c));
     for i in 0..p {
-        let norm0 = w.col(i).norm_l2();
+        let norm0 = norms[i];
         for _ in 0..2 {
             for l in 0..i {
                 let d = w.col(l).transpose() * w.col(i);
@@ -604,7 +608,11 @@ fn arnoldi_nearest(
     // (the one-DoF oscillator's 57 unknowns, blocks of 4) the Krylov space becomes
     // invariant, the block's dependent vectors are replaced by fresh ones, and the
     // wanted values were not all converged when the space ran out
-    let p = if dim >= 4 * max_dim { block.max(1) } else { 1 };
+    let p = if dim >= 4 * max_dim {
+        block.clamp(1, (max_dim / 4).max(1))
+    } else {
+        1
+    };
     // in whole blocks
 
     let max_dim = if p > 1 { (max_dim / p) * p } else { max_dim };
