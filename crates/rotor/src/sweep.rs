@@ -706,7 +706,7 @@ impl SweepProblem {
             }
             rec.prog.switching = Some((followed.len(), todo.len(), doublings.len()));
             progress(&rec.prog);
-            let runs: Vec<Result<SwitchedRun, SweepError>> = todo
+            let runs: Vec<Result<Result<SwitchedRun, String>, SweepError>> = todo
                 .par_iter()
                 .map(|(_, pd)| self.follow_switched(pd, &switch, stab, pools, interrupted))
                 .collect();
@@ -719,11 +719,19 @@ impl SweepProblem {
                 if stopped || rejoined_at(&followed, pd.omega) {
                     continue;
                 }
-                let run = run?;
-                stopped = matches!(run.end, BranchEnd::Interrupted) && run.start.is_ok();
-                let recording = std::time::Instant::now();
-                let start = match &run.start {
-                    Ok(start) => start,
+                match run? {
+                    Ok(run) => {
+                        stopped = matches!(run.end, BranchEnd::Interrupted);
+                        let branch = followed.len() as u32 + 1;
+                        followed.push(self.record_switched(
+                            rec,
+                            sink,
+                            progress,
+                            branch,
+                            (number, pd),
+                            run,
+                        )?);
+                    }
                     Err(e) => {
                         let note = format!(
                             "period doubling #{number} at ω = {:.4} rad/s: no period-doubled branch followed ({e})",
@@ -731,59 +739,76 @@ impl SweepProblem {
                         );
                         sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
                         rec.warnings.push(note);
-                        continue;
                     }
-                };
-                let branch = BranchRecord {
-                    branch: followed.len() as u32 + 1,
-                    kind: "period_doubled".into(),
-                    parent: 0,
-                    origin_bifurcation: number,
-                    origin_omega_rad_s: pd.omega,
-                    harmonics: start.basis.harmonics().to_vec(),
-                };
-                sink.write_branch(&branch)?;
-                rec.begin_branch(branch.branch, &branch.run_of(&self.run));
-                let first_index = rec.prog.points;
-                for step in &run.steps {
-                    match step {
-                        StepOutcome::Accepted {
-                            point,
-                            bifurcations,
-                        } => rec.accept(self, sink, point, bifurcations)?,
-                        _ => rec.prog.rejected_steps += 1,
-                    }
-                    progress(&rec.prog);
                 }
-                if let BranchEnd::Failed(why) = &run.end {
-                    let note = format!("branch {}: {why}", branch.branch);
-                    sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
-                    rec.warnings.push(note);
-                }
-                followed.push(FollowedBranch {
-                    branch: branch.branch,
-                    origin_omega_rad_s: pd.omega,
-                    points: rec.prog.points - first_index,
-                    bifurcations: rec.branch_bifurcations.clone(),
-                    seconds: run.seconds + recording.elapsed().as_secs_f64(),
-                    switch_seconds: run.switch_seconds,
-                    timings: run.timings,
-                    omega_range: rec.branch_range.unwrap_or((start.omega, start.omega)),
-                    rejoined: match run.end {
-                        BranchEnd::Rejoined { between } => Some(between),
-                        _ => None,
-                    },
-                    end: run.end.to_string(),
-                });
-                rec.begin_branch(0, &self.run);
             }
         }
         Ok(followed)
     }
 
+    /// Records `run`, the branch followed from period doubling `number` at `pd`, as branch
+    /// `branch`: its description, every step (points through `rec`, refused steps
+    /// counted, `progress` after each), a note if it failed; what the summary lists of it.
+    fn record_switched(
+        &self,
+        rec: &mut Recorder,
+        sink: &mut dyn Sink,
+        progress: &mut dyn FnMut(&Progress),
+        branch: u32,
+        (number, pd): (u32, &crate::hb::HbSolution),
+        run: SwitchedRun,
+    ) -> Result<FollowedBranch, SweepError> {
+        let recording = std::time::Instant::now();
+        let record = BranchRecord {
+            branch,
+            kind: "period_doubled".into(),
+            parent: 0,
+            origin_bifurcation: number,
+            origin_omega_rad_s: pd.omega,
+            harmonics: run.start.basis.harmonics().to_vec(),
+        };
+        sink.write_branch(&record)?;
+        rec.begin_branch(branch, &record.run_of(&self.run));
+        let first_index = rec.prog.points;
+        for step in &run.steps {
+            match step {
+                StepOutcome::Accepted {
+                    point,
+                    bifurcations,
+                } => rec.accept(self, sink, point, bifurcations)?,
+                _ => rec.prog.rejected_steps += 1,
+            }
+            progress(&rec.prog);
+        }
+        if let BranchEnd::Failed(why) = &run.end {
+            let note = format!("branch {branch}: {why}");
+            sink.write_note(rec.prog.points.saturating_sub(1) as u64, &note)?;
+            rec.warnings.push(note);
+        }
+        let followed = FollowedBranch {
+            branch,
+            origin_omega_rad_s: pd.omega,
+            points: rec.prog.points - first_index,
+            bifurcations: rec.branch_bifurcations.clone(),
+            seconds: run.seconds + recording.elapsed().as_secs_f64(),
+            switch_seconds: run.switch_seconds,
+            timings: run.timings,
+            omega_range: rec
+                .branch_range
+                .unwrap_or((run.start.omega, run.start.omega)),
+            rejoined: match run.end {
+                BranchEnd::Rejoined { between } => Some(between),
+                _ => None,
+            },
+            end: run.end.to_string(),
+        };
+        rec.begin_branch(0, &self.run);
+        Ok(followed)
+    }
+
     /// Follows the period-doubled branch of the period doubling at `pd` (see
     /// [`Self::follow_period_doublings`]) without recording it: its start, the outcome of
-    /// every step, how it ended.
+    /// every step, how it ended; or why there is no start.
     fn follow_switched(
         &self,
         pd: &crate::hb::HbSolution,
@@ -791,7 +816,7 @@ impl SweepProblem {
         stab: Option<&dyn StabilityMethod>,
         pools: &dyn StepPools,
         interrupted: &(dyn Fn() -> bool + Sync),
-    ) -> Result<SwitchedRun, SweepError> {
+    ) -> Result<Result<SwitchedRun, String>, SweepError> {
         let s = &self.settings;
         let (lo, hi) = (
             s.sweep.omega_start.min(s.sweep.omega_end),
@@ -800,16 +825,7 @@ impl SweepProblem {
         let started = std::time::Instant::now();
         let start = match switch_at_period_doubling(&self.system, &self.basis, pd, switch) {
             Ok(start) => start,
-            Err(e) => {
-                return Ok(SwitchedRun {
-                    start: Err(e.to_string()),
-                    steps: Vec::new(),
-                    end: BranchEnd::Interrupted,
-                    seconds: started.elapsed().as_secs_f64(),
-                    switch_seconds: started.elapsed().as_secs_f64(),
-                    timings: Timings::default(),
-                });
-            }
+            Err(e) => return Ok(Err(e.to_string())),
         };
         let to = if start.omega >= pd.omega { hi } else { lo };
         let hb = HarmonicBalance::new(&self.system, &start.basis, switch.aft_samples)?;
@@ -853,14 +869,14 @@ impl SweepProblem {
                 Err(e) => break BranchEnd::Failed(e.to_string()),
             }
         };
-        Ok(SwitchedRun {
-            start: Ok(start),
+        Ok(Ok(SwitchedRun {
+            start,
             steps,
             end,
             seconds: started.elapsed().as_secs_f64(),
             switch_seconds,
             timings: cont.timings(),
-        })
+        }))
     }
 
     /// Converts one branch point into the recorded form, with bearing loads, clearances
@@ -1139,11 +1155,11 @@ pub struct FollowedBranch {
 }
 
 /// A period-doubled branch followed and not yet recorded
-/// ([`SweepProblem::follow_switched`]): its start (or why there is none), the accepted and
-/// refused steps in order, how it ended, its wall time (all, and of the start) and where
-/// its continuation's time went.
+/// ([`SweepProblem::follow_switched`]): its start, the accepted and refused steps in
+/// order, how it ended, its wall time (all, and of the start) and where its
+/// continuation's time went.
 struct SwitchedRun {
-    start: Result<crate::continuation::switch::SwitchedStart, String>,
+    start: crate::continuation::switch::SwitchedStart,
     steps: Vec<StepOutcome>,
     end: BranchEnd,
     seconds: f64,

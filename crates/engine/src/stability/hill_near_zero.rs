@@ -488,40 +488,63 @@ fn scaled(m: &DenseMatrix, f: f64) -> DenseMatrix {
     }
 }
 
-/// Deterministic start vectors with no structure (a linear congruential sequence): `k`
-/// columns of length `dim`, the first the same whatever `k`.
-fn start_vectors(dim: usize, k: usize) -> Mat<f64> {
-    let mut s: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut v = Mat::<f64>::zeros(dim, k);
-    for j in 0..k {
-        for i in 0..dim {
-            s = s
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            v[(i, j)] = ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+/// Deterministic vectors with no structure (a linear congruential sequence): the start
+/// block's columns, then fresh directions for a block whose vectors became dependent.
+struct Directions(u64);
+
+impl Directions {
+    fn new() -> Self {
+        Self(0x9E37_79B9_7F4A_7C15)
+    }
+
+    /// The next vector of length `dim`.
+    fn next(&mut self, dim: usize) -> Vec<f64> {
+        (0..dim)
+            .map(|_| {
+                self.0 = self
+                    .0
+                    .wrapping_mul(6_364_136_223_846_793_005)
+                    .wrapping_add(1_442_695_040_888_963_407);
+                ((self.0 >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+            })
+            .collect()
+    }
+}
+
+/// Takes the orthonormal columns of `q` out of `v`, two passes (modified Gram–Schmidt);
+/// what was taken out, one coefficient per column.
+fn take_out(q: faer::MatRef<'_, f64>, mut v: faer::ColMut<'_, f64>) -> Vec<f64> {
+    let mut taken = vec![0.0; q.ncols()];
+    for _ in 0..2 {
+        for (l, t) in taken.iter_mut().enumerate() {
+            let d = q.col(l).transpose() * v.as_ref();
+            v.as_mut()
+                .iter_mut()
+                .zip(q.col(l).iter())
+                .for_each(|(x, y)| *x -= d * y);
+            *t += d;
         }
     }
-    v
+    taken
 }
 
 /// Orthonormalises the columns of `w` against the `q` columns (two passes of classical
 /// Gram–Schmidt as products) and among themselves (two passes of modified Gram–Schmidt):
-/// `w_in = q c + w_out r` with `r` upper triangular. Returns `(c, r, deflated)`. A column that
-/// falls below `1e-13` of its norm before the projections is dependent on `q` and the
-/// block's earlier columns (with one column: the Krylov space is invariant, the classical
-/// iteration's breakdown): its `r` diagonal is that
-/// remainder and, when `replace` is given, its place is taken by a vector from `replace`
-/// orthonormalised in the same way (the block grows on past a deflated direction).
+/// `w_in = q c + w_out r` with `r` upper triangular. Returns `(c, r, deflated)`. A column
+/// that falls below `1e-13` of its norm before the projections is dependent on `q` and
+/// the block's earlier columns (with one column: the Krylov space is invariant, the
+/// classical iteration's breakdown): its `r` diagonal is that remainder and, when `fresh`
+/// is given, its place is taken by a vector from `fresh` orthonormalised in the same way
+/// (the block grows on past a dependent direction).
 fn orthonormalise(
     q: faer::MatRef<'_, f64>,
     w: &mut Mat<f64>,
-    mut replace: Option<&mut dyn FnMut() -> Vec<f64>>,
+    mut fresh: Option<&mut Directions>,
 ) -> (Mat<f64>, Mat<f64>, bool) {
     let p = w.ncols();
-    let mut c = Mat::<f64>::zeros(q.ncols(), p);
     let mut r = Mat::<f64>::zeros(p, p);
     let mut deflated = false;
-    let against_q = |w: &mut Mat<f64>, c: Option<&mut Mat<f64>>| {
+    let against_q = |w: &mut Mat<f64>| {
         let mut total = Mat::<f64>::zeros(q.ncols(), w.ncols());
         if q.ncols() > 0 {
             for _ in 0..2 {
@@ -530,57 +553,38 @@ fn orthonormalise(
                 total += d;
             }
         }
-        if let Some(c) = c {
-            *c += total;
-        }
+        total
     };
     // each column's norm before any projection: what a dependent column is measured by
     let norms: Vec<f64> = (0..p).map(|i| w.col(i).norm_l2()).collect();
-    against_q(w, Some(&mut c));
+    let c = against_q(w);
     for i in 0..p {
-        let norm0 = norms[i];
-        for _ in 0..2 {
-            for l in 0..i {
-                let d = w.col(l).transpose() * w.col(i);
-                let wl = w.col(l).to_owned();
-                w.col_mut(i)
-                    .iter_mut()
-                    .zip(wl.iter())
-                    .for_each(|(x, y)| *x -= d * y);
-                r[(l, i)] += d;
-            }
+        let (done, mut rest) = w.as_mut().split_at_col_mut(i);
+        for (l, d) in take_out(done.as_ref(), rest.as_mut().col_mut(0))
+            .into_iter()
+            .enumerate()
+        {
+            r[(l, i)] = d;
         }
         let norm = w.col(i).norm_l2();
         r[(i, i)] = norm;
-        if norm > 1e-13 * norm0 && norm > 0.0 {
+        if norm > 1e-13 * norms[i] && norm > 0.0 {
             w.col_mut(i).iter_mut().for_each(|x| *x /= norm);
             continue;
         }
         deflated = true;
-        let Some(next) = replace.as_deref_mut() else {
+        let Some(directions) = fresh.as_deref_mut() else {
             continue;
         };
         // a fresh direction, orthogonal to q and the block's earlier columns
-        let mut v = Mat::from_fn(w.nrows(), 1, {
-            let f = next();
-            move |k, _| f[k]
-        });
-        against_q(&mut v, None);
-        for _ in 0..2 {
-            for l in 0..i {
-                let d = w.col(l).transpose() * v.col(0);
-                let wl = w.col(l).to_owned();
-                v.col_mut(0)
-                    .iter_mut()
-                    .zip(wl.iter())
-                    .for_each(|(x, y)| *x -= d * y);
-            }
-        }
+        let f = directions.next(w.nrows());
+        let mut v = Mat::from_fn(w.nrows(), 1, |k, _| f[k]);
+        against_q(&mut v);
+        take_out(w.as_ref().subcols(0, i), v.col_mut(0));
         let nv = v.col(0).norm_l2();
-        let vc = v.col(0).to_owned();
         w.col_mut(i)
             .iter_mut()
-            .zip(vc.iter())
+            .zip(v.col(0).iter())
             .for_each(|(x, y)| *x = y / nv);
     }
     (c, r, deflated)
@@ -614,7 +618,6 @@ fn arnoldi_nearest(
         1
     };
     // in whole blocks
-
     let max_dim = if p > 1 { (max_dim / p) * p } else { max_dim };
     let round = |k: usize| k.div_ceil(p) * p;
     // the Krylov basis as columns, orthogonalised by Gram–Schmidt in matrix form (the
@@ -625,18 +628,11 @@ fn arnoldi_nearest(
     let mut basis = Mat::<f64>::zeros(dim, (next_check + p).min(max_dim + p));
     // the block Hessenberg matrix: `hh[(i, j)]` for the columns so far
     let mut hh = Mat::<f64>::zeros(max_dim + p, max_dim);
-    let mut start = start_vectors(dim, p);
+    let mut directions = Directions::new();
+    let columns: Vec<Vec<f64>> = (0..p).map(|_| directions.next(dim)).collect();
+    let mut start = Mat::from_fn(dim, p, |i, j| columns[j][i]);
     orthonormalise(basis.as_ref().subcols(0, 0), &mut start, None);
     basis.as_mut().subcols_mut(0, p).copy_from(&start);
-    // more fresh directions, for a block whose vectors became dependent
-    let mut fresh_seed = 0usize;
-    let mut fresh = || {
-        fresh_seed += 1;
-        let v = start_vectors(dim, p + fresh_seed);
-        (0..dim)
-            .map(|i| v[(i, p + fresh_seed - 1)])
-            .collect::<Vec<f64>>()
-    };
     // the first look after about half the wanted count (`next_check` above), then every
     // twelve vectors (early enough for a large network whose disk holds fewer than the
     // wanted count), in whole blocks
@@ -647,9 +643,8 @@ fn arnoldi_nearest(
             return Err("the shifted operator gave non-finite values".into());
         }
         let q = basis.as_ref().subcols(0, m + p);
-        let replace: Option<&mut dyn FnMut() -> Vec<f64>> =
-            if p > 1 { Some(&mut fresh) } else { None };
-        let (c, r, deflated) = orthonormalise(q, &mut w, replace);
+        let fresh = (p > 1).then_some(&mut directions);
+        let (c, r, deflated) = orthonormalise(q, &mut w, fresh);
         hh.as_mut().submatrix_mut(0, m, m + p, p).copy_from(&c);
         hh.as_mut().submatrix_mut(m + p, m, p, p).copy_from(&r);
         m += p;

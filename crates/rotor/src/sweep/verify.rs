@@ -361,6 +361,8 @@ impl Checking<'_> {
             .all(|&i| self.events[i].kind == Some(BifurcationKind::SaddleNode));
         let method = (!folds_only).then_some(o.method.as_ref());
         let t0 = Instant::now();
+        // where the window starts, for the progress lines
+        let from = start.map_or(lo - w, |p| p.omega_rad_s);
         let window = Window {
             start,
             end,
@@ -405,8 +407,7 @@ impl Checking<'_> {
             fine.sweep.ds_max /= FINE_STEP_DIVISOR;
             let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
             say(&format!(
-                "order {order}, window {:.3} → {end:.3}: {} not found; again with a step of {:.4}",
-                start.map_or(lo - w, |p| p.omega_rad_s),
+                "order {order}, window {from:.3} → {end:.3}: {} not found; again with a step of {:.4}",
                 missing.join(", "),
                 fine.sweep.ds_max
             ));
@@ -420,8 +421,7 @@ impl Checking<'_> {
             }
         }
         say(&format!(
-            "order {order}, window {:.3} → {end:.3}: done in {:.1} s",
-            start.map_or(lo - w, |p| p.omega_rad_s),
+            "order {order}, window {from:.3} → {end:.3}: done in {:.1} s",
             t0.elapsed().as_secs_f64()
         ));
         let outcomes = match &found {
