@@ -460,3 +460,102 @@ fn the_curved_predictor_saves_corrector_iterations_and_finds_the_same_folds() {
     );
     assert!(ic < il, "curved {ic} against tangent-only {il}");
 }
+
+/// A continuation started at a point in the middle of a branch, oriented along the chord
+/// to the next point and measuring arclength in the first branch's scales, retraces that
+/// branch over the arclength it is given (the truncation check refines stretches of a
+/// window this way): on the stretch across the upper fold, where the branch runs back
+/// in Ω, it runs back too, locates the same fold, and stops at the first point past its
+/// arclength, on the first branch's curve.
+#[test]
+fn a_continuation_started_mid_branch_retraces_a_stretch_of_it() {
+    let sys = Duffing::default();
+    let basis = Basis::integer(1).expect("basis");
+    let run = |opts: ContinuationOptions| {
+        let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+        let mut c = Continuation::new(hb, opts, None).expect("continuation");
+        let branch = c.run(|_| {}).expect("run");
+        (branch, c.scales().to_vec())
+    };
+    let mut opts = ContinuationOptions::new(0.5, 1.6);
+    opts.ds_max = 0.1;
+    let (first, scales) = run(opts);
+    let p = &first.points;
+    // the upper fold: the first point where Ω turns back
+    let k = (1..p.len() - 1)
+        .find(|&k| p[k + 1].solution.omega < p[k].solution.omega)
+        .expect("a fold");
+    let (i, j) = (k - 2, k + 2);
+    let x = |b: &tmrotor::continuation::BranchPoint| -> Vec<f64> {
+        b.solution
+            .mech
+            .iter()
+            .copied()
+            .chain([b.solution.omega])
+            .collect()
+    };
+    let start = x(&p[i]);
+    let segment_opts = |direction: Option<Vec<f64>>| {
+        let mut o = ContinuationOptions::new(p[i].solution.omega, 1.6);
+        o.omega_bounds = Some((0.5, 1.6));
+        o.ds_max = 0.01;
+        o.ds_initial = 0.01;
+        o.initial_guess = Some(start[..start.len() - 1].to_vec());
+        o.scales = Some(scales.clone());
+        o.start_direction = direction;
+        o.max_arclength = p[j].arclength - p[i].arclength;
+        o
+    };
+    // along the chord to the next point
+    let chord: Vec<f64> = x(&p[i + 1])
+        .iter()
+        .zip(&start)
+        .map(|(b, a)| b - a)
+        .collect();
+    let (seg, _) = run(segment_opts(Some(chord.clone())));
+    assert!(matches!(
+        seg.finish,
+        tmrotor::continuation::FinishReason::Arclength { .. }
+    ));
+    let limit = p[j].arclength - p[i].arclength;
+    let q = &seg.points;
+    let last = q.last().expect("points");
+    assert!(last.arclength >= limit && q[q.len() - 2].arclength < limit);
+    // it ends on the first branch's curve, next to the point it was to reach
+    let scaled = |a: &[f64], b: &[f64]| -> f64 {
+        a.iter()
+            .zip(b)
+            .zip(&scales)
+            .map(|((u, v), s)| ((u - v) / s).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let miss = scaled(&x(last), &x(&p[j]));
+    assert!(
+        miss < 0.02,
+        "ends {miss} (scaled) from the first branch's point"
+    );
+    // the same fold
+    let fold = |b: &Branch| -> Vec<f64> {
+        b.bifurcations
+            .iter()
+            .filter(|f| f.bifurcation == Some(BifurcationKind::SaddleNode))
+            .map(|f| f.solution.omega)
+            .collect()
+    };
+    let (f0, f1) = (fold(&first), fold(&seg));
+    assert_eq!(f1.len(), 1, "{f1:?}");
+    assert!(
+        f0.iter().any(|w| (w - f1[0]).abs() < 1e-8),
+        "{f0:?} vs {f1:?}"
+    );
+    // against the chord it runs the other way: away from the fold, down in Ω
+    let against: Vec<f64> = chord.iter().map(|v| -v).collect();
+    let (back, _) = run(segment_opts(Some(against)));
+    assert!(back.points[1].solution.omega < back.points[0].solution.omega);
+    assert!(fold(&back).is_empty());
+    // a direction of the wrong length is refused
+    let hb = HarmonicBalance::new(&sys, &basis, None).expect("hb");
+    let mut c = Continuation::new(hb, segment_opts(Some(vec![1.0])), None).expect("continuation");
+    assert!(c.run(|_| {}).is_err());
+}

@@ -477,8 +477,20 @@ impl SweepProblem {
         stability: Option<&'s dyn StabilityMethod>,
         max_points: usize,
     ) -> Result<Continuation<'s>, SweepError> {
+        let opts = self.continuation_options(from, to, bounds, guess, max_points);
+        self.continuation_with(opts, stability)
+    }
+
+    /// The options [`Self::continuation_within`] follows the branch with.
+    pub fn continuation_options(
+        &self,
+        from: f64,
+        to: f64,
+        bounds: Option<(f64, f64)>,
+        guess: Option<Vec<f64>>,
+        max_points: usize,
+    ) -> ContinuationOptions {
         let s = &self.settings;
-        let hb = HarmonicBalance::new(&self.system, &self.basis, s.harmonic.aft_samples)?;
         let mut opts = ContinuationOptions::new(from, to);
         opts.omega_bounds = bounds;
         opts.ds_max = s.sweep.ds_max;
@@ -494,6 +506,21 @@ impl SweepProblem {
         opts.bifurcation_tol_arclength = BIFURCATION_TOL_ARCLENGTH;
         opts.bifurcation_tol_modulus = BIFURCATION_TOL_MODULUS;
         opts.bifurcation_tol_omega = BIFURCATION_TOL_OMEGA;
+        opts
+    }
+
+    /// A continuation of this problem's balance with `opts` (see
+    /// [`Self::continuation_options`]) and `stability`.
+    pub fn continuation_with<'s>(
+        &'s self,
+        opts: ContinuationOptions,
+        stability: Option<&'s dyn StabilityMethod>,
+    ) -> Result<Continuation<'s>, SweepError> {
+        let hb = HarmonicBalance::new(
+            &self.system,
+            &self.basis,
+            self.settings.harmonic.aft_samples,
+        )?;
         Ok(Continuation::new(hb, opts, stability)?)
     }
 

@@ -234,6 +234,27 @@ fn excesses_of(f: &FloquetResult, family: Family) -> Vec<f64> {
     m
 }
 
+/// For each family a crossing search follows (fast multipliers leaving through +1, −1
+/// and as a complex pair, then the near-zero disk's exponents), the largest distance
+/// outside the circle among its counted multipliers, as the searches measure it
+/// (negative inside; `−∞` for a family with none). Where one of them comes close to
+/// zero between two points and turns back, a crossing pair may have passed out and in
+/// again within the step.
+pub fn family_margins(f: &FloquetResult) -> [f64; 4] {
+    [
+        Family::Kind(BifurcationKind::SaddleNode),
+        Family::Kind(BifurcationKind::PeriodDoubling),
+        Family::Kind(BifurcationKind::NeimarkSacker),
+        Family::NearZero,
+    ]
+    .map(|family| {
+        excesses_of(f, family)
+            .first()
+            .copied()
+            .unwrap_or(f64::NEG_INFINITY)
+    })
+}
+
 /// How many counted multipliers of `family` lie outside the unit circle.
 fn outside_of(f: &FloquetResult, family: Family) -> usize {
     f.counted()
@@ -370,6 +391,18 @@ pub struct ContinuationOptions {
     /// `omega_end` (a branch started inside a sweep's range, heading for one end, that
     /// may fold back past its start). Default `None`: between the two.
     pub omega_bounds: Option<(f64, f64)>,
+    /// A direction (unknowns, then ω; unscaled) the first tangent is oriented along
+    /// (`τ·d > 0` in scaled units) instead of towards `omega_end`: for a continuation
+    /// started in the middle of a known branch, where the branch may run against the
+    /// sweep's direction (after a fold). Default `None`.
+    pub start_direction: Option<Vec<f64>>,
+    /// Scales of the unknowns and ω (see [`Continuation::scales`]) used instead of those
+    /// derived from the start point: a continuation of part of another one's curve then
+    /// measures arclength as that one does. Default `None`.
+    pub scales: Option<Vec<f64>>,
+    /// The branch ends after the first point whose scaled arclength from the start is at
+    /// least this ([`FinishReason::Arclength`]). Default: no limit.
+    pub max_arclength: f64,
 }
 
 impl ContinuationOptions {
@@ -400,6 +433,9 @@ impl ContinuationOptions {
             initial_guess: None,
             curved_predictor: true,
             omega_bounds: None,
+            start_direction: None,
+            scales: None,
+            max_arclength: f64::INFINITY,
         }
     }
 }
@@ -507,6 +543,8 @@ pub enum FinishReason {
     /// the other way; the path jumped between sheets of the branch where they meet and
     /// would now retrace itself backwards (see [`reversing_point`]).
     Reversed { omega: f64, earlier: usize },
+    /// The point at `omega` reached `max_arclength`.
+    Arclength { omega: f64 },
 }
 
 impl std::fmt::Display for FinishReason {
@@ -529,6 +567,10 @@ impl std::fmt::Display for FinishReason {
                  other way (along the segment after point {earlier}); it jumped between \
                  sheets of the branch where they meet, and would now retrace itself. A \
                  different step cap (ds_max) may keep it on one sheet"
+            ),
+            Self::Arclength { omega } => write!(
+                f,
+                "stopped at ω = {omega:.3} rad/s, the end of the arclength it was to cover"
             ),
         }
     }
@@ -1082,6 +1124,12 @@ impl<'a> Continuation<'a> {
         })
     }
 
+    /// The scales of the unknowns, then ω, that the scaled arclength divides by (set at
+    /// the start; empty before).
+    pub fn scales(&self) -> &[f64] {
+        &self.scales
+    }
+
     /// Where the time went so far (see [`Timings`]).
     pub fn timings(&self) -> Timings {
         self.clock.read()
@@ -1229,6 +1277,25 @@ impl<'a> Continuation<'a> {
             }
         }
         self.scales.push(sw);
+        if let Some(d) = &self.opts.start_direction
+            && d.len() != nu + 1
+        {
+            return Err(ContinuationError::Hb(HbError::Dimension {
+                what: "start direction (one entry per unknown and ω)",
+                expected: nu + 1,
+                got: d.len(),
+            }));
+        }
+        if let Some(given) = &self.opts.scales {
+            if given.len() != nu + 1 || given.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(ContinuationError::Hb(HbError::Dimension {
+                    what: "scales (positive, one per unknown and ω)",
+                    expected: nu + 1,
+                    got: given.len(),
+                }));
+            }
+            self.scales.clone_from(given);
+        }
         let tangent = self.tangent(&a, omega, None, None, None)?;
         let point = self.bare_point(0, &a, omega, &stats, 0.0);
         self.walk.history = PathHistory::new();
@@ -1555,6 +1622,9 @@ impl<'a> Continuation<'a> {
         walk.history.push(x, c.arclength);
         if walk.n_points >= self.opts.max_points && walk.finish_after.is_none() {
             walk.finish_after = Some(FinishReason::MaxPoints);
+        }
+        if c.arclength >= self.opts.max_arclength && walk.finish_after.is_none() {
+            walk.finish_after = Some(FinishReason::Arclength { omega: c.omega });
         }
         let span = c.arclength - cur.arclength;
         let bend = (self.opts.curved_predictor && c.bound.is_none() && span > 0.0).then(|| {

@@ -131,19 +131,25 @@ impl<'a> Continuation<'a> {
     }
 
     /// The unit tangent from the solution `(z, ζ)` of the tangent system, oriented along
-    /// `prev` (or towards `omega_end`).
+    /// `prev` (or along [`super::ContinuationOptions::start_direction`], else towards
+    /// `omega_end`).
     pub(super) fn oriented(&self, z: &[f64], zeta: f64, prev: Option<&[f64]>) -> Vec<f64> {
         let nu = self.hb.n_unknowns();
         let s = &self.scales;
         let mut t: Vec<f64> = z.iter().zip(s).map(|(v, si)| v / si).collect();
         t.push(zeta / s[nu]);
         let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
-        let sign = if prev.is_none() && (self.opts.omega_end - self.opts.omega_start) * t[nu] < 0.0
-        {
-            -1.0
-        } else {
-            1.0
+        let along = match (&self.opts.start_direction, prev) {
+            (_, Some(_)) => 1.0,
+            (Some(d), None) => t
+                .iter()
+                .zip(d)
+                .zip(s)
+                .map(|((ti, di), si)| ti * di / si)
+                .sum(),
+            (None, None) => (self.opts.omega_end - self.opts.omega_start) * t[nu],
         };
+        let sign = if along < 0.0 { -1.0 } else { 1.0 };
         t.into_iter().map(|v| sign * v / norm).collect()
     }
 

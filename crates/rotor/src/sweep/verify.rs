@@ -103,12 +103,13 @@ struct Window<'a> {
 
 impl Window<'_> {
     /// Follows the window on `problem`'s basis with `method` (`None`: without stability,
-    /// which locates the folds alone); what it located and where the stable flag changed.
+    /// which locates the folds alone): the branch and the scales its arclength is
+    /// measured in.
     fn follow(
         &self,
         problem: &SweepProblem,
         method: Option<&dyn crate::stability::StabilityMethod>,
-    ) -> Result<Found, String> {
+    ) -> Result<Traced, String> {
         let p = self
             .start
             .ok_or_else(|| "no recorded point before the group".to_string())?;
@@ -118,29 +119,121 @@ impl Window<'_> {
             self.recorded_basis.unwrap_or(&problem.basis),
             &problem.basis,
         );
-        let branch = problem
-            .continuation_within(
-                p.omega_rad_s,
-                self.end,
+        let opts = problem.continuation_options(
+            p.omega_rad_s,
+            self.end,
+            self.bounds,
+            Some(guess),
+            self.max_points,
+        );
+        Traced::follow(problem, opts, method)
+    }
+
+    /// Follows again, with `fine`'s smaller step, the stretches of `first` (this window's
+    /// branch with stability) where a crossing may hide between two of its points
+    /// ([`stretches_to_refine`]), each from the point before it to a quarter step past
+    /// it, in the same scaled arclength. What the window found: `first`'s findings
+    /// outside the stretches, the fine passes' inside them (`first`'s alone when there
+    /// are none).
+    fn refine(
+        &self,
+        first: &Traced,
+        fine: &SweepProblem,
+        method: Option<&dyn crate::stability::StabilityMethod>,
+        stretches: &[(usize, usize)],
+    ) -> Result<Found, String> {
+        let points = &first.branch.points;
+        let in_stretch = |step: usize| stretches.iter().any(|&(i, j)| step >= i && step <= j);
+        let mut found = first.found_outside(&in_stretch);
+        for &(i, j) in stretches {
+            let (p, q) = (&points[i], &points[i + 1]);
+            let x = |b: &crate::continuation::BranchPoint| -> Vec<f64> {
+                let s = &b.solution;
+                s.mech
+                    .iter()
+                    .chain(&s.therm)
+                    .copied()
+                    .chain([s.omega])
+                    .collect()
+            };
+            let (xp, xq) = (x(p), x(q));
+            let ahead = q.solution.omega >= p.solution.omega;
+            let (lo, hi) = self.bounds.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
+            let to = match (ahead, self.bounds) {
+                (true, Some(_)) => hi,
+                (false, Some(_)) => lo,
+                (true, None) => self.end.max(p.solution.omega + 1.0),
+                (false, None) => self.end.min(p.solution.omega - 1.0),
+            };
+            let last = points[j + 1].arclength - points[j].arclength;
+            let span = points[j + 1].arclength - p.arclength;
+            let mut opts = fine.continuation_options(
+                p.solution.omega,
+                to,
                 self.bounds,
-                Some(guess),
-                method,
-                self.max_points,
-            )
-            .map_err(|e| e.to_string())
-            .and_then(|mut c| c.run(|_| {}).map_err(|e| e.to_string()))?;
+                Some(xp[..xp.len() - 1].to_vec()),
+                (j + 1 - i) * 2 * FINE_STEP_DIVISOR as usize + 16,
+            );
+            opts.start_direction = Some(xq.iter().zip(&xp).map(|(b, a)| b - a).collect());
+            opts.scales = Some(first.scales.clone());
+            opts.max_arclength = span + 0.25 * last;
+            let segment = Traced::follow(fine, opts, method)?;
+            found.extend(segment.found_outside(&|_| false));
+        }
+        Ok(found)
+    }
+}
+
+/// A window's branch and the scales of its arclength.
+struct Traced {
+    branch: crate::continuation::Branch,
+    scales: Vec<f64>,
+}
+
+impl Traced {
+    fn follow(
+        problem: &SweepProblem,
+        opts: crate::continuation::ContinuationOptions,
+        method: Option<&dyn crate::stability::StabilityMethod>,
+    ) -> Result<Self, String> {
+        let mut c = problem
+            .continuation_with(opts, method)
+            .map_err(|e| e.to_string())?;
+        let branch = c.run(|_| {}).map_err(|e| e.to_string())?;
+        Ok(Self {
+            branch,
+            scales: c.scales().to_vec(),
+        })
+    }
+
+    /// The step (from point `k` to `k + 1`) that arclength `s` lies on.
+    fn step_at(&self, s: f64) -> usize {
+        let p = &self.branch.points;
+        p.windows(2)
+            .position(|q| s <= q[1].arclength)
+            .unwrap_or(p.len().saturating_sub(2))
+    }
+
+    /// What the branch found (see [`Found`]), leaving out what lies on the steps
+    /// `skip` names.
+    fn found_outside(&self, skip: &dyn Fn(usize) -> bool) -> Found {
+        let points = &self.branch.points;
         // the folds also from the branch's shape: where ω turns back between points with
         // no fold located on those steps (a fold the location did not report still turns
         // the branch)
-        let located: Vec<(BifurcationKind, f64)> = branch
+        let located: Vec<(BifurcationKind, f64, usize)> = self
+            .branch
             .bifurcations
             .iter()
-            .filter_map(|b| b.bifurcation.map(|k| (k, b.solution.omega)))
+            .filter_map(|b| {
+                b.bifurcation
+                    .map(|k| (k, b.solution.omega, self.step_at(b.arclength)))
+            })
             .collect();
-        let turns: Vec<(BifurcationKind, f64)> = branch
-            .points
+        let turns: Vec<(BifurcationKind, f64, usize)> = points
             .windows(3)
-            .filter_map(|q| {
+            .enumerate()
+            .filter_map(|(k, q)| {
                 let (a, b, c) = (
                     q[0].solution.omega,
                     q[1].solution.omega,
@@ -149,23 +242,108 @@ impl Window<'_> {
                 let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
                 let seen = located
                     .iter()
-                    .any(|&(k, w)| k == BifurcationKind::SaddleNode && w >= lo && w <= hi);
-                ((b - a) * (c - b) < 0.0 && !seen).then_some((BifurcationKind::SaddleNode, b))
+                    .any(|&(kind, w, _)| kind == BifurcationKind::SaddleNode && w >= lo && w <= hi);
+                // the turn at point k + 1 lies on the steps k and k + 1
+                ((b - a) * (c - b) < 0.0 && !seen && !skip(k) && !skip(k + 1)).then_some((
+                    BifurcationKind::SaddleNode,
+                    b,
+                    k,
+                ))
             })
             .collect();
-        Ok(Found {
-            bifurcations: located.into_iter().chain(turns).collect(),
-            changes: branch
-                .points
+        Found {
+            bifurcations: located
+                .into_iter()
+                .filter(|&(_, _, k)| !skip(k))
+                .chain(turns)
+                .map(|(kind, w, _)| (kind, w))
+                .collect(),
+            changes: points
                 .windows(2)
-                .filter_map(|q| {
+                .enumerate()
+                .filter_map(|(k, q)| {
                     let a = q[0].stability.as_ref()?.stable;
                     let b = q[1].stability.as_ref()?.stable;
-                    (a != b).then_some(0.5 * (q[0].solution.omega + q[1].solution.omega))
+                    (a != b && !skip(k))
+                        .then_some(0.5 * (q[0].solution.omega + q[1].solution.omega))
                 })
                 .collect(),
-        })
+        }
     }
+}
+
+/// The stretches of a branch with stability where a change may hide between two points,
+/// as runs of steps `(i, j)` (from point `i` to point `j + 1`): the steps on which the
+/// stable flag changes, a bifurcation was located or ω turns back, where a point has no
+/// stability, and where the largest distance outside the unit circle of a family of
+/// multipliers ([`crate::continuation::family_margins`], and of all of them) changes
+/// sign or comes close to zero and turns back at a point: closer than the sum of its
+/// changes over the two steps beside it, which bounds how far a peak between samples
+/// can rise above the sample (a parabola through the three rises by at most an eighth
+/// of it).
+fn stretches_to_refine(t: &Traced) -> Vec<(usize, usize)> {
+    let points = &t.branch.points;
+    let n = points.len();
+    if n < 2 {
+        return Vec::new();
+    }
+    let mut flag = vec![false; n - 1];
+    for b in &t.branch.bifurcations {
+        flag[t.step_at(b.arclength)] = true;
+    }
+    let margins: Vec<Option<[f64; 5]>> = points
+        .iter()
+        .map(|p| {
+            p.stability.as_ref().map(|f| {
+                let m = crate::continuation::family_margins(f);
+                let all = m.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                [m[0], m[1], m[2], m[3], all]
+            })
+        })
+        .collect();
+    for k in 0..n - 1 {
+        let (a, b) = (&points[k], &points[k + 1]);
+        let flags = (a.stable(), b.stable());
+        if flags.0.is_none() || flags.1.is_none() || flags.0 != flags.1 {
+            flag[k] = true;
+        }
+        if let (Some(ga), Some(gb)) = (margins[k], margins[k + 1])
+            && ga
+                .iter()
+                .zip(&gb)
+                .any(|(x, y)| x.is_finite() && y.is_finite() && x * y <= 0.0)
+        {
+            flag[k] = true;
+        }
+    }
+    for k in 1..n - 1 {
+        let w = |i: usize| points[i].solution.omega;
+        let turn = (w(k) - w(k - 1)) * (w(k + 1) - w(k)) < 0.0;
+        let close = match (margins[k - 1], margins[k], margins[k + 1]) {
+            (Some(g0), Some(g1), Some(g2)) => (0..5).any(|f| {
+                let (a, b, c) = (g0[f], g1[f], g2[f]);
+                if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+                    return false;
+                }
+                let reach = (b - a).abs() + (c - b).abs();
+                (b >= a && b >= c && b <= 0.0 && -b < reach)
+                    || (b <= a && b <= c && b > 0.0 && b < reach)
+            }),
+            _ => false,
+        };
+        if turn || close {
+            flag[k - 1] = true;
+            flag[k] = true;
+        }
+    }
+    let mut out: Vec<(usize, usize)> = Vec::new();
+    for (k, _) in flag.iter().enumerate().filter(|(_, f)| **f) {
+        match out.last_mut() {
+            Some((_, j)) if *j + 1 == k => *j = k,
+            _ => out.push((k, k)),
+        }
+    }
+    out
 }
 
 /// What a window's continuation found: located bifurcations (kind, ω) and changes of the
@@ -173,6 +351,13 @@ impl Window<'_> {
 struct Found {
     bifurcations: Vec<(BifurcationKind, f64)>,
     changes: Vec<f64>,
+}
+
+impl Found {
+    fn extend(&mut self, other: Found) {
+        self.bifurcations.extend(other.bifurcations);
+        self.changes.extend(other.changes);
+    }
 }
 
 /// Re-solves `events` of a run (settings `settings`, model `model`, recorded on
@@ -370,7 +555,7 @@ impl Checking<'_> {
             recorded_basis: self.recorded_basis,
             max_points: self.options.max_points,
         };
-        let mut found: Result<Found, String> = if (self.interrupted)() {
+        let first: Result<Traced, String> = if (self.interrupted)() {
             Err("not reached: the sweep was interrupted".to_string())
         } else if self.started.elapsed().as_secs_f64() > self.options.max_seconds {
             Err(format!(
@@ -386,9 +571,15 @@ impl Checking<'_> {
             }
             window.follow(&o.problem, method)
         };
+        let mut found: Result<Found, String> = first
+            .as_ref()
+            .map(|t| t.found_outside(&|_| false))
+            .map_err(Clone::clone);
         // A fold pair or a crossing narrower than a step is passed over unseen: before
         // an event is called vanished, the window is followed again with
-        // 1/FINE_STEP_DIVISOR of the step.
+        // 1/FINE_STEP_DIVISOR of the step: all of it without stability (where only
+        // folds are sought), else the stretches where the first pass's multipliers
+        // leave room for a crossing between two points ([`stretches_to_refine`]).
         let missing: Vec<String> = match &found {
             Ok(f) => g
                 .iter()
@@ -402,20 +593,35 @@ impl Checking<'_> {
                 .collect(),
             Err(_) => Vec::new(),
         };
-        if !missing.is_empty() && !(self.interrupted)() {
+        if let (false, Ok(first)) = (missing.is_empty() || (self.interrupted)(), &first) {
             let mut fine = o.settings.clone();
             fine.sweep.ds_max /= FINE_STEP_DIVISOR;
             let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
-            say(&format!(
-                "order {order}, window {from:.3} → {end:.3}: {} not found; again with a step of {:.4}",
-                missing.join(", "),
-                fine.sweep.ds_max
-            ));
-            let again = Window {
-                max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
-                ..window
-            }
-            .follow(&fine_problem, method);
+            let step = fine.sweep.ds_max;
+            let again = if method.is_some() {
+                let stretches = stretches_to_refine(first);
+                let steps: usize = stretches.iter().map(|(i, j)| j + 1 - i).sum();
+                say(&format!(
+                    "order {order}, window {from:.3} → {end:.3}: {} not found; again with a \
+                     step of {step:.4} on {} stretches ({steps} of {} steps)",
+                    missing.join(", "),
+                    stretches.len(),
+                    first.branch.points.len().saturating_sub(1),
+                ));
+                window.refine(first, &fine_problem, method, &stretches)
+            } else {
+                say(&format!(
+                    "order {order}, window {from:.3} → {end:.3}: {} not found; again with a \
+                     step of {step:.4}",
+                    missing.join(", "),
+                ));
+                Window {
+                    max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
+                    ..window
+                }
+                .follow(&fine_problem, method)
+                .map(|t| t.found_outside(&|_| false))
+            };
             if again.is_ok() {
                 found = again;
             }
@@ -519,4 +725,82 @@ fn embed(mech: &[f64], therm: &[f64], from: &Basis, to: &Basis) -> Vec<f64> {
         out.extend(b);
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::continuation::{Branch, BranchPoint, FinishReason};
+    use crate::hb::{HbSolution, ResidualNorms};
+    use crate::stability::FloquetResult;
+    use num_complex::Complex64;
+
+    /// A branch at ω = 500 + s (s = 0 … 10, one point per unit of arclength) whose only
+    /// multipliers are a complex pair of modulus `modulus[k]` at point `k`.
+    fn branch(modulus: &[f64]) -> Traced {
+        let basis = Basis::integer(1).expect("basis");
+        let points = modulus
+            .iter()
+            .enumerate()
+            .map(|(k, &r)| {
+                let mut f = FloquetResult::new(vec![
+                    Complex64::from_polar(r, 1.0),
+                    Complex64::from_polar(r, -1.0),
+                ]);
+                f.stable = r < 1.0;
+                BranchPoint {
+                    index: k,
+                    arclength: k as f64,
+                    solution: HbSolution {
+                        omega: 500.0 + k as f64,
+                        basis: basis.clone(),
+                        mech: vec![0.0; 3],
+                        therm: Vec::new(),
+                        residual: ResidualNorms::default(),
+                        relative_residual: ResidualNorms::default(),
+                        iterations: 1,
+                    },
+                    stability: Some(f),
+                    stability_error: None,
+                    bifurcation: None,
+                    jacobian: None,
+                }
+            })
+            .collect();
+        Traced {
+            branch: Branch {
+                points,
+                bifurcations: Vec::new(),
+                finish: FinishReason::MaxPoints,
+                rejected_steps: 0,
+            },
+            scales: vec![1.0; 4],
+        }
+    }
+
+    /// A pair that comes within 0.004 of the circle at point 3 after rising by 0.006 and
+    /// 0.004 on the steps beside it may have crossed and come back between the points:
+    /// both steps are refined. A turn 0.05 inside the circle whose steps change it by
+    /// 0.01 and 0.02 cannot have; the pair leaving the circle between points 8 and 9
+    /// (the stable flag changes) is refined.
+    #[test]
+    fn the_steps_where_a_pair_may_cross_unseen_are_refined_and_only_they() {
+        let t = branch(&[
+            0.98, 0.99, 0.990, 0.996, 0.992, 0.96, 0.95, 0.97, 0.99, 1.01, 1.02,
+        ]);
+        assert_eq!(stretches_to_refine(&t), vec![(2, 3), (8, 8)]);
+        // an unstable pair that comes back towards the circle and turns away again
+        let t = branch(&[
+            1.05, 1.04, 1.02, 1.003, 1.01, 1.03, 1.05, 1.06, 1.07, 1.08, 1.09,
+        ]);
+        assert_eq!(stretches_to_refine(&t), vec![(2, 3)]);
+        // what the first pass found on a refined step is left to the fine pass
+        let t = branch(&[
+            0.98, 0.99, 0.990, 0.996, 0.992, 0.96, 0.95, 0.97, 0.99, 1.01, 1.02,
+        ]);
+        let all = t.found_outside(&|_| false);
+        assert_eq!(all.changes, vec![508.5]);
+        let outside = t.found_outside(&|k| k == 8);
+        assert!(outside.changes.is_empty());
+    }
 }
