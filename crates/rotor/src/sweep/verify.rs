@@ -130,7 +130,7 @@ impl Window<'_> {
     }
 
     /// Follows again, with `fine`'s smaller step, the stretches of `first` (this window's
-    /// branch with stability) where a crossing may hide between two of its points
+    /// branch) where a crossing may hide between two of its points
     /// ([`stretches_to_refine`]), each from the point before it to a quarter step past
     /// it, in the same scaled arclength. What the window found: `first`'s findings
     /// outside the stretches, the fine passes' inside them (`first`'s alone when there
@@ -272,24 +272,59 @@ impl Traced {
     }
 }
 
-/// The stretches of a branch with stability where a change may hide between two points,
-/// as runs of steps `(i, j)` (from point `i` to point `j + 1`): the steps on which the
-/// stable flag changes, a bifurcation was located or ω turns back, where a point has no
-/// stability, and where the largest distance outside the unit circle of a family of
-/// multipliers ([`crate::continuation::family_margins`], and of all of them) changes
-/// sign or comes close to zero and turns back at a point: closer than the sum of its
-/// changes over the two steps beside it, which bounds how far a peak between samples
-/// can rise above the sample (a parabola through the three rises by at most an eighth
-/// of it).
-fn stretches_to_refine(t: &Traced) -> Vec<(usize, usize)> {
+/// The stretches of a branch where a change may hide between two points, as runs of
+/// steps `(i, j)` (from point `i` to point `j + 1`):
+/// - the steps on which a bifurcation was located or ω turns back;
+/// - where the slope `Δω/Δs` of a step keeps its sign but comes close to zero between
+///   steps where it is steeper (a fold pair within the step turns ω back and forth and
+///   flattens the chord): closer than the sum of its changes to the two steps beside
+///   it; that step and its flatter neighbour;
+/// - with `stability`: where the stable flag changes or a point has no stability, and
+///   where the largest distance outside the unit circle of a family of multipliers
+///   ([`crate::continuation::family_margins`], and of all of them) changes sign, or
+///   comes close to zero and turns back at a point: closer than the sum of its changes
+///   over the two steps beside it, which bounds how far a peak between samples can rise
+///   above the sample (a parabola through the three rises by at most an eighth of it).
+///
+/// The closeness rule is the same for both: a sampled extremum `b` between `a` and `c`
+/// is close when `|b| < |b − a| + |c − b|`.
+fn stretches_to_refine(t: &Traced, stability: bool) -> Vec<(usize, usize)> {
     let points = &t.branch.points;
     let n = points.len();
     if n < 2 {
         return Vec::new();
     }
+    // a sampled turn of `b` towards zero (same sign as its neighbours, or at most zero
+    // from the side of `a`) that may reach it between the samples
+    let close = |a: f64, b: f64, c: f64| {
+        let reach = (b - a).abs() + (c - b).abs();
+        let finite = a.is_finite() && b.is_finite() && c.is_finite();
+        finite
+            && ((b >= a && b >= c && b <= 0.0 && -b < reach)
+                || (b <= a && b <= c && b > 0.0 && b < reach))
+    };
     let mut flag = vec![false; n - 1];
     for b in &t.branch.bifurcations {
         flag[t.step_at(b.arclength)] = true;
+    }
+    let w = |i: usize| points[i].solution.omega;
+    let slope = |k: usize| (w(k + 1) - w(k)) / (points[k + 1].arclength - points[k].arclength);
+    for k in 1..n - 1 {
+        if (w(k) - w(k - 1)) * (w(k + 1) - w(k)) < 0.0 {
+            flag[k - 1] = true;
+            flag[k] = true;
+        }
+    }
+    for k in 1..n.saturating_sub(2) {
+        let (a, b, c) = (slope(k - 1), slope(k), slope(k + 1));
+        // the flattest of three steps running the same way, as a turn of |slope|
+        if a * b > 0.0 && b * c > 0.0 && close(-a.abs(), -b.abs(), -c.abs()) {
+            flag[k] = true;
+            flag[if a.abs() < c.abs() { k - 1 } else { k + 1 }] = true;
+        }
+    }
+    if !stability {
+        return runs(&flag);
     }
     let margins: Vec<Option<[f64; 5]>> = points
         .iter()
@@ -302,9 +337,8 @@ fn stretches_to_refine(t: &Traced) -> Vec<(usize, usize)> {
         })
         .collect();
     for k in 0..n - 1 {
-        let (a, b) = (&points[k], &points[k + 1]);
-        let flags = (a.stable(), b.stable());
-        if flags.0.is_none() || flags.1.is_none() || flags.0 != flags.1 {
+        let (a, b) = (points[k].stable(), points[k + 1].stable());
+        if a.is_none() || b.is_none() || a != b {
             flag[k] = true;
         }
         if let (Some(ga), Some(gb)) = (margins[k], margins[k + 1])
@@ -317,25 +351,18 @@ fn stretches_to_refine(t: &Traced) -> Vec<(usize, usize)> {
         }
     }
     for k in 1..n - 1 {
-        let w = |i: usize| points[i].solution.omega;
-        let turn = (w(k) - w(k - 1)) * (w(k + 1) - w(k)) < 0.0;
-        let close = match (margins[k - 1], margins[k], margins[k + 1]) {
-            (Some(g0), Some(g1), Some(g2)) => (0..5).any(|f| {
-                let (a, b, c) = (g0[f], g1[f], g2[f]);
-                if !(a.is_finite() && b.is_finite() && c.is_finite()) {
-                    return false;
-                }
-                let reach = (b - a).abs() + (c - b).abs();
-                (b >= a && b >= c && b <= 0.0 && -b < reach)
-                    || (b <= a && b <= c && b > 0.0 && b < reach)
-            }),
-            _ => false,
-        };
-        if turn || close {
+        if let (Some(g0), Some(g1), Some(g2)) = (margins[k - 1], margins[k], margins[k + 1])
+            && (0..5).any(|f| close(g0[f], g1[f], g2[f]))
+        {
             flag[k - 1] = true;
             flag[k] = true;
         }
     }
+    runs(&flag)
+}
+
+/// The runs of set entries of `flag`, as `(first, last)` index pairs.
+fn runs(flag: &[bool]) -> Vec<(usize, usize)> {
     let mut out: Vec<(usize, usize)> = Vec::new();
     for (k, _) in flag.iter().enumerate().filter(|(_, f)| **f) {
         match out.last_mut() {
@@ -576,10 +603,10 @@ impl Checking<'_> {
             .map(|t| t.found_outside(&|_| false))
             .map_err(Clone::clone);
         // A fold pair or a crossing narrower than a step is passed over unseen: before
-        // an event is called vanished, the window is followed again with
-        // 1/FINE_STEP_DIVISOR of the step: all of it without stability (where only
-        // folds are sought), else the stretches where the first pass's multipliers
-        // leave room for a crossing between two points ([`stretches_to_refine`]).
+        // an event is called vanished, the stretches of the window where the first
+        // pass's shape (and multipliers, with stability) leave room for one between two
+        // points ([`stretches_to_refine`]) are followed again with 1/FINE_STEP_DIVISOR
+        // of the step.
         let missing: Vec<String> = match &found {
             Ok(f) => g
                 .iter()
@@ -598,30 +625,16 @@ impl Checking<'_> {
             fine.sweep.ds_max /= FINE_STEP_DIVISOR;
             let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
             let step = fine.sweep.ds_max;
-            let again = if method.is_some() {
-                let stretches = stretches_to_refine(first);
-                let steps: usize = stretches.iter().map(|(i, j)| j + 1 - i).sum();
-                say(&format!(
-                    "order {order}, window {from:.3} → {end:.3}: {} not found; again with a \
-                     step of {step:.4} on {} stretches ({steps} of {} steps)",
-                    missing.join(", "),
-                    stretches.len(),
-                    first.branch.points.len().saturating_sub(1),
-                ));
-                window.refine(first, &fine_problem, method, &stretches)
-            } else {
-                say(&format!(
-                    "order {order}, window {from:.3} → {end:.3}: {} not found; again with a \
-                     step of {step:.4}",
-                    missing.join(", "),
-                ));
-                Window {
-                    max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
-                    ..window
-                }
-                .follow(&fine_problem, method)
-                .map(|t| t.found_outside(&|_| false))
-            };
+            let stretches = stretches_to_refine(first, method.is_some());
+            let steps: usize = stretches.iter().map(|(i, j)| j + 1 - i).sum();
+            say(&format!(
+                "order {order}, window {from:.3} → {end:.3}: {} not found; again with a \
+                 step of {step:.4} on {} stretches ({steps} of {} steps)",
+                missing.join(", "),
+                stretches.len(),
+                first.branch.points.len().saturating_sub(1),
+            ));
+            let again = window.refine(first, &fine_problem, method, &stretches);
             if again.is_ok() {
                 found = again;
             }
@@ -738,6 +751,12 @@ mod tests {
     /// A branch at ω = 500 + s (s = 0 … 10, one point per unit of arclength) whose only
     /// multipliers are a complex pair of modulus `modulus[k]` at point `k`.
     fn branch(modulus: &[f64]) -> Traced {
+        let omegas: Vec<f64> = (0..modulus.len()).map(|k| 500.0 + k as f64).collect();
+        branch_at(&omegas, modulus)
+    }
+
+    /// [`branch`] with point `k` at `omegas[k]`.
+    fn branch_at(omegas: &[f64], modulus: &[f64]) -> Traced {
         let basis = Basis::integer(1).expect("basis");
         let points = modulus
             .iter()
@@ -752,7 +771,7 @@ mod tests {
                     index: k,
                     arclength: k as f64,
                     solution: HbSolution {
-                        omega: 500.0 + k as f64,
+                        omega: omegas[k],
                         basis: basis.clone(),
                         mech: vec![0.0; 3],
                         therm: Vec::new(),
@@ -788,12 +807,12 @@ mod tests {
         let t = branch(&[
             0.98, 0.99, 0.990, 0.996, 0.992, 0.96, 0.95, 0.97, 0.99, 1.01, 1.02,
         ]);
-        assert_eq!(stretches_to_refine(&t), vec![(2, 3), (8, 8)]);
+        assert_eq!(stretches_to_refine(&t, true), vec![(2, 3), (8, 8)]);
         // an unstable pair that comes back towards the circle and turns away again
         let t = branch(&[
             1.05, 1.04, 1.02, 1.003, 1.01, 1.03, 1.05, 1.06, 1.07, 1.08, 1.09,
         ]);
-        assert_eq!(stretches_to_refine(&t), vec![(2, 3)]);
+        assert_eq!(stretches_to_refine(&t, true), vec![(2, 3)]);
         // what the first pass found on a refined step is left to the fine pass
         let t = branch(&[
             0.98, 0.99, 0.990, 0.996, 0.992, 0.96, 0.95, 0.97, 0.99, 1.01, 1.02,
@@ -802,5 +821,30 @@ mod tests {
         assert_eq!(all.changes, vec![508.5]);
         let outside = t.found_outside(&|k| k == 8);
         assert!(outside.changes.is_empty());
+    }
+
+    /// Where a step's slope Δω/Δs drops to a fifth of its neighbours' a fold pair may hide
+    /// in it: that step and the next (its neighbours equally steep) are refined, with
+    /// stability or without. A slope that eases from 1 to 0.8 and back to 0.9 is a bend,
+    /// not room for a fold pair; nor are the multipliers, far inside the circle.
+    #[test]
+    fn the_steps_where_a_fold_pair_may_hide_are_refined() {
+        let at = |steps: &[f64]| -> Vec<f64> {
+            let mut w = vec![500.0];
+            for d in steps {
+                w.push(w[w.len() - 1] + d);
+            }
+            w
+        };
+        let inside = [0.5; 7];
+        let t = branch_at(&at(&[1.0, 1.0, 0.2, 1.0, 1.0, 1.0]), &inside);
+        assert_eq!(stretches_to_refine(&t, false), vec![(2, 3)]);
+        assert_eq!(stretches_to_refine(&t, true), vec![(2, 3)]);
+        let t = branch_at(&at(&[1.0, 0.9, 0.8, 0.85, 0.9, 1.0]), &inside);
+        assert!(stretches_to_refine(&t, false).is_empty());
+        assert!(stretches_to_refine(&t, true).is_empty());
+        // a turn: the steps on either side of the point where ω turns back
+        let t = branch_at(&at(&[1.0, 1.0, 1.0, -1.0, -1.0, -1.0]), &inside);
+        assert_eq!(stretches_to_refine(&t, false), vec![(2, 3)]);
     }
 }
