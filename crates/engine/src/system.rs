@@ -121,7 +121,7 @@ pub struct NonlinearDofs {
 /// all row-major (row = equation, column = variable). `v` is the velocity `ẋ` in physical
 /// time. Buffers are sized by [`NonlinearEval::new`] and overwritten by
 /// [`System::eval_nonlinear`], which must set every entry.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct NonlinearEval {
     pub f: Vec<f64>,
     pub g: Vec<f64>,
@@ -131,6 +131,34 @@ pub struct NonlinearEval {
     pub dg_dx: Vec<f64>,
     pub dg_dv: Vec<f64>,
     pub dg_dt: Vec<f64>,
+}
+
+impl Clone for NonlinearEval {
+    fn clone(&self) -> Self {
+        Self {
+            f: self.f.clone(),
+            g: self.g.clone(),
+            df_dx: self.df_dx.clone(),
+            df_dv: self.df_dv.clone(),
+            df_dt: self.df_dt.clone(),
+            dg_dx: self.dg_dx.clone(),
+            dg_dv: self.dg_dv.clone(),
+            dg_dt: self.dg_dt.clone(),
+        }
+    }
+
+    /// Copies into the buffers already held (the derived `clone_from` allocates a whole
+    /// new value): the integrators copy an evaluation at every right-hand side.
+    fn clone_from(&mut self, source: &Self) {
+        self.f.clone_from(&source.f);
+        self.g.clone_from(&source.g);
+        self.df_dx.clone_from(&source.df_dx);
+        self.df_dv.clone_from(&source.df_dv);
+        self.df_dt.clone_from(&source.df_dt);
+        self.dg_dx.clone_from(&source.dg_dx);
+        self.dg_dv.clone_from(&source.dg_dv);
+        self.dg_dt.clone_from(&source.dg_dt);
+    }
 }
 
 impl NonlinearEval {
