@@ -400,9 +400,6 @@ pub struct ContinuationOptions {
     /// derived from the start point: a continuation of part of another one's curve then
     /// measures arclength as that one does. Default `None`.
     pub scales: Option<Vec<f64>>,
-    /// The branch ends after the first point whose scaled arclength from the start is at
-    /// least this ([`FinishReason::Arclength`]). Default: no limit.
-    pub max_arclength: f64,
 }
 
 impl ContinuationOptions {
@@ -435,7 +432,6 @@ impl ContinuationOptions {
             omega_bounds: None,
             start_direction: None,
             scales: None,
-            max_arclength: f64::INFINITY,
         }
     }
 }
@@ -543,8 +539,9 @@ pub enum FinishReason {
     /// the other way; the path jumped between sheets of the branch where they meet and
     /// would now retrace itself backwards (see [`reversing_point`]).
     Reversed { omega: f64, earlier: usize },
-    /// The point at `omega` reached `max_arclength`.
-    Arclength { omega: f64 },
+    /// The caller stopped the branch after the point at `omega`
+    /// ([`Continuation::run_until`]).
+    Stopped { omega: f64 },
 }
 
 impl std::fmt::Display for FinishReason {
@@ -568,10 +565,7 @@ impl std::fmt::Display for FinishReason {
                  sheets of the branch where they meet, and would now retrace itself. A \
                  different step cap (ds_max) may keep it on one sheet"
             ),
-            Self::Arclength { omega } => write!(
-                f,
-                "stopped at ω = {omega:.3} rad/s, the end of the arclength it was to cover"
-            ),
+            Self::Stopped { omega } => write!(f, "stopped at ω = {omega:.3} rad/s as asked"),
         }
     }
 }
@@ -1238,6 +1232,31 @@ impl<'a> Continuation<'a> {
     fn start(&mut self) -> Result<(Current, BranchPoint), ContinuationError> {
         let omega = self.opts.omega_start;
         let nu = self.hb.n_unknowns();
+        let entries = |field: &'static str, v: &[f64], reason: &'static str| {
+            Err(ContinuationError::Setting {
+                field,
+                value: v.len() as f64,
+                reason,
+            })
+        };
+        if let Some(d) = &self.opts.start_direction
+            && d.len() != nu + 1
+        {
+            return entries(
+                "start_direction",
+                d,
+                "must hold one entry per unknown and one for ω",
+            );
+        }
+        if let Some(v) = &self.opts.scales
+            && (v.len() != nu + 1 || v.iter().any(|x| !(x.is_finite() && *x > 0.0)))
+        {
+            return entries(
+                "scales",
+                v,
+                "must hold one positive, finite scale per unknown and one for ω",
+            );
+        }
         let guess = match &self.opts.initial_guess {
             Some(g) if g.len() == nu => g.clone(),
             Some(g) => {
@@ -1277,23 +1296,7 @@ impl<'a> Continuation<'a> {
             }
         }
         self.scales.push(sw);
-        if let Some(d) = &self.opts.start_direction
-            && d.len() != nu + 1
-        {
-            return Err(ContinuationError::Hb(HbError::Dimension {
-                what: "start direction (one entry per unknown and ω)",
-                expected: nu + 1,
-                got: d.len(),
-            }));
-        }
         if let Some(given) = &self.opts.scales {
-            if given.len() != nu + 1 || given.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-                return Err(ContinuationError::Hb(HbError::Dimension {
-                    what: "scales (positive, one per unknown and ω)",
-                    expected: nu + 1,
-                    got: given.len(),
-                }));
-            }
             self.scales.clone_from(given);
         }
         let tangent = self.tangent(&a, omega, None, None, None)?;
@@ -1623,9 +1626,6 @@ impl<'a> Continuation<'a> {
         if walk.n_points >= self.opts.max_points && walk.finish_after.is_none() {
             walk.finish_after = Some(FinishReason::MaxPoints);
         }
-        if c.arclength >= self.opts.max_arclength && walk.finish_after.is_none() {
-            walk.finish_after = Some(FinishReason::Arclength { omega: c.omega });
-        }
         let span = c.arclength - cur.arclength;
         let bend = (self.opts.curved_predictor && c.bound.is_none() && span > 0.0).then(|| {
             c.tangent
@@ -1746,9 +1746,16 @@ impl<'a> Continuation<'a> {
     }
 
     /// Runs to the end, calling `observer` after every step.
-    pub fn run(
+    pub fn run(&mut self, observer: impl FnMut(&StepOutcome)) -> Result<Branch, ContinuationError> {
+        self.run_until(observer, |_| false)
+    }
+
+    /// [`Self::run`], ending after the first accepted point (with its stability and the
+    /// bifurcations before it) for which `stop` is true ([`FinishReason::Stopped`]).
+    pub fn run_until(
         &mut self,
         mut observer: impl FnMut(&StepOutcome),
+        mut stop: impl FnMut(&BranchPoint) -> bool,
     ) -> Result<Branch, ContinuationError> {
         let mut points = Vec::new();
         let mut bifs = Vec::new();
@@ -1761,8 +1768,18 @@ impl<'a> Continuation<'a> {
                     point,
                     bifurcations,
                 } => {
+                    let omega = point.solution.omega;
+                    let done = stop(&point);
                     points.push(*point);
                     bifs.extend(bifurcations);
+                    if done {
+                        return Ok(Branch {
+                            points,
+                            bifurcations: bifs,
+                            finish: FinishReason::Stopped { omega },
+                            rejected_steps: rejected,
+                        });
+                    }
                 }
                 StepOutcome::Rejected(_) => rejected += 1,
                 StepOutcome::Finished(f) => {

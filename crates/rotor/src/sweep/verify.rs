@@ -16,6 +16,7 @@
 
 use std::time::Instant;
 
+use crate::continuation::{BranchPoint, FinishReason};
 use crate::hb::Basis;
 use crate::model::Model;
 use crate::record::{TruncationCheck, TruncationOutcome};
@@ -131,10 +132,12 @@ impl Window<'_> {
 
     /// Follows again, with `fine`'s smaller step, the stretches of `first` (this window's
     /// branch) where a crossing may hide between two of its points
-    /// ([`stretches_to_refine`]), each from the point before it to a quarter step past
-    /// it, in the same scaled arclength. What the window found: `first`'s findings
-    /// outside the stretches, the fine passes' inside them (`first`'s alone when there
-    /// are none).
+    /// ([`stretches_to_refine`]), each from its first point, oriented along the chord to
+    /// the next, in `first`'s arclength scales, until it has passed the stretch's last
+    /// point (close to it, beyond the plane through it across the last step's chord).
+    /// What the window found: `first`'s findings outside the stretches, the fine
+    /// passes' inside them (`first`'s alone when there are none); an error when a
+    /// stretch is not covered.
     fn refine(
         &self,
         first: &Traced,
@@ -145,39 +148,74 @@ impl Window<'_> {
         let points = &first.branch.points;
         let in_stretch = |step: usize| stretches.iter().any(|&(i, j)| step >= i && step <= j);
         let mut found = first.found_outside(&in_stretch);
+        let x = |b: &BranchPoint| -> Vec<f64> {
+            let s = &b.solution;
+            s.mech
+                .iter()
+                .chain(&s.therm)
+                .copied()
+                .chain([s.omega])
+                .collect()
+        };
+        let scaled = |a: &[f64], b: &[f64]| -> Vec<f64> {
+            a.iter()
+                .zip(b)
+                .zip(&first.scales)
+                .map(|((u, v), s)| (u - v) / s)
+                .collect()
+        };
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(u, v)| u * v).sum::<f64>();
+        let step = |k: usize| points[k + 1].arclength - points[k].arclength;
         for &(i, j) in stretches {
-            let (p, q) = (&points[i], &points[i + 1]);
-            let x = |b: &crate::continuation::BranchPoint| -> Vec<f64> {
-                let s = &b.solution;
-                s.mech
-                    .iter()
-                    .chain(&s.therm)
-                    .copied()
-                    .chain([s.omega])
-                    .collect()
+            let start = x(&points[i]);
+            let end = x(&points[j + 1]);
+            // the stretch's last step, along which the fine pass is seen to pass its end
+            let along = scaled(&end, &x(&points[j]));
+            let span = points[j + 1].arclength - points[i].arclength;
+            let next = if j + 2 < points.len() {
+                step(j + 1)
+            } else {
+                f64::INFINITY
             };
-            let (xp, xq) = (x(p), x(q));
-            let ahead = q.solution.omega >= p.solution.omega;
-            let (lo, hi) = self.bounds.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
-            let to = match (ahead, self.bounds) {
-                (true, Some(_)) => hi,
-                (false, Some(_)) => lo,
-                (true, None) => self.end.max(p.solution.omega + 1.0),
-                (false, None) => self.end.min(p.solution.omega - 1.0),
-            };
-            let last = points[j + 1].arclength - points[j].arclength;
-            let span = points[j + 1].arclength - p.arclength;
             let mut opts = fine.continuation_options(
-                p.solution.omega,
-                to,
+                points[i].solution.omega,
+                self.end,
                 self.bounds,
-                Some(xp[..xp.len() - 1].to_vec()),
+                Some(start[..start.len() - 1].to_vec()),
                 (j + 1 - i) * 2 * FINE_STEP_DIVISOR as usize + 16,
             );
-            opts.start_direction = Some(xq.iter().zip(&xp).map(|(b, a)| b - a).collect());
+            // how close to the stretch's end a point past it must be: within half a
+            // step of the first pass (the shorter of the two beside it), or a step and
+            // a half of the fine pass where those are shorter
+            let reach = (0.5 * step(j).min(next)).max(1.5 * opts.ds_max);
+            // oriented along the first pass's chord (the window's end decides only the
+            // count of folds passed, as in the first pass)
+            opts.start_direction = Some(
+                x(&points[i + 1])
+                    .iter()
+                    .zip(&start)
+                    .map(|(b, a)| b - a)
+                    .collect(),
+            );
             opts.scales = Some(first.scales.clone());
-            opts.max_arclength = span + 0.25 * last;
-            let segment = Traced::follow(fine, opts, method)?;
+            let passed = |b: &BranchPoint| {
+                let d = scaled(&x(b), &end);
+                dot(&d, &along) >= 0.0 && dot(&d, &d).sqrt() <= reach && b.arclength >= 0.5 * span
+            };
+            let segment = Traced::follow_until(fine, opts, method, passed)?;
+            // a stretch the finer pass did not cover is no evidence either way
+            let covered = match segment.branch.finish {
+                FinishReason::Stopped { .. } => true,
+                FinishReason::Bound { .. } => j + 2 == points.len(),
+                _ => false,
+            };
+            if !covered {
+                return Err(format!(
+                    "the finer pass over steps {i}–{j} did not reach point {}: {}",
+                    j + 1,
+                    segment.branch.finish
+                ));
+            }
             found.extend(segment.found_outside(&|_| false));
         }
         Ok(found)
@@ -196,10 +234,20 @@ impl Traced {
         opts: crate::continuation::ContinuationOptions,
         method: Option<&dyn crate::stability::StabilityMethod>,
     ) -> Result<Self, String> {
+        Self::follow_until(problem, opts, method, |_| false)
+    }
+
+    /// [`Self::follow`], ending after the first point for which `stop` is true.
+    fn follow_until(
+        problem: &SweepProblem,
+        opts: crate::continuation::ContinuationOptions,
+        method: Option<&dyn crate::stability::StabilityMethod>,
+        stop: impl FnMut(&BranchPoint) -> bool,
+    ) -> Result<Self, String> {
         let mut c = problem
             .continuation_with(opts, method)
             .map_err(|e| e.to_string())?;
-        let branch = c.run(|_| {}).map_err(|e| e.to_string())?;
+        let branch = c.run_until(|_| {}, stop).map_err(|e| e.to_string())?;
         Ok(Self {
             branch,
             scales: c.scales().to_vec(),
@@ -634,9 +682,30 @@ impl Checking<'_> {
                 stretches.len(),
                 first.branch.points.len().saturating_sub(1),
             ));
-            let again = window.refine(first, &fine_problem, method, &stretches);
-            if again.is_ok() {
-                found = again;
+            // A stretch the finer pass cannot follow to its end (the first pass jumped
+            // between sheets of the branch within a step, or the fine steps stalled at a
+            // sharp fold) says the first pass's path is no guide there: the whole
+            // window is followed again from its start with the finer step.
+            let again = window
+                .refine(first, &fine_problem, method, &stretches)
+                .or_else(|e| {
+                    say(&format!(
+                        "order {order}, window {from:.3} → {end:.3}: {e}; the whole window \
+                         again with a step of {step:.4}"
+                    ));
+                    Window {
+                        max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
+                        ..window
+                    }
+                    .follow(&fine_problem, method)
+                    .map(|t| t.found_outside(&|_| false))
+                });
+            match again {
+                Ok(f) => found = Ok(f),
+                Err(e) => say(&format!(
+                    "order {order}, window {from:.3} → {end:.3}: the finer pass failed ({e}); \
+                     the first pass's findings stand"
+                )),
             }
         }
         say(&format!(
@@ -743,7 +812,7 @@ fn embed(mech: &[f64], therm: &[f64], from: &Basis, to: &Basis) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::continuation::{Branch, BranchPoint, FinishReason};
+    use crate::continuation::Branch;
     use crate::hb::{HbSolution, ResidualNorms};
     use crate::stability::FloquetResult;
     use num_complex::Complex64;
