@@ -1240,12 +1240,12 @@ impl<'a> Continuation<'a> {
             })
         };
         if let Some(d) = &self.opts.start_direction
-            && d.len() != nu + 1
+            && (d.len() != nu + 1 || d.iter().any(|x| !x.is_finite()))
         {
             return entries(
                 "start_direction",
                 d,
-                "must hold one entry per unknown and one for ω",
+                "must hold one finite entry per unknown and one for ω",
             );
         }
         if let Some(v) = &self.opts.scales
@@ -1751,7 +1751,9 @@ impl<'a> Continuation<'a> {
     }
 
     /// [`Self::run`], ending after the first accepted point (with its stability and the
-    /// bifurcations before it) for which `stop` is true ([`FinishReason::Stopped`]).
+    /// bifurcations before it) for which `stop` is true ([`FinishReason::Stopped`]). The
+    /// continuation has then taken the corrector step past that point; stepping on
+    /// resumes from there.
     pub fn run_until(
         &mut self,
         mut observer: impl FnMut(&StepOutcome),

@@ -139,15 +139,24 @@ impl<'a> Continuation<'a> {
         let mut t: Vec<f64> = z.iter().zip(s).map(|(v, si)| v / si).collect();
         t.push(zeta / s[nu]);
         let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let towards_end = (self.opts.omega_end - self.opts.omega_start) * t[nu];
         let along = match (&self.opts.start_direction, prev) {
             (_, Some(_)) => 1.0,
-            (Some(d), None) => t
-                .iter()
-                .zip(d)
-                .zip(s)
-                .map(|((ti, di), si)| ti * di / si)
-                .sum(),
-            (None, None) => (self.opts.omega_end - self.opts.omega_start) * t[nu],
+            (Some(d), None) => {
+                let a: f64 = t
+                    .iter()
+                    .zip(d)
+                    .zip(s)
+                    .map(|((ti, di), si)| ti * di / si)
+                    .sum();
+                // a direction across the tangent says nothing: towards the end then
+                if a.is_finite() && a != 0.0 {
+                    a
+                } else {
+                    towards_end
+                }
+            }
+            (None, None) => towards_end,
         };
         let sign = if along < 0.0 { -1.0 } else { 1.0 };
         t.into_iter().map(|v| sign * v / norm).collect()

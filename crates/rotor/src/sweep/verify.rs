@@ -144,7 +144,7 @@ impl Window<'_> {
         fine: &SweepProblem,
         method: Option<&dyn crate::stability::StabilityMethod>,
         stretches: &[(usize, usize)],
-    ) -> Result<Found, String> {
+    ) -> Result<Found, Refining> {
         let points = &first.branch.points;
         let in_stretch = |step: usize| stretches.iter().any(|&(i, j)| step >= i && step <= j);
         let mut found = first.found_outside(&in_stretch);
@@ -165,18 +165,12 @@ impl Window<'_> {
                 .collect()
         };
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(u, v)| u * v).sum::<f64>();
-        let step = |k: usize| points[k + 1].arclength - points[k].arclength;
         for &(i, j) in stretches {
             let start = x(&points[i]);
             let end = x(&points[j + 1]);
             // the stretch's last step, along which the fine pass is seen to pass its end
             let along = scaled(&end, &x(&points[j]));
             let span = points[j + 1].arclength - points[i].arclength;
-            let next = if j + 2 < points.len() {
-                step(j + 1)
-            } else {
-                f64::INFINITY
-            };
             let mut opts = fine.continuation_options(
                 points[i].solution.omega,
                 self.end,
@@ -184,10 +178,12 @@ impl Window<'_> {
                 Some(start[..start.len() - 1].to_vec()),
                 (j + 1 - i) * 2 * FINE_STEP_DIVISOR as usize + 16,
             );
-            // how close to the stretch's end a point past it must be: within half a
-            // step of the first pass (the shorter of the two beside it), or a step and
-            // a half of the fine pass where those are shorter
-            let reach = (0.5 * step(j).min(next)).max(1.5 * opts.ds_max);
+            // how close to the stretch's end a point past it must be: the fine pass
+            // solves the same equations, so on the same sheet it passes through that
+            // point, and its first point past it lies within a fine step (along the
+            // tangent, and the corrector's reach across it); twice that
+            let mcd = opts.max_corrector_distance;
+            let reach = 2.0 * (1.0 + mcd * mcd).sqrt() * opts.ds_max;
             // oriented along the first pass's chord (the window's end decides only the
             // count of folds passed, as in the first pass)
             opts.start_direction = Some(
@@ -202,24 +198,37 @@ impl Window<'_> {
                 let d = scaled(&x(b), &end);
                 dot(&d, &along) >= 0.0 && dot(&d, &d).sqrt() <= reach && b.arclength >= 0.5 * span
             };
-            let segment = Traced::follow_until(fine, opts, method, passed)?;
+            let segment =
+                Traced::follow_until(fine, opts, method, passed).map_err(Refining::Failed)?;
             // a stretch the finer pass did not cover is no evidence either way
-            let covered = match segment.branch.finish {
-                FinishReason::Stopped { .. } => true,
-                FinishReason::Bound { .. } => j + 2 == points.len(),
+            let covered = match (&segment.branch.finish, &first.branch.finish) {
+                (FinishReason::Stopped { .. }, _) => true,
+                // the stretch ends where the first pass reached the window's bound
+                (FinishReason::Bound { omega: a }, FinishReason::Bound { omega: b }) => {
+                    j + 2 == points.len() && a == b
+                }
                 _ => false,
             };
             if !covered {
-                return Err(format!(
+                return Err(Refining::NotCovered(format!(
                     "the finer pass over steps {i}–{j} did not reach point {}: {}",
                     j + 1,
                     segment.branch.finish
-                ));
+                )));
             }
             found.extend(segment.found_outside(&|_| false));
         }
         Ok(found)
     }
+}
+
+/// Why [`Window::refine`] gave no findings.
+enum Refining {
+    /// A stretch's finer pass did not reach the stretch's end: the first pass's path is
+    /// no guide there (the whole window is followed again).
+    NotCovered(String),
+    /// A finer pass failed (its start, a setting): the first pass's findings stand.
+    Failed(String),
 }
 
 /// A window's branch and the scales of its arclength.
@@ -671,41 +680,52 @@ impl Checking<'_> {
         if let (false, Ok(first)) = (missing.is_empty() || (self.interrupted)(), &first) {
             let mut fine = o.settings.clone();
             fine.sweep.ds_max /= FINE_STEP_DIVISOR;
-            let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
             let step = fine.sweep.ds_max;
             let stretches = stretches_to_refine(first, method.is_some());
             let steps: usize = stretches.iter().map(|(i, j)| j + 1 - i).sum();
-            say(&format!(
-                "order {order}, window {from:.3} → {end:.3}: {} not found; again with a \
-                 step of {step:.4} on {} stretches ({steps} of {} steps)",
-                missing.join(", "),
-                stretches.len(),
-                first.branch.points.len().saturating_sub(1),
-            ));
-            // A stretch the finer pass cannot follow to its end (the first pass jumped
-            // between sheets of the branch within a step, or the fine steps stalled at a
-            // sharp fold) says the first pass's path is no guide there: the whole
-            // window is followed again from its start with the finer step.
-            let again = window
-                .refine(first, &fine_problem, method, &stretches)
-                .or_else(|e| {
-                    say(&format!(
-                        "order {order}, window {from:.3} → {end:.3}: {e}; the whole window \
-                         again with a step of {step:.4}"
-                    ));
-                    Window {
-                        max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
-                        ..window
+            let note = |m: String| say(&format!("order {order}, window {from:.3} → {end:.3}: {m}"));
+            if stretches.is_empty() {
+                note(format!(
+                    "{} not found, and no step where it could hide",
+                    missing.join(", ")
+                ));
+            } else {
+                let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
+                note(format!(
+                    "{} not found; again with a step of {step:.4} on {} stretches ({steps} of \
+                     {} steps)",
+                    missing.join(", "),
+                    stretches.len(),
+                    first.branch.points.len().saturating_sub(1),
+                ));
+                // A stretch the finer pass cannot follow to its end (the first pass jumped
+                // between sheets of the branch within a step, or the fine steps stalled at
+                // a sharp fold) says the first pass's path is no guide there: the whole
+                // window is followed again from its start with the finer step.
+                let again = match window.refine(first, &fine_problem, method, &stretches) {
+                    Ok(f) => Ok(f),
+                    Err(Refining::Failed(e)) => Err(e),
+                    Err(Refining::NotCovered(_)) if (self.interrupted)() => {
+                        Err("the sweep was interrupted".to_string())
                     }
-                    .follow(&fine_problem, method)
-                    .map(|t| t.found_outside(&|_| false))
-                });
-            match again {
-                Ok(f) => found = Ok(f),
-                Err(e) => say(&format!(
-                    "order {order}, window {from:.3} → {end:.3}: the finer pass failed ({e}); \
-                     the first pass's findings stand"
-                )),
+                    Err(Refining::NotCovered(e)) => {
+                        note(format!(
+                            "{e}; the whole window again with a step of {step:.4}"
+                        ));
+                        Window {
+                            max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
+                            ..window
+                        }
+                        .follow(&fine_problem, method)
+                        .map(|t| t.found_outside(&|_| false))
+                    }
+                };
+                match again {
+                    Ok(f) => found = Ok(f),
+                    Err(e) => note(format!(
+                        "the finer pass failed ({e}); the first pass's findings stand"
+                    )),
+                }
             }
         }
         say(&format!(
