@@ -1270,35 +1270,10 @@ impl<'a> Continuation<'a> {
         };
         let (a, stats) = newton::solve_fixed(&self.hb, omega, &guess, &self.opts.newton)
             .map_err(|cause| ContinuationError::Start { omega, cause })?;
-        let nm = self.hb.n_mech_unknowns();
-        let maxabs = |s: &[f64]| s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let or1 = |v: f64| if v > 0.0 && v.is_finite() { v } else { 1.0 };
-        let sm = self
-            .opts
-            .scale_mech
-            .unwrap_or_else(|| or1(maxabs(&a[..nm])));
-        let st = self
-            .opts
-            .scale_therm
-            .unwrap_or_else(|| or1(maxabs(&a[nm..])));
-        let sw = self
-            .opts
-            .scale_omega
-            .unwrap_or((self.opts.omega_end - self.opts.omega_start).abs());
-        self.scales = (0..a.len()).map(|i| if i < nm { sm } else { st }).collect();
-        if self.opts.scale_per_dof {
-            let nc = self.hb.n_coeffs();
-            for (block, scales) in a.chunks(nc).zip(self.scales.chunks_mut(nc)) {
-                let m = maxabs(block);
-                if m > 0.0 && m.is_finite() {
-                    scales.iter_mut().for_each(|v| *v = m);
-                }
-            }
-        }
-        self.scales.push(sw);
-        if let Some(given) = &self.opts.scales {
-            self.scales.clone_from(given);
-        }
+        self.scales = match &self.opts.scales {
+            Some(given) => given.clone(),
+            None => self.start_scales(&a),
+        };
         let tangent = self.tangent(&a, omega, None, None, None)?;
         let point = self.bare_point(0, &a, omega, &stats, 0.0);
         self.walk.history = PathHistory::new();
@@ -1314,6 +1289,38 @@ impl<'a> Continuation<'a> {
             bend: None,
         };
         Ok((cur, point))
+    }
+
+    /// The scales of the unknowns, then ω, derived from the start solution `a` (see
+    /// [`ContinuationOptions::scale_mech`] and the fields after it).
+    fn start_scales(&self, a: &[f64]) -> Vec<f64> {
+        let nm = self.hb.n_mech_unknowns();
+        let maxabs = |s: &[f64]| s.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let or1 = |v: f64| if v > 0.0 && v.is_finite() { v } else { 1.0 };
+        let sm = self
+            .opts
+            .scale_mech
+            .unwrap_or_else(|| or1(maxabs(&a[..nm])));
+        let st = self
+            .opts
+            .scale_therm
+            .unwrap_or_else(|| or1(maxabs(&a[nm..])));
+        let sw = self
+            .opts
+            .scale_omega
+            .unwrap_or((self.opts.omega_end - self.opts.omega_start).abs());
+        let mut scales: Vec<f64> = (0..a.len()).map(|i| if i < nm { sm } else { st }).collect();
+        if self.opts.scale_per_dof {
+            let nc = self.hb.n_coeffs();
+            for (block, scales) in a.chunks(nc).zip(scales.chunks_mut(nc)) {
+                let m = maxabs(block);
+                if m > 0.0 && m.is_finite() {
+                    scales.iter_mut().for_each(|v| *v = m);
+                }
+            }
+        }
+        scales.push(sw);
+        scales
     }
 
     /// The arclength row of the unknowns for the scaled tangent `t`: `t_i / s_i`.

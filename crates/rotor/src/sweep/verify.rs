@@ -148,14 +148,11 @@ impl Window<'_> {
         let points = &first.branch.points;
         let in_stretch = |step: usize| stretches.iter().any(|&(i, j)| step >= i && step <= j);
         let mut found = first.found_outside(&in_stretch);
+        // a point's unknowns, then ω
         let x = |b: &BranchPoint| -> Vec<f64> {
-            let s = &b.solution;
-            s.mech
-                .iter()
-                .chain(&s.therm)
-                .copied()
-                .chain([s.omega])
-                .collect()
+            let mut v = b.solution.unknowns();
+            v.push(b.solution.omega);
+            v
         };
         let scaled = |a: &[f64], b: &[f64]| -> Vec<f64> {
             a.iter()
@@ -216,7 +213,7 @@ impl Window<'_> {
                     segment.branch.finish
                 )));
             }
-            found.extend(segment.found_outside(&|_| false));
+            found.extend(segment.found());
         }
         Ok(found)
     }
@@ -261,6 +258,11 @@ impl Traced {
             branch,
             scales: c.scales().to_vec(),
         })
+    }
+
+    /// Everything the branch found (see [`Found`]).
+    fn found(&self) -> Found {
+        self.found_outside(&|_| false)
     }
 
     /// The step (from point `k` to `k + 1`) that arclength `s` lies on.
@@ -655,10 +657,8 @@ impl Checking<'_> {
             }
             window.follow(&o.problem, method)
         };
-        let mut found: Result<Found, String> = first
-            .as_ref()
-            .map(|t| t.found_outside(&|_| false))
-            .map_err(Clone::clone);
+        let mut found: Result<Found, String> =
+            first.as_ref().map(|t| t.found()).map_err(Clone::clone);
         // A fold pair or a crossing narrower than a step is passed over unseen: before
         // an event is called vanished, the stretches of the window where the first
         // pass's shape (and multipliers, with stability) leave room for one between two
@@ -717,7 +717,7 @@ impl Checking<'_> {
                             ..window
                         }
                         .follow(&fine_problem, method)
-                        .map(|t| t.found_outside(&|_| false))
+                        .map(|t| t.found())
                     }
                 };
                 match again {
@@ -906,7 +906,7 @@ mod tests {
         let t = branch(&[
             0.98, 0.99, 0.990, 0.996, 0.992, 0.96, 0.95, 0.97, 0.99, 1.01, 1.02,
         ]);
-        let all = t.found_outside(&|_| false);
+        let all = t.found();
         assert_eq!(all.changes, vec![508.5]);
         let outside = t.found_outside(&|k| k == 8);
         assert!(outside.changes.is_empty());
