@@ -88,9 +88,15 @@ pub struct Event {
     pub after_point: u64,
 }
 
-/// Steps of the second pass over a window where an event seemed to vanish: the
-/// continuation's largest step divided by this.
+/// Steps of the finest pass over a window where an event seemed to vanish: the
+/// continuation's largest step divided by this. It is reached in levels, each
+/// [`LEVEL_DIVISOR`] times finer than the one before, every level following again only the
+/// stretches of the one before where a change may still hide ([`stretches_to_refine`]).
 const FINE_STEP_DIVISOR: f64 = 16.0;
+
+/// How much finer each level of the finer pass is than the one before (see
+/// [`FINE_STEP_DIVISOR`]).
+const LEVEL_DIVISOR: f64 = 4.0;
 
 /// One window of the check: the branch followed from `start` to `end` within `bounds`.
 #[derive(Clone, Copy)]
@@ -138,13 +144,20 @@ impl Window<'_> {
     /// What the window found: `first`'s findings outside the stretches, the fine
     /// passes' inside them (`first`'s alone when there are none); an error when a
     /// stretch is not covered.
+    ///
+    /// `levels` are the problems of the finer levels, coarsest first: each stretch is
+    /// followed with the first, and the stretches of that pass where a change may still
+    /// hide with the next, and so on.
     fn refine(
         &self,
         first: &Traced,
-        fine: &SweepProblem,
+        levels: &[SweepProblem],
         method: Option<&dyn crate::stability::StabilityMethod>,
         stretches: &[(usize, usize)],
     ) -> Result<Found, Refining> {
+        let Some((fine, finer)) = levels.split_first() else {
+            return Ok(first.found());
+        };
         let points = &first.branch.points;
         let in_stretch = |step: usize| stretches.iter().any(|&(i, j)| step >= i && step <= j);
         let mut found = first.found_outside(&in_stretch);
@@ -173,7 +186,7 @@ impl Window<'_> {
                 self.end,
                 self.bounds,
                 Some(start[..start.len() - 1].to_vec()),
-                (j + 1 - i) * 2 * FINE_STEP_DIVISOR as usize + 16,
+                (j + 1 - i) * 2 * LEVEL_DIVISOR as usize + 16,
             );
             // how close to the stretch's end a point past it must be: the fine pass
             // solves the same equations, so on the same sheet it passes through that
@@ -213,10 +226,77 @@ impl Window<'_> {
                     segment.branch.finish
                 )));
             }
-            found.extend(segment.found());
+            let within = stretches_to_refine(&segment, method.is_some());
+            found.extend(if finer.is_empty() || within.is_empty() {
+                segment.found()
+            } else {
+                self.refine(&segment, finer, method, &within)?
+            });
         }
         Ok(found)
     }
+
+    /// What the window's branch `first` found, with the stretches where a change may
+    /// hide followed again at each of `levels` in turn ([`Self::refine`]). Where a
+    /// stretch is not covered (a pass jumped between sheets of the branch within a
+    /// step), the whole window is followed again at the first level, and its stretches
+    /// refined at the next ones (down to the whole window at the finest level).
+    /// `max_points` bounds the coarse pass: a level's whole window may take
+    /// proportionally more. An error when a finer pass failed (the first pass's findings
+    /// stand).
+    fn deepen(
+        &self,
+        first: &Traced,
+        levels: &[SweepProblem],
+        method: Option<&dyn crate::stability::StabilityMethod>,
+        interrupted: &dyn Fn() -> bool,
+        note: &dyn Fn(String),
+    ) -> Result<Found, String> {
+        let Some((fine, finer)) = levels.split_first() else {
+            return Ok(first.found());
+        };
+        let stretches = stretches_to_refine(first, method.is_some());
+        if stretches.is_empty() {
+            return Ok(first.found());
+        }
+        match self.refine(first, levels, method, &stretches) {
+            Ok(f) => Ok(f),
+            Err(Refining::Failed(e)) => Err(e),
+            Err(Refining::NotCovered(_)) if interrupted() => {
+                Err("the sweep was interrupted".to_string())
+            }
+            Err(Refining::NotCovered(e)) => {
+                note(format!(
+                    "{e}; the whole window again with a step of {:.4}",
+                    fine.settings.sweep.ds_max
+                ));
+                let whole = Window {
+                    max_points: self.max_points * LEVEL_DIVISOR as usize,
+                    ..*self
+                }
+                .follow(fine, method)?;
+                Window {
+                    max_points: self.max_points * LEVEL_DIVISOR as usize,
+                    ..*self
+                }
+                .deepen(&whole, finer, method, interrupted, note)
+            }
+        }
+    }
+}
+
+/// The settings of the finer pass's levels, coarsest first: each with a step
+/// [`LEVEL_DIVISOR`] times smaller than the one before, down to the step divided by
+/// [`FINE_STEP_DIVISOR`].
+fn finer_levels(settings: &StudySettings) -> Vec<StudySettings> {
+    let finest = settings.sweep.ds_max / FINE_STEP_DIVISOR;
+    let mut levels: Vec<StudySettings> = Vec::new();
+    let mut fine = settings.clone();
+    while fine.sweep.ds_max > finest * (1.0 + 1e-9) {
+        fine.sweep.ds_max = (fine.sweep.ds_max / LEVEL_DIVISOR).max(finest);
+        levels.push(fine.clone());
+    }
+    levels
 }
 
 /// Why [`Window::refine`] gave no findings.
@@ -662,8 +742,9 @@ impl Checking<'_> {
         // A fold pair or a crossing narrower than a step is passed over unseen: before
         // an event is called vanished, the stretches of the window where the first
         // pass's shape (and multipliers, with stability) leave room for one between two
-        // points ([`stretches_to_refine`]) are followed again with 1/FINE_STEP_DIVISOR
-        // of the step.
+        // points ([`stretches_to_refine`]) are followed again with 1/LEVEL_DIVISOR of the
+        // step, and the stretches of those passes that still leave room for one with
+        // 1/LEVEL_DIVISOR of theirs, down to 1/FINE_STEP_DIVISOR of the step.
         let missing: Vec<String> = match &found {
             Ok(f) => g
                 .iter()
@@ -678,49 +759,31 @@ impl Checking<'_> {
             Err(_) => Vec::new(),
         };
         if let (false, Ok(first)) = (missing.is_empty() || (self.interrupted)(), &first) {
-            let mut fine = o.settings.clone();
-            fine.sweep.ds_max /= FINE_STEP_DIVISOR;
-            let step = fine.sweep.ds_max;
             let stretches = stretches_to_refine(first, method.is_some());
             let steps: usize = stretches.iter().map(|(i, j)| j + 1 - i).sum();
             let note = |m: String| say(&format!("order {order}, window {from:.3} → {end:.3}: {m}"));
+            let fine_step = o.settings.sweep.ds_max / FINE_STEP_DIVISOR;
             if stretches.is_empty() {
                 note(format!(
                     "{} not found, and no step where it could hide",
                     missing.join(", ")
                 ));
             } else {
-                let fine_problem = SweepProblem::with_model(&fine, self.model.clone())?;
+                let levels = finer_levels(&o.settings)
+                    .iter()
+                    .map(|s| SweepProblem::with_model(s, self.model.clone()))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let coarsest = levels
+                    .first()
+                    .map_or(fine_step, |p| p.settings.sweep.ds_max);
                 note(format!(
-                    "{} not found; again with a step of {step:.4} on {} stretches ({steps} of \
-                     {} steps)",
+                    "{} not found; again with a step of {coarsest:.4} on {} stretches ({steps} \
+                     of {} steps), down to {fine_step:.4} where a change may still hide",
                     missing.join(", "),
                     stretches.len(),
                     first.branch.points.len().saturating_sub(1),
                 ));
-                // A stretch the finer pass cannot follow to its end (the first pass jumped
-                // between sheets of the branch within a step, or the fine steps stalled at
-                // a sharp fold) says the first pass's path is no guide there: the whole
-                // window is followed again from its start with the finer step.
-                let again = match window.refine(first, &fine_problem, method, &stretches) {
-                    Ok(f) => Ok(f),
-                    Err(Refining::Failed(e)) => Err(e),
-                    Err(Refining::NotCovered(_)) if (self.interrupted)() => {
-                        Err("the sweep was interrupted".to_string())
-                    }
-                    Err(Refining::NotCovered(e)) => {
-                        note(format!(
-                            "{e}; the whole window again with a step of {step:.4}"
-                        ));
-                        Window {
-                            max_points: self.options.max_points * FINE_STEP_DIVISOR as usize,
-                            ..window
-                        }
-                        .follow(&fine_problem, method)
-                        .map(|t| t.found())
-                    }
-                };
-                match again {
+                match window.deepen(first, &levels, method, self.interrupted, &note) {
                     Ok(f) => found = Ok(f),
                     Err(e) => note(format!(
                         "the finer pass failed ({e}); the first pass's findings stand"
@@ -910,6 +973,19 @@ mod tests {
         assert_eq!(all.changes, vec![508.5]);
         let outside = t.found_outside(&|k| k == 8);
         assert!(outside.changes.is_empty());
+    }
+
+    /// The finer pass reaches a sixteenth of the step in two levels of a quarter each.
+    #[test]
+    fn the_finer_levels_reach_a_sixteenth_of_the_step_by_quarters() {
+        let mut settings = StudySettings::default();
+        settings.sweep.ds_max = 0.16;
+        let steps: Vec<f64> = finer_levels(&settings)
+            .iter()
+            .map(|s| s.sweep.ds_max)
+            .collect();
+        assert_eq!(steps.len(), 2);
+        assert!((steps[0] - 0.04).abs() < 1e-15 && (steps[1] - 0.01).abs() < 1e-15);
     }
 
     /// Where a step's slope Δω/Δs drops to a fifth of its neighbours' a fold pair may hide
