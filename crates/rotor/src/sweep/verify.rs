@@ -16,7 +16,7 @@
 
 use std::time::Instant;
 
-use crate::continuation::{BranchPoint, FinishReason};
+use crate::continuation::{BranchPoint, ContinuationError, FinishReason};
 use crate::hb::Basis;
 use crate::model::Model;
 use crate::record::{TruncationCheck, TruncationOutcome};
@@ -116,10 +116,10 @@ impl Window<'_> {
         &self,
         problem: &SweepProblem,
         method: Option<&dyn crate::stability::StabilityMethod>,
-    ) -> Result<Traced, String> {
+    ) -> Result<Traced, Unfollowed> {
         let p = self
             .start
-            .ok_or_else(|| "no recorded point before the group".to_string())?;
+            .ok_or_else(|| Unfollowed::Other("no recorded point before the group".to_string()))?;
         let guess = embed(
             p.coeffs_mech,
             p.coeffs_therm,
@@ -208,8 +208,8 @@ impl Window<'_> {
                 let d = scaled(&x(b), &end);
                 dot(&d, &along) >= 0.0 && dot(&d, &d).sqrt() <= reach && b.arclength >= 0.5 * span
             };
-            let segment =
-                Traced::follow_until(fine, opts, method, passed).map_err(Refining::Failed)?;
+            let segment = Traced::follow_until(fine, opts, method, passed)
+                .map_err(|e| Refining::Failed(e.into()))?;
             // a stretch the finer pass did not cover is no evidence either way
             let covered = match (&segment.branch.finish, &first.branch.finish) {
                 (FinishReason::Stopped { .. }, _) => true,
@@ -274,7 +274,8 @@ impl Window<'_> {
                     max_points: self.max_points * LEVEL_DIVISOR as usize,
                     ..*self
                 }
-                .follow(fine, method)?;
+                .follow(fine, method)
+                .map_err(String::from)?;
                 Window {
                     max_points: self.max_points * LEVEL_DIVISOR as usize,
                     ..*self
@@ -282,6 +283,47 @@ impl Window<'_> {
                 .deepen(&whole, finer, method, interrupted, note)
             }
         }
+    }
+}
+
+/// How many recorded points further back a window may start from when the higher order
+/// has no solution near a start point's coefficients.
+const MAX_START_RETRIES: usize = 3;
+
+/// Where a group's window may start, in the order tried: walking back along the branch
+/// from the group's first event (`before`: the recorded points up to it, in branch order)
+/// while the points stay inside the window (the branch may pass the same speeds on
+/// another sheet earlier), the first point at least half a window (`w`) from each event
+/// (`omegas`) and up to [`MAX_START_RETRIES`] further back inside the window; else the
+/// earliest of that stretch; else the point just before.
+fn start_candidates<'p>(
+    before: &[&'p StartPoint<'p>],
+    omegas: &[f64],
+    w: f64,
+) -> Vec<&'p StartPoint<'p>> {
+    let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let stretch: Vec<&StartPoint> = before
+        .iter()
+        .rev()
+        .take_while(|p| p.omega_rad_s >= lo - w && p.omega_rad_s <= hi + w)
+        .copied()
+        .collect();
+    match stretch
+        .iter()
+        .position(|p| omegas.iter().all(|o| (p.omega_rad_s - o).abs() >= 0.5 * w))
+    {
+        Some(i) => stretch[i..]
+            .iter()
+            .take(1 + MAX_START_RETRIES)
+            .copied()
+            .collect(),
+        None => stretch
+            .last()
+            .or_else(|| before.last())
+            .copied()
+            .into_iter()
+            .collect(),
     }
 }
 
@@ -308,6 +350,24 @@ enum Refining {
     Failed(String),
 }
 
+/// Why a window's branch was not followed.
+enum Unfollowed {
+    /// No solution of the window's order near the start point's coefficients (carried
+    /// over from the recorded order): next to a fold that moved at the higher order the
+    /// start's sheet may end before its ω.
+    Start(String),
+    /// Any other failure (a setting, a step, the interrupt).
+    Other(String),
+}
+
+impl From<Unfollowed> for String {
+    fn from(u: Unfollowed) -> String {
+        match u {
+            Unfollowed::Start(m) | Unfollowed::Other(m) => m,
+        }
+    }
+}
+
 /// A window's branch and the scales of its arclength.
 struct Traced {
     branch: crate::continuation::Branch,
@@ -319,7 +379,7 @@ impl Traced {
         problem: &SweepProblem,
         opts: crate::continuation::ContinuationOptions,
         method: Option<&dyn crate::stability::StabilityMethod>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, Unfollowed> {
         Self::follow_until(problem, opts, method, |_| false)
     }
 
@@ -329,11 +389,14 @@ impl Traced {
         opts: crate::continuation::ContinuationOptions,
         method: Option<&dyn crate::stability::StabilityMethod>,
         stop: impl FnMut(&BranchPoint) -> bool,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, Unfollowed> {
         let mut c = problem
             .continuation_with(opts, method)
-            .map_err(|e| e.to_string())?;
-        let branch = c.run_until(|_| {}, stop).map_err(|e| e.to_string())?;
+            .map_err(|e| Unfollowed::Other(e.to_string()))?;
+        let branch = c.run_until(|_| {}, stop).map_err(|e| match e {
+            ContinuationError::Start { .. } => Unfollowed::Start(e.to_string()),
+            e => Unfollowed::Other(e.to_string()),
+        })?;
         Ok(Self {
             branch,
             scales: c.scales().to_vec(),
@@ -646,47 +709,14 @@ struct Checking<'a> {
     progress: &'a (dyn Fn(&str) + Sync),
 }
 
-impl Checking<'_> {
-    /// The outcomes of group `g` (indices into the events) at order `o`: its window
-    /// followed from the recorded point before it, again with a finer step where an event
-    /// seemed to vanish.
-    fn group(&self, o: &AtOrder, g: &[usize]) -> Result<Vec<TruncationOutcome>, SweepError> {
-        let say = |m: &str| (self.progress)(m);
-        let order = o.order;
+impl<'a> Checking<'a> {
+    /// The window over a group of events from `lo` to `hi` (rad/s), followed from
+    /// `start`: its bounds hold the start and reach a window's width past the events,
+    /// and its end is the bound the recorded branch runs towards from the start (it may
+    /// be running back after a fold).
+    fn window_from(&self, start: Option<&'a StartPoint<'a>>, lo: f64, hi: f64) -> Window<'a> {
         let w = self.options.window_rad_s;
-        let omegas: Vec<f64> = g.iter().map(|&i| self.events[i].omega_rad_s).collect();
-        let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
-        let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let first_after = g
-            .iter()
-            .map(|&i| self.events[i].after_point)
-            .min()
-            .unwrap_or(0);
-        // the start: walking back along the branch from the group's first event while
-        // the points stay inside the window (the branch may pass the same speeds on
-        // another sheet earlier), the first point at least half a window from each
-        // event, else the earliest of that stretch, else the point just before
-        let before: Vec<&StartPoint> = self
-            .points
-            .iter()
-            .filter(|p| p.index <= first_after)
-            .collect();
-        let stretch: Vec<&StartPoint> = before
-            .iter()
-            .rev()
-            .take_while(|p| p.omega_rad_s >= lo - w && p.omega_rad_s <= hi + w)
-            .copied()
-            .collect();
-        let start = stretch
-            .iter()
-            .find(|p| omegas.iter().all(|o| (p.omega_rad_s - o).abs() >= 0.5 * w))
-            .or_else(|| stretch.last())
-            .or_else(|| before.last())
-            .copied();
-        // the branch is followed until it leaves the window, which holds the start
         let bounds = start.map(|p| ((lo - w).min(p.omega_rad_s), (hi + w).max(p.omega_rad_s)));
-        // the way the recorded branch runs from the start point (it may be running
-        // back after a fold)
         let forward = start
             .and_then(|p| {
                 self.points
@@ -705,6 +735,36 @@ impl Checking<'_> {
             }
             None => hi + self.sign * w,
         };
+        Window {
+            start,
+            end,
+            bounds,
+            recorded_basis: self.recorded_basis,
+            max_points: self.options.max_points,
+        }
+    }
+
+    /// The outcomes of group `g` (indices into the events) at order `o`: its window
+    /// followed from the recorded point before it, again with a finer step where an event
+    /// seemed to vanish.
+    fn group(&self, o: &AtOrder, g: &[usize]) -> Result<Vec<TruncationOutcome>, SweepError> {
+        let say = |m: &str| (self.progress)(m);
+        let order = o.order;
+        let w = self.options.window_rad_s;
+        let omegas: Vec<f64> = g.iter().map(|&i| self.events[i].omega_rad_s).collect();
+        let lo = omegas.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = omegas.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let first_after = g
+            .iter()
+            .map(|&i| self.events[i].after_point)
+            .min()
+            .unwrap_or(0);
+        let before: Vec<&StartPoint> = self
+            .points
+            .iter()
+            .filter(|p| p.index <= first_after)
+            .collect();
+        let starts = start_candidates(&before, &omegas, w);
         // a group of saddle-nodes alone is matched by the folds of the window's branch,
         // which its corrector locates without multipliers: no stability there
         let folds_only = g
@@ -712,15 +772,7 @@ impl Checking<'_> {
             .all(|&i| self.events[i].kind == Some(BifurcationKind::SaddleNode));
         let method = (!folds_only).then_some(o.method.as_ref());
         let t0 = Instant::now();
-        // where the window starts, for the progress lines
-        let from = start.map_or(lo - w, |p| p.omega_rad_s);
-        let window = Window {
-            start,
-            end,
-            bounds,
-            recorded_basis: self.recorded_basis,
-            max_points: self.options.max_points,
-        };
+        let mut window = self.window_from(starts.first().copied(), lo, hi);
         let first: Result<Traced, String> = if (self.interrupted)() {
             Err("not reached: the sweep was interrupted".to_string())
         } else if self.started.elapsed().as_secs_f64() > self.options.max_seconds {
@@ -729,14 +781,34 @@ impl Checking<'_> {
                 self.options.max_seconds
             ))
         } else {
-            if let Some(p) = start {
-                say(&format!(
-                    "order {order}: ω {:.3} → {:.3} rad/s from point {}",
-                    p.omega_rad_s, end, p.index
-                ));
+            // where no solution of this order lies near a start point's coefficients
+            // (a fold that moved at this order ends the start's sheet before its ω), the
+            // next candidate further back in the window
+            let mut next = starts.iter().skip(1);
+            loop {
+                if let Some(p) = window.start {
+                    say(&format!(
+                        "order {order}: ω {:.3} → {:.3} rad/s from point {}",
+                        p.omega_rad_s, window.end, p.index
+                    ));
+                }
+                match window.follow(&o.problem, method) {
+                    Err(Unfollowed::Start(e)) if !(self.interrupted)() => match next.next() {
+                        Some(&p) => {
+                            say(&format!(
+                                "order {order}: {e}; from point {} instead",
+                                p.index
+                            ));
+                            window = self.window_from(Some(p), lo, hi);
+                        }
+                        None => break Err(e),
+                    },
+                    r => break r.map_err(String::from),
+                }
             }
-            window.follow(&o.problem, method)
         };
+        // where the window starts, and the bound it runs to, for the progress lines
+        let (from, end) = (window.start.map_or(lo - w, |p| p.omega_rad_s), window.end);
         let mut found: Result<Found, String> =
             first.as_ref().map(|t| t.found()).map_err(Clone::clone);
         // A fold pair or a crossing narrower than a step is passed over unseen: before
@@ -973,6 +1045,42 @@ mod tests {
         assert_eq!(all.changes, vec![508.5]);
         let outside = t.found_outside(&|k| k == 8);
         assert!(outside.changes.is_empty());
+    }
+
+    /// A window starts from the first recorded point half a window before the event, and
+    /// where the higher order has no solution there from the points further back inside
+    /// the window, at most three of them; never from a point outside it.
+    #[test]
+    fn a_window_starts_half_a_window_back_then_further_back_inside_it() {
+        let at = |omegas: &[f64]| -> Vec<StartPoint<'static>> {
+            omegas
+                .iter()
+                .enumerate()
+                .map(|(i, &w)| StartPoint {
+                    index: i as u64,
+                    omega_rad_s: w,
+                    coeffs_mech: &[],
+                    coeffs_therm: &[],
+                })
+                .collect()
+        };
+        let indices = |points: &[StartPoint<'static>], omegas: &[f64]| -> Vec<u64> {
+            let before: Vec<&StartPoint> = points.iter().collect();
+            start_candidates(&before, omegas, 1.0)
+                .iter()
+                .map(|p| p.index)
+                .collect()
+        };
+        // the points of W2 before its fold at 541.0 rad/s
+        let points = at(&[539.33, 539.70, 540.04, 540.25, 540.44, 540.63, 540.82]);
+        assert_eq!(indices(&points, &[541.0]), vec![4, 3, 2]);
+        // no more than three further back
+        let dense: Vec<f64> = (0..12).map(|k| 540.0 + 0.04 * k as f64).collect();
+        assert_eq!(indices(&at(&dense), &[541.0]), vec![11, 10, 9, 8]);
+        // every point of the window within half a window of the event: its earliest only
+        assert_eq!(indices(&at(&[539.0, 540.6, 540.8]), &[541.0]), vec![1]);
+        // none inside the window: the point just before
+        assert_eq!(indices(&at(&[538.0, 539.5]), &[541.0]), vec![1]);
     }
 
     /// The finer pass reaches a sixteenth of the step in two levels of a quarter each.
