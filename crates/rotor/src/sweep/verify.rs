@@ -136,18 +136,11 @@ impl Window<'_> {
         Traced::follow(problem, opts, method)
     }
 
-    /// Follows again, with `fine`'s smaller step, the stretches of `first` (this window's
-    /// branch) where a crossing may hide between two of its points
-    /// ([`stretches_to_refine`]), each from its first point, oriented along the chord to
-    /// the next, in `first`'s arclength scales, until it has passed the stretch's last
-    /// point (close to it, beyond the plane through it across the last step's chord).
-    /// What the window found: `first`'s findings outside the stretches, the fine
-    /// passes' inside them (`first`'s alone when there are none); an error when a
-    /// stretch is not covered.
-    ///
-    /// `levels` are the problems of the finer levels, coarsest first: each stretch is
-    /// followed with the first, and the stretches of that pass where a change may still
-    /// hide with the next, and so on.
+    /// Follows again the stretches of `first` (this window's branch) where a crossing may
+    /// hide between two of its points ([`stretches_to_refine`]), at each of `levels` in
+    /// turn ([`Self::stretch_found`]). What the window found: `first`'s findings outside
+    /// the stretches, the finer passes' inside them (`first`'s alone when there are no
+    /// levels); an error when a stretch is not covered at any level.
     fn refine(
         &self,
         first: &Traced,
@@ -155,12 +148,58 @@ impl Window<'_> {
         method: Option<&dyn crate::stability::StabilityMethod>,
         stretches: &[(usize, usize)],
     ) -> Result<Found, Refining> {
-        let Some((fine, finer)) = levels.split_first() else {
+        if levels.is_empty() {
             return Ok(first.found());
-        };
-        let points = &first.branch.points;
+        }
         let in_stretch = |step: usize| stretches.iter().any(|&(i, j)| step >= i && step <= j);
         let mut found = first.found_outside(&in_stretch);
+        for &(i, j) in stretches {
+            found.extend(self.stretch_found(first, levels, method, i, j)?);
+        }
+        Ok(found)
+    }
+
+    /// What the stretch of `first` from point `i` to point `j + 1` holds: followed with
+    /// the first of `levels`, and the stretches of that pass where a change may still
+    /// hide with the next ones ([`Self::refine`]). Where a finer pass fails, this level's
+    /// findings stand; where it is not covered (this level's path jumped between sheets
+    /// within a step), the stretch is followed again at the next level directly.
+    fn stretch_found(
+        &self,
+        first: &Traced,
+        levels: &[SweepProblem],
+        method: Option<&dyn crate::stability::StabilityMethod>,
+        i: usize,
+        j: usize,
+    ) -> Result<Found, Refining> {
+        let Some((fine, finer)) = levels.split_first() else {
+            return Err(Refining::Failed("no finer level".to_string()));
+        };
+        let segment = self.follow_stretch(first, fine, method, i, j)?;
+        let within = stretches_to_refine(&segment, method.is_some());
+        if finer.is_empty() || within.is_empty() {
+            return Ok(segment.found());
+        }
+        match self.refine(&segment, finer, method, &within) {
+            Ok(f) => Ok(f),
+            Err(Refining::Failed(_)) => Ok(segment.found()),
+            Err(Refining::NotCovered(_)) => self.stretch_found(first, finer, method, i, j),
+        }
+    }
+
+    /// The stretch of `first` from point `i` to point `j + 1` followed on `fine`'s
+    /// smaller step: from point `i`, oriented along the chord to the next, in `first`'s
+    /// arclength scales, until it has passed point `j + 1` (close to it, beyond the plane
+    /// through it across the last step's chord); an error when it does not get there.
+    fn follow_stretch(
+        &self,
+        first: &Traced,
+        fine: &SweepProblem,
+        method: Option<&dyn crate::stability::StabilityMethod>,
+        i: usize,
+        j: usize,
+    ) -> Result<Traced, Refining> {
+        let points = &first.branch.points;
         // a point's unknowns, then ω
         let x = |b: &BranchPoint| -> Vec<f64> {
             let mut v = b.solution.unknowns();
@@ -175,65 +214,57 @@ impl Window<'_> {
                 .collect()
         };
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(u, v)| u * v).sum::<f64>();
-        for &(i, j) in stretches {
-            let start = x(&points[i]);
-            let end = x(&points[j + 1]);
-            // the stretch's last step, along which the fine pass is seen to pass its end
-            let along = scaled(&end, &x(&points[j]));
-            let span = points[j + 1].arclength - points[i].arclength;
-            let mut opts = fine.continuation_options(
-                points[i].solution.omega,
-                self.end,
-                self.bounds,
-                Some(start[..start.len() - 1].to_vec()),
-                (j + 1 - i) * 2 * LEVEL_DIVISOR as usize + 16,
-            );
-            // how close to the stretch's end a point past it must be: the fine pass
-            // solves the same equations, so on the same sheet it passes through that
-            // point, and its first point past it lies within a fine step (along the
-            // tangent, and the corrector's reach across it); twice that
-            let mcd = opts.max_corrector_distance;
-            let reach = 2.0 * (1.0 + mcd * mcd).sqrt() * opts.ds_max;
-            // oriented along the first pass's chord (the window's end decides only the
-            // count of folds passed, as in the first pass)
-            opts.start_direction = Some(
-                x(&points[i + 1])
-                    .iter()
-                    .zip(&start)
-                    .map(|(b, a)| b - a)
-                    .collect(),
-            );
-            opts.scales = Some(first.scales.clone());
-            let passed = |b: &BranchPoint| {
-                let d = scaled(&x(b), &end);
-                dot(&d, &along) >= 0.0 && dot(&d, &d).sqrt() <= reach && b.arclength >= 0.5 * span
-            };
-            let segment = Traced::follow_until(fine, opts, method, passed)
-                .map_err(|e| Refining::Failed(e.into()))?;
-            // a stretch the finer pass did not cover is no evidence either way
-            let covered = match (&segment.branch.finish, &first.branch.finish) {
-                (FinishReason::Stopped { .. }, _) => true,
-                // the stretch ends where the first pass reached the window's bound
-                (FinishReason::Bound { omega: a }, FinishReason::Bound { omega: b }) => {
-                    j + 2 == points.len() && a == b
-                }
-                _ => false,
-            };
-            if !covered {
-                return Err(Refining::NotCovered(format!(
-                    "the finer pass over steps {i}–{j} did not reach point {}: {}",
-                    j + 1,
-                    segment.branch.finish
-                )));
+        let start = x(&points[i]);
+        let end = x(&points[j + 1]);
+        // the stretch's last step, along which the fine pass is seen to pass its end
+        let along = scaled(&end, &x(&points[j]));
+        let span = points[j + 1].arclength - points[i].arclength;
+        let mut opts = fine.continuation_options(
+            points[i].solution.omega,
+            self.end,
+            self.bounds,
+            Some(start[..start.len() - 1].to_vec()),
+            (j + 1 - i) * 2 * LEVEL_DIVISOR as usize + 16,
+        );
+        // how close to the stretch's end a point past it must be: the fine pass
+        // solves the same equations, so on the same sheet it passes through that
+        // point, and its first point past it lies within a fine step (along the
+        // tangent, and the corrector's reach across it); twice that
+        let mcd = opts.max_corrector_distance;
+        let reach = 2.0 * (1.0 + mcd * mcd).sqrt() * opts.ds_max;
+        // oriented along the first pass's chord (the window's end decides only the
+        // count of folds passed, as in the first pass)
+        opts.start_direction = Some(
+            x(&points[i + 1])
+                .iter()
+                .zip(&start)
+                .map(|(b, a)| b - a)
+                .collect(),
+        );
+        opts.scales = Some(first.scales.clone());
+        let passed = |b: &BranchPoint| {
+            let d = scaled(&x(b), &end);
+            dot(&d, &along) >= 0.0 && dot(&d, &d).sqrt() <= reach && b.arclength >= 0.5 * span
+        };
+        let segment = Traced::follow_until(fine, opts, method, passed)
+            .map_err(|e| Refining::Failed(e.into()))?;
+        // a stretch the finer pass did not cover is no evidence either way
+        let covered = match (&segment.branch.finish, &first.branch.finish) {
+            (FinishReason::Stopped { .. }, _) => true,
+            // the stretch ends where the first pass reached the window's bound
+            (FinishReason::Bound { omega: a }, FinishReason::Bound { omega: b }) => {
+                j + 2 == points.len() && a == b
             }
-            let within = stretches_to_refine(&segment, method.is_some());
-            found.extend(if finer.is_empty() || within.is_empty() {
-                segment.found()
-            } else {
-                self.refine(&segment, finer, method, &within)?
-            });
+            _ => false,
+        };
+        if !covered {
+            return Err(Refining::NotCovered(format!(
+                "the finer pass over steps {i}–{j} did not reach point {}: {}",
+                j + 1,
+                segment.branch.finish
+            )));
         }
-        Ok(found)
+        Ok(segment)
     }
 
     /// What the window's branch `first` found, with the stretches where a change may
@@ -294,7 +325,8 @@ const MAX_START_RETRIES: usize = 3;
 /// from the group's first event (`before`: the recorded points up to it, in branch order)
 /// while the points stay inside the window (the branch may pass the same speeds on
 /// another sheet earlier), the first point at least half a window (`w`) from each event
-/// (`omegas`) and up to [`MAX_START_RETRIES`] further back inside the window; else the
+/// (`omegas`), then up to [`MAX_START_RETRIES`] further back inside the window (further
+/// from the events as the branch runs there, though not necessarily in ω); else the
 /// earliest of that stretch; else the point just before.
 fn start_candidates<'p>(
     before: &[&'p StartPoint<'p>],
@@ -745,8 +777,8 @@ impl<'a> Checking<'a> {
     }
 
     /// The outcomes of group `g` (indices into the events) at order `o`: its window
-    /// followed from the recorded point before it, again with a finer step where an event
-    /// seemed to vanish.
+    /// followed from a recorded point before it ([`start_candidates`], the next one where
+    /// a start fails), again with a finer step where an event seemed to vanish.
     fn group(&self, o: &AtOrder, g: &[usize]) -> Result<Vec<TruncationOutcome>, SweepError> {
         let say = |m: &str| (self.progress)(m);
         let order = o.order;
