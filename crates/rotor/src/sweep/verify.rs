@@ -301,17 +301,12 @@ impl Window<'_> {
                     "{e}; the whole window again with a step of {:.4}",
                     fine.settings.sweep.ds_max
                 ));
-                let whole = Window {
+                let wider = Window {
                     max_points: self.max_points * LEVEL_DIVISOR as usize,
                     ..*self
-                }
-                .follow(fine, method)
-                .map_err(String::from)?;
-                Window {
-                    max_points: self.max_points * LEVEL_DIVISOR as usize,
-                    ..*self
-                }
-                .deepen(&whole, finer, method, interrupted, note)
+                };
+                let whole = wider.follow(fine, method).map_err(String::from)?;
+                wider.deepen(&whole, finer, method, interrupted, note)
             }
         }
     }
