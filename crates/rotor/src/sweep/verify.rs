@@ -267,8 +267,9 @@ impl Window<'_> {
         Ok(segment)
     }
 
-    /// What the window's branch `first` found, with the stretches where a change may
-    /// hide followed again at each of `levels` in turn ([`Self::refine`]). Where a
+    /// What the window's branch `first` found, with its `stretches` where a change may
+    /// hide ([`stretches_to_refine`]) followed again at each of `levels` in turn
+    /// ([`Self::refine`]). Where a
     /// stretch is not covered (a pass jumped between sheets of the branch within a
     /// step), the whole window is followed again at the first level, and its stretches
     /// refined at the next ones (down to the whole window at the finest level).
@@ -278,6 +279,7 @@ impl Window<'_> {
     fn deepen(
         &self,
         first: &Traced,
+        stretches: &[(usize, usize)],
         levels: &[SweepProblem],
         method: Option<&dyn crate::stability::StabilityMethod>,
         interrupted: &dyn Fn() -> bool,
@@ -286,11 +288,10 @@ impl Window<'_> {
         let Some((fine, finer)) = levels.split_first() else {
             return Ok(first.found());
         };
-        let stretches = stretches_to_refine(first, method.is_some());
         if stretches.is_empty() {
             return Ok(first.found());
         }
-        match self.refine(first, levels, method, &stretches) {
+        match self.refine(first, levels, method, stretches) {
             Ok(f) => Ok(f),
             Err(Refining::Failed(e)) => Err(e),
             Err(Refining::NotCovered(_)) if interrupted() => {
@@ -306,7 +307,8 @@ impl Window<'_> {
                     ..*self
                 };
                 let whole = wider.follow(fine, method).map_err(String::from)?;
-                wider.deepen(&whole, finer, method, interrupted, note)
+                let stretches = stretches_to_refine(&whole, method.is_some());
+                wider.deepen(&whole, &stretches, finer, method, interrupted, note)
             }
         }
     }
@@ -861,7 +863,6 @@ impl<'a> Checking<'a> {
             let stretches = stretches_to_refine(first, method.is_some());
             let steps: usize = stretches.iter().map(|(i, j)| j + 1 - i).sum();
             let note = |m: String| say(&format!("order {order}, window {from:.3} → {end:.3}: {m}"));
-            let fine_step = o.settings.sweep.ds_max / FINE_STEP_DIVISOR;
             if stretches.is_empty() {
                 note(format!(
                     "{} not found, and no step where it could hide",
@@ -872,9 +873,8 @@ impl<'a> Checking<'a> {
                     .iter()
                     .map(|s| SweepProblem::with_model(s, self.model.clone()))
                     .collect::<Result<Vec<_>, _>>()?;
-                let coarsest = levels
-                    .first()
-                    .map_or(fine_step, |p| p.settings.sweep.ds_max);
+                let step = |p: Option<&SweepProblem>| p.map_or(0.0, |p| p.settings.sweep.ds_max);
+                let (coarsest, fine_step) = (step(levels.first()), step(levels.last()));
                 note(format!(
                     "{} not found; again with a step of {coarsest:.4} on {} stretches ({steps} \
                      of {} steps), down to {fine_step:.4} where a change may still hide",
@@ -882,7 +882,7 @@ impl<'a> Checking<'a> {
                     stretches.len(),
                     first.branch.points.len().saturating_sub(1),
                 ));
-                match window.deepen(first, &levels, method, self.interrupted, &note) {
+                match window.deepen(first, &stretches, &levels, method, self.interrupted, &note) {
                     Ok(f) => found = Ok(f),
                     Err(e) => note(format!(
                         "the finer pass failed ({e}); the first pass's findings stand"
