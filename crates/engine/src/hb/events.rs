@@ -115,14 +115,14 @@ impl PanelRule {
 
     /// The nodes of one period for switching functions whose values at this rule's nodes
     /// are `values` (node-major, `n_switch` per node): where one changes sign between two
-    /// consecutive nodes (cyclically), `locate(i, θa, θb)` returns its zero in
-    /// `[θa, θb]`, and the panels holding zeros are cut there and integrated piece by
-    /// piece.
+    /// consecutive nodes (cyclically), `locate(i, (θa, sa), (θb, sb))` returns its zero in
+    /// `[θa, θb]` (`sa`, `sb` its values there, from `values`), and the panels holding
+    /// zeros are cut there and integrated piece by piece.
     pub fn refine(
         &self,
         values: &[f64],
         n_switch: usize,
-        mut locate: impl FnMut(usize, f64, f64) -> f64,
+        mut locate: impl FnMut(usize, (f64, f64), (f64, f64)) -> f64,
     ) -> EventNodes {
         let n = self.theta.len();
         let mut events = Vec::new();
@@ -140,7 +140,7 @@ impl PanelRule {
                 for i in 0..n_switch {
                     let (sa, sb) = (values[j * n_switch + i], values[jn * n_switch + i]);
                     if sa.is_finite() && sb.is_finite() && (sa > 0.0) != (sb > 0.0) {
-                        events.push(locate(i, ta, tb).rem_euclid(TAU));
+                        events.push(locate(i, (ta, sa), (tb, sb)).rem_euclid(TAU));
                     }
                 }
             }
@@ -299,9 +299,9 @@ mod tests {
     /// The nodes of `rule` for the single switching function `s(θ)`.
     fn refine_with(rule: &PanelRule, s: impl Fn(f64) -> f64) -> EventNodes {
         let values: Vec<f64> = rule.theta().iter().map(|&t| s(t)).collect();
-        rule.refine(&values, 1, |_, a, b| {
+        rule.refine(&values, 1, |_, (a, fa), (b, fb)| {
             let mut f = |t: f64| s(t);
-            illinois(&mut f, a, s(a), b, s(b))
+            illinois(&mut f, a, fa, b, fb)
         })
     }
 
@@ -360,7 +360,7 @@ mod tests {
     #[test]
     fn no_switching_gives_plain_panels() {
         let rule = PanelRule::new(32, 3);
-        let nodes = rule.refine(&[], 0, |_, a, _| a);
+        let nodes = rule.refine(&[], 0, |_, (a, _), _| a);
         assert_eq!(nodes.len(), 256);
         assert!(nodes.events.is_empty());
         let series: Vec<f64> = nodes.theta.iter().map(|&t| (3.0 * t).sin()).collect();

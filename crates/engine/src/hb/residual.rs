@@ -126,6 +126,11 @@ pub struct HarmonicBalance<'a> {
     /// Per-sample evaluation buffers of earlier residuals, reused: allocating and zeroing
     /// them (128 × 13 kB on the dual rotor) was about a tenth of a residual.
     eval_pool: std::sync::Mutex<Vec<Vec<NonlinearEval>>>,
+    /// The last load's coefficients and the ω (its bits) they are for: a step asks for
+    /// the load at one ω about twice (its residual and the convergence test's reference
+    /// norms), and sampling the forcing over the AFT grid is a fifth of a residual on a
+    /// small system.
+    load_cache: std::sync::Mutex<Option<(u64, Vec<f64>)>>,
 }
 
 impl std::fmt::Debug for HarmonicBalance<'_> {
@@ -364,6 +369,7 @@ impl<'a> HarmonicBalance<'a> {
             n_mech,
             n_therm,
             eval_pool: std::sync::Mutex::new(Vec::new()),
+            load_cache: std::sync::Mutex::new(None),
         })
     }
 
@@ -439,14 +445,14 @@ impl<'a> HarmonicBalance<'a> {
         }
         let mut st = NodeState::new(p, q);
         let mut buf = vec![0.0; ns];
-        let nodes = self.rule.refine(&values, ns, |i, a, b| {
+        // the bracket's ends are nodes whose switching values are known
+        let nodes = self.rule.refine(&values, ns, |i, (a, fa), (b, fb)| {
             let mut f = |th: f64| {
                 self.state_at_phase(coeffs, wb, th, &mut st);
                 self.system
                     .switching(omega, th / wb, &st.x, &st.v, &st.temp, &mut buf);
                 buf[i]
             };
-            let (fa, fb) = (f(a), f(b));
             illinois(&mut f, a, fa, b, fb)
         });
         (nodes, states)
@@ -591,6 +597,21 @@ impl<'a> HarmonicBalance<'a> {
 
     /// Coefficients of the loads `F(t; ω)` (projected by AFT) and `F_T(ω)` (constant term).
     pub fn load_coeffs(&self, omega: f64) -> Vec<f64> {
+        let key = omega.to_bits();
+        if let Ok(cache) = self.load_cache.lock()
+            && let Some((k, load)) = cache.as_ref()
+            && *k == key
+        {
+            return load.clone();
+        }
+        let out = self.load_coeffs_uncached(omega);
+        if let Ok(mut cache) = self.load_cache.lock() {
+            *cache = Some((key, out.clone()));
+        }
+        out
+    }
+
+    fn load_coeffs_uncached(&self, omega: f64) -> Vec<f64> {
         let nc = self.n_coeffs();
         let n = self.aft.n_samples();
         let mut out = vec![0.0; self.n_unknowns()];
