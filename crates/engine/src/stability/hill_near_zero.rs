@@ -626,8 +626,10 @@ fn arnoldi_nearest(
     // allocated in full is megabytes of fresh pages zeroed at every point
     let mut next_check = round((want + want / 3 + 4).min(96)).min(max_dim);
     let mut basis = Mat::<f64>::zeros(dim, (next_check + p).min(max_dim + p));
-    // the block Hessenberg matrix: `hh[(i, j)]` for the columns so far
-    let mut hh = Mat::<f64>::zeros(max_dim + p, max_dim);
+    // the block Hessenberg matrix: `hh[(i, j)]` for the columns so far, one block of
+    // rows more than the basis has columns, grown with it (in full it is another
+    // megabyte of fresh pages at every point)
+    let mut hh = Mat::<f64>::zeros(basis.ncols() + p, basis.ncols());
     let mut directions = Directions::new();
     let columns: Vec<Vec<f64>> = (0..p).map(|_| directions.next(dim)).collect();
     let mut start = Mat::from_fn(dim, p, |i, j| columns[j][i]);
@@ -676,6 +678,7 @@ fn arnoldi_nearest(
         if basis.ncols() < m + p {
             let cols = (next_check + p).min(max_dim + p).max(m + p);
             basis.resize_with(dim, cols, |_, _| 0.0);
+            hh.resize_with(cols + p, cols, |_, _| 0.0);
         }
         basis.as_mut().subcols_mut(m, p).copy_from(&w);
     }
