@@ -283,10 +283,12 @@ pub trait System: Sync {
     ) {
     }
 
-    /// Mechanical load `F(t; ω)` (length `n_mech`), written into `out`.
+    /// Mechanical load `F(t; ω)` (length `n_mech`), written into `out`: a function of
+    /// `ω` and `t` alone (the harmonic balance keeps its coefficients for the last `ω`).
     fn forcing(&self, omega: f64, t: f64, out: &mut [f64]);
 
-    /// Constant thermal load `F_T(ω)` (length `n_therm`), written into `out`.
+    /// Constant thermal load `F_T(ω)` (length `n_therm`), written into `out`: a function
+    /// of `ω` alone.
     fn thermal_load(&self, _omega: f64, out: &mut [f64]) {
         out.iter_mut().for_each(|v| *v = 0.0);
     }

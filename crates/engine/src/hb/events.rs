@@ -117,7 +117,11 @@ impl PanelRule {
     /// are `values` (node-major, `n_switch` per node): where one changes sign between two
     /// consecutive nodes (cyclically), `locate(i, (θa, sa), (θb, sb))` returns its zero in
     /// `[θa, θb]` (`sa`, `sb` its values there, from `values`), and the panels holding
-    /// zeros are cut there and integrated piece by piece.
+    /// zeros are cut there and integrated piece by piece. For the bracket across the
+    /// period's end (`θb` = the first node's phase + 2π), `sb` is the first node's value:
+    /// the same for a switching function periodic in `θ`, and a locator whose function
+    /// is not (a rolling-element bearing's contacts move with the cage, whose speed is
+    /// not a multiple of the base frequency) evaluates it there again.
     pub fn refine(
         &self,
         values: &[f64],

@@ -224,7 +224,8 @@ pub fn shoot_periodic_segments(
                 let next = &ys[(k + 1) % n_seg];
                 ends[k].iter().zip(next).map(|(a, b)| a - b)
             });
-            if r.fold(0.0f64, |m, v| m.max(v.abs())) <= START_CONVERGED * integrator.rtol * scale {
+            residual = r.fold(0.0f64, |m, v| m.max(v.abs()));
+            if residual <= START_CONVERGED * integrator.rtol * scale {
                 rtol = full.rtol;
                 continue;
             }
