@@ -118,15 +118,15 @@ impl PanelRule {
     /// consecutive nodes (cyclically), `locate(i, (θa, sa), (θb, sb))` returns its zero in
     /// `[θa, θb]` (`sa`, `sb` its values there, from `values`), and the panels holding
     /// zeros are cut there and integrated piece by piece. For the bracket across the
-    /// period's end (`θb` = the first node's phase + 2π), `sb` is the first node's value:
-    /// the same for a switching function periodic in `θ`, and a locator whose function
-    /// is not (a rolling-element bearing's contacts move with the cage, whose speed is
-    /// not a multiple of the base frequency) evaluates it there again.
+    /// period's end (`θb` = the first node's phase + 2π) `sb` is `None`: the first node's
+    /// value decides the sign, but a switching function need not be periodic in `θ` (a
+    /// rolling-element bearing's contacts move with the cage, whose speed is not a
+    /// multiple of the base frequency), so the locator evaluates it at `θb`.
     pub fn refine(
         &self,
         values: &[f64],
         n_switch: usize,
-        mut locate: impl FnMut(usize, (f64, f64), (f64, f64)) -> f64,
+        mut locate: impl FnMut(usize, (f64, f64), (f64, Option<f64>)) -> f64,
     ) -> EventNodes {
         let n = self.theta.len();
         let mut events = Vec::new();
@@ -144,6 +144,7 @@ impl PanelRule {
                 for i in 0..n_switch {
                     let (sa, sb) = (values[j * n_switch + i], values[jn * n_switch + i]);
                     if sa.is_finite() && sb.is_finite() && (sa > 0.0) != (sb > 0.0) {
+                        let sb = (jn != 0).then_some(sb);
                         events.push(locate(i, (ta, sa), (tb, sb)).rem_euclid(TAU));
                     }
                 }
@@ -305,6 +306,7 @@ mod tests {
         let values: Vec<f64> = rule.theta().iter().map(|&t| s(t)).collect();
         rule.refine(&values, 1, |_, (a, fa), (b, fb)| {
             let mut f = |t: f64| s(t);
+            let fb = fb.unwrap_or_else(|| f(b));
             illinois(&mut f, a, fa, b, fb)
         })
     }

@@ -446,8 +446,7 @@ impl<'a> HarmonicBalance<'a> {
         let mut st = NodeState::new(p, q);
         let mut buf = vec![0.0; ns];
         // the bracket's ends are nodes whose switching values are known, but for the end
-        // past the period's (a switching function need not be periodic in the base
-        // period: a bearing's contacts move with its cage)
+        // past the period's (see `PanelRule::refine`)
         let nodes = self.rule.refine(&values, ns, |i, (a, fa), (b, fb)| {
             let mut f = |th: f64| {
                 self.state_at_phase(coeffs, wb, th, &mut st);
@@ -455,7 +454,7 @@ impl<'a> HarmonicBalance<'a> {
                     .switching(omega, th / wb, &st.x, &st.v, &st.temp, &mut buf);
                 buf[i]
             };
-            let fb = if b >= std::f64::consts::TAU { f(b) } else { fb };
+            let fb = fb.unwrap_or_else(|| f(b));
             illinois(&mut f, a, fa, b, fb)
         });
         (nodes, states)

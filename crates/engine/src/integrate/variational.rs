@@ -148,8 +148,8 @@ const START_CONVERGED: f64 = 10.0;
 /// above its integration error). A start whose loose residual is already at that
 /// integration's own error level is measured again at the full tolerance before any step;
 /// the loose look integrates the state alone first, and the sensitivities only where the
-/// start needs a step. Every later integration, the convergence test and the returned monodromy use the full
-/// tolerance.
+/// start needs a step. Every later integration, the convergence test and the returned
+/// monodromy use the full tolerance.
 pub fn shoot_periodic(
     system: &dyn System,
     omega: f64,
@@ -210,7 +210,7 @@ pub fn shoot_periodic_segments(
             ..full
         };
         let exact = rtol <= full.rtol;
-        let scale = 1.0 + ys.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let scale = 1.0 + ys.iter().map(|y| max_abs(y)).fold(0.0, f64::max);
         if !exact {
             // the loose look first without the sensitivities (a fifth of the equations of
             // a small system): a start already at that integration's own error (a well
@@ -220,11 +220,7 @@ pub fn shoot_periodic_segments(
                 .enumerate()
                 .map(|(k, y)| flow(&space, k as f64 * h, y, h, &integrator))
                 .collect::<Result<_, _>>()?;
-            let r = (0..n_seg).flat_map(|k| {
-                let next = &ys[(k + 1) % n_seg];
-                ends[k].iter().zip(next).map(|(a, b)| a - b)
-            });
-            residual = r.fold(0.0f64, |m, v| m.max(v.abs()));
+            residual = max_abs(&gaps(&ys, |k| &ends[k]));
             if residual <= START_CONVERGED * integrator.rtol * scale {
                 rtol = full.rtol;
                 continue;
@@ -235,14 +231,8 @@ pub fn shoot_periodic_segments(
             .enumerate()
             .map(|(k, y)| flow_with_sensitivity(&space, k as f64 * h, y, h, &integrator))
             .collect::<Result<_, _>>()?;
-        // r_k = y_k(t_{k+1}) − y_{k+1}
-        let r: Vec<f64> = (0..n_seg)
-            .flat_map(|k| {
-                let next = &ys[(k + 1) % n_seg];
-                flows[k].y.iter().zip(next).map(|(a, b)| a - b)
-            })
-            .collect();
-        residual = r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let r = gaps(&ys, |k| &flows[k].y);
+        residual = max_abs(&r);
         if exact && residual <= opts.tol * scale {
             return Ok(FlowSensitivity {
                 phi: monodromy(&flows),
@@ -295,6 +285,26 @@ pub fn shoot_periodic_segments(
         iterations: opts.max_iterations,
         residual,
     })
+}
+
+/// The multiple-shooting residual `r_k = y_k(t_{k+1}) − y_{k+1}` (indices mod the number
+/// of segments) of segment starts `ys` whose ends are `end(k)`.
+fn gaps<'e>(ys: &[Vec<f64>], end: impl Fn(usize) -> &'e [f64]) -> Vec<f64> {
+    let n = ys.len();
+    (0..n)
+        .flat_map(|k| {
+            let next = &ys[(k + 1) % n];
+            end(k)
+                .iter()
+                .zip(next)
+                .map(|(a, b)| a - b)
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |m, x| m.max(x.abs()))
 }
 
 fn identity_flat(d: usize) -> Vec<f64> {
