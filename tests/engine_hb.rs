@@ -158,6 +158,31 @@ fn solve_both(system: &dyn System, basis: &Basis, omega: f64, bordered: bool) {
             assert!((mu - muf).abs() < 1e-10 * muf.abs().max(1.0));
         }
     }
+    // blocks of right-hand sides, with the factors kept for one column at a time and for
+    // blocks: every column equals a fresh full solve
+    let rhs = faer::Mat::from_fn(nu, 3, |i, j| [&b, &b2, &col][j][i]);
+    let es = [0.4, -1.3, 2.1];
+    let solver = LinearSolver { condense: true };
+    for fact in [
+        solver.factor(&hb, &parts, border).expect("factor"),
+        solver
+            .factor_for_blocks(&hb, &parts, border)
+            .expect("factor for blocks"),
+    ] {
+        let (x, mu) = fact.solve_many(rhs.as_ref(), &es).expect("solve many");
+        for j in 0..3 {
+            let bj: Vec<f64> = (0..nu).map(|i| rhs[(i, j)]).collect();
+            let (xf, muf) = LinearSolver { condense: false }
+                .solve(&hb, &parts, border, &bj, es[j])
+                .expect("full");
+            let scale = xf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            for (i, v) in xf.iter().enumerate() {
+                assert!((x[(i, j)] - v).abs() < 1e-10 * scale, "{} vs {v}", x[(i, j)]);
+            }
+            let mu_j = if bordered { mu[j] } else { 0.0 };
+            assert!((mu_j - muf).abs() < 1e-10 * muf.abs().max(1.0));
+        }
+    }
 }
 
 #[test]
