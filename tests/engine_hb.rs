@@ -177,7 +177,11 @@ fn solve_both(system: &dyn System, basis: &Basis, omega: f64, bordered: bool) {
                 .expect("full");
             let scale = xf.iter().fold(0.0f64, |m, v| m.max(v.abs()));
             for (i, v) in xf.iter().enumerate() {
-                assert!((x[(i, j)] - v).abs() < 1e-10 * scale, "{} vs {v}", x[(i, j)]);
+                assert!(
+                    (x[(i, j)] - v).abs() < 1e-10 * scale,
+                    "{} vs {v}",
+                    x[(i, j)]
+                );
             }
             let mu_j = if bordered { mu[j] } else { 0.0 };
             assert!((mu_j - muf).abs() < 1e-10 * muf.abs().max(1.0));

@@ -125,12 +125,7 @@ impl LinearSolver {
         parts: &JacobianParts,
         border: Option<Border<'_>>,
     ) -> Result<Factorization, SolveError> {
-        let inner = Arc::new(if self.condense {
-            Factored::Condensed(Box::new(Condensed::new(hb, parts, border, Layout::Single)?))
-        } else {
-            Factored::Full(full_lu(hb, parts, border))
-        });
-        Ok(self.wrap(inner, hb, parts, border))
+        self.factor_in(hb, parts, border, Layout::Single)
     }
 
     /// [`Self::factor`] for solves with blocks of right-hand sides
@@ -143,28 +138,28 @@ impl LinearSolver {
         parts: &JacobianParts,
         border: Option<Border<'_>>,
     ) -> Result<Factorization, SolveError> {
-        let inner = Arc::new(if self.condense {
-            Factored::Condensed(Box::new(Condensed::new(hb, parts, border, Layout::Blocks)?))
-        } else {
-            Factored::Full(full_lu(hb, parts, border))
-        });
-        Ok(self.wrap(inner, hb, parts, border))
+        self.factor_in(hb, parts, border, Layout::Blocks)
     }
 
-    fn wrap(
+    fn factor_in(
         &self,
-        inner: Arc<Factored>,
         hb: &HarmonicBalance<'_>,
         parts: &JacobianParts,
         border: Option<Border<'_>>,
-    ) -> Factorization {
-        Factorization {
+        layout: Layout,
+    ) -> Result<Factorization, SolveError> {
+        let inner = Arc::new(if self.condense {
+            Factored::Condensed(Box::new(Condensed::new(hb, parts, border, layout)?))
+        } else {
+            Factored::Full(full_lu(hb, parts, border))
+        });
+        Ok(Factorization {
             inner,
             omega: parts.omega,
             n_unknowns: hb.n_unknowns(),
             border: border.map(|bd| (bd.row.to_vec(), bd.corner)),
             row_update: None,
-        }
+        })
     }
 }
 
