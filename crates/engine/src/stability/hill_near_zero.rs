@@ -389,17 +389,20 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         // a shift slightly off zero (the Jacobian is singular at folds), small against
         // the disk; a second one if T(σ) happens to be singular there
         let mut last_err = String::new();
+        let want = want.min(dim.saturating_sub(2)).max(1);
         let block = match options.block {
             0 if self.globals.len() * self.hb.n_coeffs() >= AUTO_BLOCK_FROM => AUTO_BLOCK,
             0 => 1,
             b => b,
         };
+        // the factors in the layout for the block size the iteration will use
+        let (_, p) = krylov_limits(dim, want, options, block);
         for shift in [1e-3 * r_max, -2.3e-3 * r_max] {
-            let solver = LinearSolver::default();
-            let factored = if block > 1 {
-                solver.factor_for_blocks(self.hb, &self.at(shift), None)
+            let (solver, t) = (LinearSolver::default(), self.at(shift));
+            let factored = if p > 1 {
+                solver.factor_for_blocks(self.hb, &t, None)
             } else {
-                solver.factor(self.hb, &self.at(shift), None)
+                solver.factor(self.hb, &t, None)
             };
             let fact = match factored {
                 Ok(f) => f,
@@ -464,7 +467,6 @@ impl<'a, 'h> HillPencil<'a, 'h> {
                 }
                 Ok(out)
             };
-            let want = want.min(dim.saturating_sub(2)).max(1);
             return arnoldi_nearest(op, dim, want, shift, r_max, options, block, vectors)
                 .map_err(|e| setup(format!("Hill eigenvalues near zero: {e}")));
         }
@@ -596,6 +598,24 @@ fn orthonormalise(
     (c, r, deflated)
 }
 
+/// The largest Krylov dimension and the block size of [`arnoldi_nearest`] for `want`
+/// eigenvalues of an operator of dimension `dim`, `block` vectors asked for a step.
+fn krylov_limits(dim: usize, want: usize, options: &HillOptions, block: usize) -> (usize, usize) {
+    // at least twice the wanted count (a large thermal network wants many)
+    let max_dim = options.max_dim.max(2 * want + 40).min(dim);
+    // blocks only where the space is far larger than the part of it used: on a small one
+    // (the one-DoF oscillator's 57 unknowns, blocks of 4) the Krylov space becomes
+    // invariant, the block's dependent vectors are replaced by fresh ones, and the
+    // wanted values were not all converged when the space ran out
+    let p = if dim >= 4 * max_dim {
+        block.clamp(1, (max_dim / 4).max(1))
+    } else {
+        1
+    };
+    // in whole blocks
+    (if p > 1 { (max_dim / p) * p } else { max_dim }, p)
+}
+
 /// Block Arnoldi on the shift-inverted operator `op` (dimension `dim`, applied to a block
 /// of vectors at once) until the `want` eigenvalues nearest `shift` and the next one are
 /// converged, or every eigenvalue in the disk of radius `r_max` is, or the Krylov space
@@ -612,19 +632,7 @@ fn arnoldi_nearest(
     block: usize,
     vectors: bool,
 ) -> Result<(NearZero, Vec<Vec<Complex64>>), String> {
-    // at least twice the wanted count (a large thermal network wants many)
-    let max_dim = options.max_dim.max(2 * want + 40).min(dim);
-    // blocks only where the space is far larger than the part of it used: on a small one
-    // (the one-DoF oscillator's 57 unknowns, blocks of 4) the Krylov space becomes
-    // invariant, the block's dependent vectors are replaced by fresh ones, and the
-    // wanted values were not all converged when the space ran out
-    let p = if dim >= 4 * max_dim {
-        block.clamp(1, (max_dim / 4).max(1))
-    } else {
-        1
-    };
-    // in whole blocks
-    let max_dim = if p > 1 { (max_dim / p) * p } else { max_dim };
+    let (max_dim, p) = krylov_limits(dim, want, options, block);
     let round = |k: usize| k.div_ceil(p) * p;
     // the Krylov basis as columns, orthogonalised by Gram–Schmidt in matrix form (the
     // cost of the method besides the solves), allocated for the first look and grown as

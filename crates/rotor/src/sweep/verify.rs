@@ -269,10 +269,10 @@ impl Window<'_> {
 
     /// What the window's branch `first` found, with its `stretches` where a change may
     /// hide ([`stretches_to_refine`]) followed again at each of `levels` in turn
-    /// ([`Self::refine`]). Where a stretch is not covered (a pass jumped between sheets of the branch within a
-    /// step), the whole window is followed again at the first level, and its stretches
-    /// refined at the next ones (down to the whole window at the finest level).
-    /// `max_points` bounds the coarse pass: a level's whole window may take
+    /// ([`Self::refine`]). Where a stretch is not covered (a pass jumped between sheets of
+    /// the branch within a step), the whole window is followed again at the first level,
+    /// and its stretches refined at the next ones (down to the whole window at the finest
+    /// level). `max_points` bounds the coarse pass: a level's whole window may take
     /// proportionally more. An error when a finer pass failed (the first pass's findings
     /// stand).
     fn deepen(
