@@ -18,7 +18,14 @@ use tmrotor::record::reader::read_recording;
 use tmrotor::stability::{HillOptions, HillPencil};
 use tmrotor::system::PeriodicOrbit;
 
+/// The binaries' allocator and settings, so that the cost per point is theirs (the system
+/// allocator maps and unmaps the Krylov basis' megabytes at every point).
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() -> anyhow::Result<()> {
+    tmrotor::keep_freed_memory();
+    tmrotor::sequential_dense_kernels();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let file = args
         .first()

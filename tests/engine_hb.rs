@@ -308,3 +308,43 @@ fn forward_omega_derivative_matches_the_central_one() {
             .is_err()
     );
 }
+
+/// Hill's pencil takes the Jacobian and the velocity sensitivity from one evaluation of
+/// the samples: the same matrices as the two separate calls, and no sensitivity (rather
+/// than a matrix of zeros) where no force or heat depends on a velocity.
+#[test]
+fn jacobian_and_velocity_sensitivity_from_one_evaluation_equal_the_separate_ones() {
+    let basis = Basis::paper(2, Ratio::new(6, 5).expect("ratio")).expect("basis");
+    let mut without = Chain::new(5, 3);
+    without.cubic_damping = 0.0;
+    without.heat_friction = 0.0;
+    for (system, velocity_dependent) in [(Chain::new(5, 3), true), (without, false)] {
+        let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
+        let nu = hb.n_unknowns();
+        let a: Vec<f64> = pseudo_random(nu, 5).iter().map(|v| 0.5 * v).collect();
+        let (mut r1, mut r2) = (vec![0.0; nu], vec![0.0; nu]);
+        let parts = hb.residual_jacobian(&a, 0.9, &mut r1).expect("jacobian");
+        let separate = hb.velocity_sensitivity(&a, 0.9).expect("velocity");
+        let (joint, velocity) = hb
+            .residual_jacobian_velocity(&a, 0.9, &mut r2)
+            .expect("jacobian and velocity");
+        assert_eq!(r1, r2);
+        assert_eq!(parts.nonlinear, joint.nonlinear);
+        assert_eq!(hb.dense_jacobian(&parts), hb.dense_jacobian(&joint));
+        assert_eq!(
+            hb.velocity_sensitivity_if_any(&a, 0.9).expect("velocity"),
+            velocity
+        );
+        match velocity {
+            Some(v) => {
+                assert!(velocity_dependent);
+                assert!(v.iter().any(|x| *x != 0.0));
+                assert_eq!(v, separate);
+            }
+            None => {
+                assert!(!velocity_dependent);
+                assert!(separate.iter().all(|x| *x == 0.0));
+            }
+        }
+    }
+}

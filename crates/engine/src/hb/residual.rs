@@ -825,7 +825,8 @@ impl<'a> HarmonicBalance<'a> {
 
     /// Residual `R(A, ω)` into `out`.
     pub fn residual(&self, coeffs: &[f64], omega: f64, out: &mut [f64]) -> Result<(), HbError> {
-        self.residual_inner(coeffs, omega, out, None).map(|_| ())
+        self.residual_inner(coeffs, omega, out, None, None)
+            .map(|_| ())
     }
 
     /// Residual into `out` and the Jacobian `∂R/∂A` in structured form.
@@ -837,12 +838,36 @@ impl<'a> HarmonicBalance<'a> {
     ) -> Result<JacobianParts, HbError> {
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
         let mut jac = vec![0.0; pn * pn];
-        let lin = self.residual_inner(coeffs, omega, out, Some(&mut jac))?;
+        let lin = self.residual_inner(coeffs, omega, out, Some(&mut jac), None)?;
         Ok(JacobianParts {
             omega,
             linear: lin,
             nonlinear: jac,
         })
+    }
+
+    /// [`Self::residual_jacobian`] and [`Self::velocity_sensitivity`] from one evaluation
+    /// of the samples (Hill's pencil wants both at a point); the sensitivity is `None`
+    /// where it is zero: no sample has a velocity derivative (the dual rotor's forces
+    /// and heat depend on displacements and temperatures alone).
+    pub fn residual_jacobian_velocity(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+        out: &mut [f64],
+    ) -> Result<(JacobianParts, Option<Vec<f64>>), HbError> {
+        let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
+        let mut jac = vec![0.0; pn * pn];
+        let mut velocity = None;
+        let lin = self.residual_inner(coeffs, omega, out, Some(&mut jac), Some(&mut velocity))?;
+        Ok((
+            JacobianParts {
+                omega,
+                linear: lin,
+                nonlinear: jac,
+            },
+            velocity,
+        ))
     }
 
     fn residual_inner(
@@ -851,6 +876,7 @@ impl<'a> HarmonicBalance<'a> {
         omega: f64,
         out: &mut [f64],
         jac: Option<&mut Vec<f64>>,
+        velocity: Option<&mut Option<Vec<f64>>>,
     ) -> Result<LinearPart, HbError> {
         self.check_len("coefficient vector", coeffs.len())?;
         self.check_len("residual vector", out.len())?;
@@ -882,7 +908,11 @@ impl<'a> HarmonicBalance<'a> {
             if let Some(jac) = jac {
                 self.nonlinear_jacobian(&ev, omega, jac, false);
             }
+            let velocity_part = velocity.map(|v| (v, self.velocity_part(&ev, omega)));
             self.recycle(ev);
+            if let Some((v, part)) = velocity_part {
+                *v = part?;
+            }
         }
         if out.iter().any(|v| !v.is_finite()) {
             return Err(HbError::NonFinite {
@@ -899,21 +929,51 @@ impl<'a> HarmonicBalance<'a> {
     /// nonlinear terms that multiplies `λ` in Hill's eigenproblem: a perturbation
     /// `e^{λt} p(t)` has the rate `e^{λt} (ṗ + λ p)`.
     pub fn velocity_sensitivity(&self, coeffs: &[f64], omega: f64) -> Result<Vec<f64>, HbError> {
+        self.velocity_sensitivity_if_any(coeffs, omega).map(|v| {
+            v.unwrap_or_else(|| {
+                let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
+                vec![0.0; pn * pn]
+            })
+        })
+    }
+
+    /// [`Self::velocity_sensitivity`], `None` where it is zero (no sample has a velocity
+    /// derivative).
+    pub fn velocity_sensitivity_if_any(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+    ) -> Result<Option<Vec<f64>>, HbError> {
         self.check_len("coefficient vector", coeffs.len())?;
+        if self.nl.mech.len() + self.nl.therm.len() == 0 {
+            return Ok(None);
+        }
+        let ev = self.evaluate(coeffs, omega, true);
+        let out = self.velocity_part(&ev, omega);
+        self.recycle(ev);
+        out
+    }
+
+    /// The velocity sensitivity from the evaluated samples `ev` (see
+    /// [`Self::velocity_sensitivity`]); `None` when no sample has a velocity derivative.
+    fn velocity_part(&self, ev: &Evaluation, omega: f64) -> Result<Option<Vec<f64>>, HbError> {
+        let any = ev.evals.iter().any(|e| {
+            let [_, df_dv, _, _, dg_dv, _] = e.derivative_blocks();
+            df_dv.iter().chain(dg_dv).any(|v| *v != 0.0)
+        });
+        if !any {
+            return Ok(None);
+        }
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
         let mut out = vec![0.0; pn * pn];
-        if pn > 0 {
-            let ev = self.evaluate(coeffs, omega, true);
-            self.nonlinear_jacobian(&ev, omega, &mut out, true);
-            self.recycle(ev);
-        }
+        self.nonlinear_jacobian(ev, omega, &mut out, true);
         if out.iter().any(|v| !v.is_finite()) {
             return Err(HbError::NonFinite {
                 what: "velocity sensitivity",
                 omega,
             });
         }
-        Ok(out)
+        Ok(Some(out))
     }
 
     /// Assembles `∂P[f, g]/∂A` into `jac`; with `velocity_only`, the Galerkin matrix of the

@@ -187,7 +187,9 @@ impl HillMode {
 pub struct HillPencil<'a, 'h> {
     hb: &'a HarmonicBalance<'h>,
     parts: JacobianParts,
-    velocity: Vec<f64>,
+    /// The velocity sensitivity ([`HarmonicBalance::velocity_sensitivity`]); `None` where
+    /// it is zero.
+    velocity: Option<Vec<f64>>,
     /// The `(row, column)` nonlinear-DoF blocks of `velocity` with a nonzero entry (most
     /// are zero: only velocity-dependent forces and heat have one).
     velocity_blocks: Vec<(usize, usize)>,
@@ -206,31 +208,36 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         let omega = solution.omega;
         let setup = |reason: String| StabilityError::Setup { omega, reason };
         let coeffs = solution.unknowns();
-        let parts = match parts.filter(|p| p.omega == omega) {
-            Some(p) => p.clone(),
+        // the Jacobian and the velocity sensitivity from one evaluation of the samples
+        // where the Jacobian is not given
+        let (parts, velocity) = match parts.filter(|p| p.omega == omega) {
+            Some(p) => (p.clone(), hb.velocity_sensitivity_if_any(&coeffs, omega)),
             None => {
                 let mut r = vec![0.0; coeffs.len()];
-                hb.residual_jacobian(&coeffs, omega, &mut r)
-                    .map_err(|e| setup(e.to_string()))?
+                let (p, v) = hb
+                    .residual_jacobian_velocity(&coeffs, omega, &mut r)
+                    .map_err(|e| setup(e.to_string()))?;
+                (p, Ok(v))
             }
         };
-        let velocity = hb
-            .velocity_sensitivity(&coeffs, omega)
-            .map_err(|e| setup(e.to_string()))?;
+        let velocity = velocity.map_err(|e| setup(e.to_string()))?;
         let nc = hb.n_coeffs();
         let globals = hb.nonlinear_global();
         let pt = globals.len();
         let ld = pt * nc;
-        let velocity_blocks = (0..pt)
-            .flat_map(|k| (0..pt).map(move |l| (k, l)))
-            .filter(|&(k, l)| {
-                (0..nc).any(|r| {
-                    velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc]
-                        .iter()
-                        .any(|v| *v != 0.0)
+        let velocity_blocks = match &velocity {
+            Some(v) => (0..pt)
+                .flat_map(|k| (0..pt).map(move |l| (k, l)))
+                .filter(|&(k, l)| {
+                    (0..nc).any(|r| {
+                        v[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc]
+                            .iter()
+                            .any(|x| *x != 0.0)
+                    })
                 })
-            })
-            .collect();
+                .collect(),
+            None => Vec::new(),
+        };
         Ok(Self {
             hb,
             parts,
@@ -308,13 +315,16 @@ impl<'a, 'h> HillPencil<'a, 'h> {
                 nt,
             ),
         };
-        let nonlinear = self
-            .parts
-            .nonlinear
-            .iter()
-            .zip(&self.velocity)
-            .map(|(j, v)| j + s * v)
-            .collect();
+        let nonlinear = match &self.velocity {
+            Some(velocity) => self
+                .parts
+                .nonlinear
+                .iter()
+                .zip(velocity)
+                .map(|(j, v)| j + s * v)
+                .collect(),
+            None => self.parts.nonlinear.clone(),
+        };
         JacobianParts {
             omega: self.parts.omega,
             linear,
@@ -324,14 +334,16 @@ impl<'a, 'h> HillPencil<'a, 'h> {
 
     /// `out += V x` with `V` the velocity sensitivity, on its nonzero blocks.
     fn add_velocity(&self, x: &[f64], out: &mut [f64]) {
+        let Some(velocity) = &self.velocity else {
+            return;
+        };
         let nc = self.hb.n_coeffs();
         let ld = self.globals.len() * nc;
         for &(k, l) in &self.velocity_blocks {
             let (gk, gl) = (self.globals[k], self.globals[l]);
             let xs = &x[gl * nc..(gl + 1) * nc];
             for r in 0..nc {
-                let row =
-                    &self.velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc];
+                let row = &velocity[(k * nc + r) * ld + l * nc..(k * nc + r) * ld + (l + 1) * nc];
                 out[gk * nc + r] += dot(row, xs);
             }
         }
