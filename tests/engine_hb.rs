@@ -348,3 +348,41 @@ fn jacobian_and_velocity_sensitivity_from_one_evaluation_equal_the_separate_ones
         }
     }
 }
+
+/// A point's Hill exponents are the same whether the pencil evaluates the Jacobian itself
+/// or is handed the continuation's (whose flag tells it whether a velocity sensitivity
+/// must be evaluated): with and without velocity-dependent forces and heat.
+#[test]
+fn hill_exponents_equal_with_a_handed_jacobian() {
+    use tmrotor::hb::HbSolution;
+    use tmrotor::stability::{HillOptions, HillPencil};
+    let basis = Basis::integer(3).expect("basis");
+    let mut without = Chain::new(4, 3);
+    without.cubic_damping = 0.0;
+    without.heat_friction = 0.0;
+    for (system, velocity_dependent) in [(Chain::new(4, 3), true), (without, false)] {
+        let hb = HarmonicBalance::new(&system, &basis, None).expect("hb");
+        let omega = 0.9;
+        let (a, stats) = tmrotor::hb::newton::solve_fixed(
+            &hb,
+            omega,
+            &vec![0.0; hb.n_unknowns()],
+            &Default::default(),
+        )
+        .expect("a converged point");
+        let s = HbSolution::from_unknowns(omega, hb.basis(), hb.n_mech(), &a, &stats);
+        let mut r = vec![0.0; hb.n_unknowns()];
+        let parts = hb.residual_jacobian(&a, omega, &mut r).expect("jacobian");
+        assert_eq!(parts.velocity_dependent, velocity_dependent);
+        let want = hb.n_therm() + 4;
+        let options = HillOptions::default();
+        let own = HillPencil::new(&hb, &s, None)
+            .and_then(|p| p.near_zero(want, &options))
+            .expect("exponents");
+        let handed = HillPencil::new(&hb, &s, Some(&parts))
+            .and_then(|p| p.near_zero(want, &options))
+            .expect("exponents");
+        assert!(!own.exponents.is_empty());
+        assert_eq!(own, handed);
+    }
+}

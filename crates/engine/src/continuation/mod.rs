@@ -1513,6 +1513,8 @@ impl<'a> Continuation<'a> {
         };
         cur.stability.clone_from(&result.0);
         (held.point.stability, held.point.stability_error) = result;
+        // the Jacobian was kept for the assessment alone (megabytes a point)
+        held.point.jacobian = None;
         held.bifurcations.extend(found.into_iter().flatten());
         self.held = Some(held);
     }
@@ -1582,6 +1584,7 @@ impl<'a> Continuation<'a> {
             // nothing was held (not reached): assessed and handed out at once
             (point.stability, point.stability_error) =
                 self.assess(&point.solution, point.jacobian.as_deref(), &next.tangent);
+            point.jacobian = None;
             next.stability.clone_from(&point.stability);
         }
         let bifurcations = self.located_changes(cur, &next, point.index);
@@ -1685,14 +1688,12 @@ impl<'a> Continuation<'a> {
         if distance > self.opts.max_corrector_distance * ds {
             return Err(RejectReason::Distance { ds, distance });
         }
-        // kept for the point's slow exponents when stability is assessed
-        let parts = self
-            .stability
-            .and(jacobian.as_ref())
-            .map(|(p, _)| std::sync::Arc::new(p.clone()));
-        let (tangent, chord) = self
+        let (tangent, chord, parts) = self
             .tangent_factored(&a, omega, Some(&cur.tangent), jacobian, matrix, true)
             .map_err(|e| corrector(&e))?;
+        // `∂R/∂A` at the point (the corrector's or the tangent's), kept for Hill's pencil
+        // when stability is assessed
+        let parts = self.stability.is_some().then(|| std::sync::Arc::new(parts));
         let cos_angle: f64 = tangent.iter().zip(&cur.tangent).map(|(x, y)| x * y).sum();
         if cos_angle < 0.5 {
             return Err(RejectReason::Turn { ds, cos_angle });
@@ -2014,7 +2015,7 @@ mod tests {
         };
         // a nearby point, and the start's Jacobian bordered with its tangent's row
         let c = cont.correct(&start, 0.005).expect("corrects");
-        let (_, m) = cont
+        let (_, m, _) = cont
             .tangent_factored(
                 &start.a,
                 start.omega,

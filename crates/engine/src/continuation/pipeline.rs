@@ -348,11 +348,12 @@ where
         };
         match point {
             None => slot.stability = Some((state.stability.clone(), None)),
-            Some(p) => {
+            Some(mut p) => {
                 let cont = self.cont;
                 let tx = Reply(Some(self.tx.clone()));
                 let solution: HbSolution = p.solution.clone();
-                let jacobian = p.jacobian.clone();
+                // the assessment alone needs it (megabytes a point)
+                let jacobian = p.jacobian.take();
                 let at = Arc::clone(&state);
                 self.scope.spawn_fifo(move |_| {
                     let result = cont.assess(&solution, jacobian.as_deref(), &at.tangent);

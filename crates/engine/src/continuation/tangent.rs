@@ -15,13 +15,14 @@ impl<'a> Continuation<'a> {
         matrix: Option<Factorization>,
     ) -> Result<Vec<f64>, ContinuationError> {
         self.tangent_factored(a, omega, prev, jacobian, matrix, false)
-            .map(|(t, _)| t)
+            .map(|(t, _, _)| t)
     }
 
     /// [`Self::tangent`] (from `jacobian`, `∂R/∂A` and `R` at the point, when the
     /// corrector left them) and, with `prev` and `keep`, a factorization bordered with the
     /// new tangent's arclength row: the corrector's first matrix for a step from this
-    /// point (`None` when that row makes it singular).
+    /// point (`None` when that row makes it singular); and `∂R/∂A` at the point, given or
+    /// evaluated here (the point's stability reuses it).
     ///
     /// With `matrix` (the corrector's last matrix, bordered with `prev`'s arclength row:
     /// the Jacobian at an earlier iterate) the tangent system at the point is solved by
@@ -36,7 +37,7 @@ impl<'a> Continuation<'a> {
         jacobian: Option<(JacobianParts, Vec<f64>)>,
         matrix: Option<Factorization>,
         keep: bool,
-    ) -> Result<(Vec<f64>, Option<Factorization>), ContinuationError> {
+    ) -> Result<(Vec<f64>, Option<Factorization>, JacobianParts), ContinuationError> {
         let nu = self.hb.n_unknowns();
         let (parts, r) = match jacobian {
             Some(j) => j,
@@ -55,7 +56,7 @@ impl<'a> Continuation<'a> {
         let Some(t) = prev else {
             let neg: Vec<f64> = r_omega.iter().map(|v| -v).collect();
             let (z, _) = solver.solve(&self.hb, &parts, None, &neg, 0.0)?;
-            return Ok((self.oriented(&z, 1.0, None), None));
+            return Ok((self.oriented(&z, 1.0, None), None, parts));
         };
         let row = self.arc_row(t);
         let corner = t[nu] / s[nu];
@@ -69,7 +70,8 @@ impl<'a> Continuation<'a> {
             && let Some((z, zeta, own)) = self.refine_tangent(&m, &system)
         {
             let tangent = self.oriented(&z, zeta, prev);
-            return Ok(self.with_row(tangent, keep.then_some(m), Some(&own)));
+            let (t, f) = self.with_row(tangent, keep.then_some(m), Some(&own));
+            return Ok((t, f, parts));
         }
         let border = Border {
             column: &r_omega,
@@ -80,7 +82,8 @@ impl<'a> Continuation<'a> {
         let (z, zeta) = fact.solve(&vec![0.0; nu], 1.0)?;
         let tangent = self.oriented(&z, zeta, prev);
         // the tangent's own solve is `A⁻¹ e` of the row replacement
-        Ok(self.with_row(tangent, keep.then_some(fact), Some(&(z, zeta))))
+        let (t, f) = self.with_row(tangent, keep.then_some(fact), Some(&(z, zeta)));
+        Ok((t, f, parts))
     }
 
     /// The solution `(z, ζ)` of the tangent system `[[∂R/∂A, ∂R/∂ω], [rᵀ, d]] (z, ζ) =

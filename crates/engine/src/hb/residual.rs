@@ -99,6 +99,10 @@ pub struct JacobianParts {
     /// `(P·nc) × (P·nc)` row-major, `P = n_nl_mech + n_nl_therm`; block `(k, l)` couples
     /// nonlinear DoF `k` (mechanical ones first, then thermal) with nonlinear DoF `l`.
     pub nonlinear: Vec<f64>,
+    /// Whether some sample has a velocity derivative (`∂f/∂ẋ` or `∂g/∂ẋ`): where none
+    /// has, the velocity sensitivity ([`HarmonicBalance::velocity_sensitivity`]) is zero
+    /// and Hill's pencil needs no evaluation of its own.
+    pub velocity_dependent: bool,
 }
 
 /// 2-norms of the mechanical and thermal parts of a residual vector.
@@ -214,6 +218,14 @@ const PARALLEL_WIDTH: usize = 8;
 struct Evaluation {
     evals: Vec<NonlinearEval>,
     nodes: Option<EventNodes>,
+}
+
+/// Whether some evaluated sample has a velocity derivative (`∂f/∂ẋ` or `∂g/∂ẋ`).
+fn has_velocity_derivatives(ev: &Evaluation) -> bool {
+    ev.evals.iter().any(|e| {
+        let [_, df_dv, _, _, dg_dv, _] = e.derivative_blocks();
+        df_dv.iter().chain(dg_dv).any(|v| *v != 0.0)
+    })
 }
 
 /// Scratch state of the nonlinear DoFs at one instant.
@@ -838,11 +850,13 @@ impl<'a> HarmonicBalance<'a> {
     ) -> Result<JacobianParts, HbError> {
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
         let mut jac = vec![0.0; pn * pn];
-        let lin = self.residual_inner(coeffs, omega, out, Some(&mut jac), None)?;
+        let (lin, velocity_dependent) =
+            self.residual_inner(coeffs, omega, out, Some(&mut jac), None)?;
         Ok(JacobianParts {
             omega,
             linear: lin,
             nonlinear: jac,
+            velocity_dependent,
         })
     }
 
@@ -859,12 +873,14 @@ impl<'a> HarmonicBalance<'a> {
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
         let mut jac = vec![0.0; pn * pn];
         let mut velocity = None;
-        let lin = self.residual_inner(coeffs, omega, out, Some(&mut jac), Some(&mut velocity))?;
+        let (lin, velocity_dependent) =
+            self.residual_inner(coeffs, omega, out, Some(&mut jac), Some(&mut velocity))?;
         Ok((
             JacobianParts {
                 omega,
                 linear: lin,
                 nonlinear: jac,
+                velocity_dependent,
             },
             velocity,
         ))
@@ -877,7 +893,7 @@ impl<'a> HarmonicBalance<'a> {
         out: &mut [f64],
         jac: Option<&mut Vec<f64>>,
         velocity: Option<&mut Option<Vec<f64>>>,
-    ) -> Result<LinearPart, HbError> {
+    ) -> Result<(LinearPart, bool), HbError> {
         self.check_len("coefficient vector", coeffs.len())?;
         self.check_len("residual vector", out.len())?;
         let nc = self.n_coeffs();
@@ -889,6 +905,7 @@ impl<'a> HarmonicBalance<'a> {
         let lin = self.system.linear(omega);
         self.check_linear(&lin)?;
         self.add_linear(&lin, omega, coeffs, out);
+        let mut velocity_dependent = false;
         if p + q > 0 {
             let ev = self.evaluate(coeffs, omega, jac.is_some());
             let mut buf = Vec::new();
@@ -907,6 +924,7 @@ impl<'a> HarmonicBalance<'a> {
             }
             if let Some(jac) = jac {
                 self.nonlinear_jacobian(&ev, omega, jac, false);
+                velocity_dependent = has_velocity_derivatives(&ev);
             }
             let velocity_part = velocity.map(|v| (v, self.velocity_part(&ev, omega)));
             self.recycle(ev);
@@ -920,7 +938,7 @@ impl<'a> HarmonicBalance<'a> {
                 omega,
             });
         }
-        Ok(lin)
+        Ok((lin, velocity_dependent))
     }
 
     /// The Galerkin matrix of the velocity sensitivities alone, `P[∂f/∂ẋ ·]` and
@@ -957,11 +975,7 @@ impl<'a> HarmonicBalance<'a> {
     /// The velocity sensitivity from the evaluated samples `ev` (see
     /// [`Self::velocity_sensitivity`]); `None` when no sample has a velocity derivative.
     fn velocity_part(&self, ev: &Evaluation, omega: f64) -> Result<Option<Vec<f64>>, HbError> {
-        let any = ev.evals.iter().any(|e| {
-            let [_, df_dv, _, _, dg_dv, _] = e.derivative_blocks();
-            df_dv.iter().chain(dg_dv).any(|v| *v != 0.0)
-        });
-        if !any {
+        if !has_velocity_derivatives(ev) {
             return Ok(None);
         }
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();

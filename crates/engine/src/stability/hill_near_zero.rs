@@ -211,6 +211,8 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         // the Jacobian and the velocity sensitivity from one evaluation of the samples
         // where the Jacobian is not given
         let (parts, velocity) = match parts.filter(|p| p.omega == omega) {
+            // (its flag says whether any sample has a velocity derivative)
+            Some(p) if !p.velocity_dependent => (p.clone(), Ok(None)),
             Some(p) => (p.clone(), hb.velocity_sensitivity_if_any(&coeffs, omega)),
             None => {
                 let mut r = vec![0.0; coeffs.len()];
@@ -329,6 +331,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             omega: self.parts.omega,
             linear,
             nonlinear,
+            velocity_dependent: self.velocity.is_some(),
         }
     }
 
