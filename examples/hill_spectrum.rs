@@ -8,7 +8,8 @@
 //! prints the exponents nearest the imaginary axis there (how a pair crosses inside a
 //! step); with `HILL_PROFILE=1` it times the factorization of `T(σ)`, one solve and one
 //! product with the linear part at the first point in range, and lists the moduli of the
-//! exponents found.
+//! exponents found; `HILL_BLOCK=B` grows the Arnoldi iteration by `B` vectors a step (0,
+//! the default, chooses as the sweep does).
 
 use std::time::Instant;
 
@@ -46,6 +47,7 @@ fn main() -> anyhow::Result<()> {
     )?;
     let options = HillOptions {
         extra,
+        block: std::env::var("HILL_BLOCK").map_or(Ok(0), |b| b.parse())?,
         ..HillOptions::default()
     };
     if let Ok(i) = std::env::var("BETWEEN") {

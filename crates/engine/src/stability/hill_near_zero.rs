@@ -104,7 +104,14 @@ impl Default for HillOptions {
 pub const AUTO_BLOCK: usize = 4;
 
 /// The condensed size from which [`HillOptions::block`] `= 0` uses [`AUTO_BLOCK`].
-pub const AUTO_BLOCK_FROM: usize = 700;
+///
+/// The dual rotor at order 3 (612 condensed unknowns, 70 exponents wanted), one thread,
+/// with the binaries' allocator: 31.6–31.9 ms a point one vector a step (101 vectors on
+/// average), 27.8–28.9 ms with blocks of four (138 vectors). The figures above, and an
+/// earlier comparison at order 3 that favoured one vector a step, were taken with the
+/// system allocator, which maps and unmaps the larger basis at every point
+/// (docs/performance.md, fifth session). Below 612 not measured.
+pub const AUTO_BLOCK_FROM: usize = 600;
 
 /// The Floquet exponents of the truncated balance in a disk around zero.
 #[derive(Clone, Debug, PartialEq)]
