@@ -662,11 +662,13 @@ fn arnoldi_nearest(
     // allocated in full is megabytes of fresh pages zeroed at every point
     // The first look: the classical iteration has converged the wanted values after
     // about a third more vectors than wanted (on the dual rotor, 70 wanted: 85–103), a
-    // block one after a quarter more again (132 at orders 4–7 with blocks of 4), and
-    // each look that finds too few costs an eigendecomposition of the Hessenberg matrix
-    // (measured on one thread: about 2 ms at 96 columns, 3 ms at 120–132).
+    // block one after a third more again (blocks of 4, checked after every block: 116–144
+    // at order 3, 45 % by 128; 128–144 at order 5, 48 % by 128), and each look that finds
+    // too few costs an eigendecomposition of the Hessenberg matrix (measured on one
+    // thread: about 2 ms at 96 columns, 3 ms at 120–132): a block iteration looks at 128
+    // and then every two blocks, the classical one at 96 and then every twelve vectors.
     let first = (want + want / 3 + 4).min(96);
-    let first = if p > 1 { first + first / 4 } else { first };
+    let first = if p > 1 { first + first / 3 } else { first };
     let mut next_check = round(first).min(max_dim);
     let mut basis = Mat::<f64>::zeros(dim, (next_check + p).min(max_dim + p));
     // the block Hessenberg matrix: `hh[(i, j)]` for the columns so far, one block of
@@ -678,8 +680,9 @@ fn arnoldi_nearest(
     let mut start = Mat::from_fn(dim, p, |i, j| columns[j][i]);
     orthonormalise(basis.as_ref().subcols(0, 0), &mut start, None);
     basis.as_mut().subcols_mut(0, p).copy_from(&start);
-    // the first look as above (`next_check`), then every twelve vectors (early enough
-    // for a large network whose disk holds fewer than the wanted count), in whole blocks
+    // the first look as above (`next_check`), then every twelve vectors (eight with
+    // blocks; early enough for a large network whose disk holds fewer than the wanted
+    // count), in whole blocks
     let mut m = 0;
     loop {
         let mut w = op(basis.as_ref().subcols(m, p))?;
@@ -715,7 +718,7 @@ fn arnoldi_nearest(
                     "not converged in {m} Arnoldi steps (dimension {dim})"
                 ));
             }
-            next_check = (m + round(12)).min(max_dim);
+            next_check = (m + round(if p > 1 { 8 } else { 12 })).min(max_dim);
         }
         if basis.ncols() < m + p {
             let cols = (next_check + p).min(max_dim + p).max(m + p);
