@@ -848,16 +848,7 @@ impl<'a> HarmonicBalance<'a> {
         omega: f64,
         out: &mut [f64],
     ) -> Result<JacobianParts, HbError> {
-        let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
-        let mut jac = vec![0.0; pn * pn];
-        let (lin, velocity_dependent) =
-            self.residual_inner(coeffs, omega, out, Some(&mut jac), None)?;
-        Ok(JacobianParts {
-            omega,
-            linear: lin,
-            nonlinear: jac,
-            velocity_dependent,
-        })
+        self.jacobian_parts(coeffs, omega, out, None)
     }
 
     /// [`Self::residual_jacobian`] and [`Self::velocity_sensitivity`] from one evaluation
@@ -870,20 +861,30 @@ impl<'a> HarmonicBalance<'a> {
         omega: f64,
         out: &mut [f64],
     ) -> Result<(JacobianParts, Option<Vec<f64>>), HbError> {
+        let mut velocity = None;
+        let parts = self.jacobian_parts(coeffs, omega, out, Some(&mut velocity))?;
+        Ok((parts, velocity))
+    }
+
+    /// The residual into `out` and `∂R/∂A`, with the velocity sensitivity into `velocity`
+    /// when asked for ([`Self::residual_jacobian_velocity`]).
+    fn jacobian_parts(
+        &self,
+        coeffs: &[f64],
+        omega: f64,
+        out: &mut [f64],
+        velocity: Option<&mut Option<Vec<f64>>>,
+    ) -> Result<JacobianParts, HbError> {
         let pn = (self.nl.mech.len() + self.nl.therm.len()) * self.n_coeffs();
         let mut jac = vec![0.0; pn * pn];
-        let mut velocity = None;
         let (lin, velocity_dependent) =
-            self.residual_inner(coeffs, omega, out, Some(&mut jac), Some(&mut velocity))?;
-        Ok((
-            JacobianParts {
-                omega,
-                linear: lin,
-                nonlinear: jac,
-                velocity_dependent,
-            },
-            velocity,
-        ))
+            self.residual_inner(coeffs, omega, out, Some(&mut jac), velocity)?;
+        Ok(JacobianParts {
+            omega,
+            linear: lin,
+            nonlinear: jac,
+            velocity_dependent,
+        })
     }
 
     fn residual_inner(

@@ -41,6 +41,8 @@
 //! reorthogonalisation finds the Ritz values `θ` of largest modulus, `λ = σ + 1/θ`,
 //! accepted when their residual estimate is below a relative tolerance.
 
+use std::borrow::Cow;
+
 use faer::Mat;
 use num_complex::Complex64;
 
@@ -193,7 +195,9 @@ impl HillMode {
 /// Hill's pencil `T(λ)` of the harmonic balance at a converged point.
 pub struct HillPencil<'a, 'h> {
     hb: &'a HarmonicBalance<'h>,
-    parts: JacobianParts,
+    /// `∂R/∂A` at the point: the one handed over (borrowed: megabytes a point) or
+    /// evaluated here.
+    parts: Cow<'a, JacobianParts>,
     /// The velocity sensitivity ([`HarmonicBalance::velocity_sensitivity`]); `None` where
     /// it is zero.
     velocity: Option<Vec<f64>>,
@@ -210,7 +214,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
     pub fn new(
         hb: &'a HarmonicBalance<'h>,
         solution: &HbSolution,
-        parts: Option<&JacobianParts>,
+        parts: Option<&'a JacobianParts>,
     ) -> Result<Self, StabilityError> {
         let omega = solution.omega;
         let setup = |reason: String| StabilityError::Setup { omega, reason };
@@ -219,14 +223,17 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         // where the Jacobian is not given
         let (parts, velocity) = match parts.filter(|p| p.omega == omega) {
             // (its flag says whether any sample has a velocity derivative)
-            Some(p) if !p.velocity_dependent => (p.clone(), Ok(None)),
-            Some(p) => (p.clone(), hb.velocity_sensitivity_if_any(&coeffs, omega)),
+            Some(p) if !p.velocity_dependent => (Cow::Borrowed(p), Ok(None)),
+            Some(p) => (
+                Cow::Borrowed(p),
+                hb.velocity_sensitivity_if_any(&coeffs, omega),
+            ),
             None => {
                 let mut r = vec![0.0; coeffs.len()];
                 let (p, v) = hb
                     .residual_jacobian_velocity(&coeffs, omega, &mut r)
                     .map_err(|e| setup(e.to_string()))?;
-                (p, Ok(v))
+                (Cow::Owned(p), Ok(v))
             }
         };
         let velocity = velocity.map_err(|e| setup(e.to_string()))?;
@@ -267,7 +274,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
         options: &HillOptions,
     ) -> Result<f64, StabilityError> {
         let eps = 1e-3;
-        let mut scaled_parts = self.parts.clone();
+        let mut scaled_parts = (*self.parts).clone();
         scaled_parts
             .linear
             .thermal_capacity
@@ -276,7 +283,7 @@ impl<'a, 'h> HillPencil<'a, 'h> {
             .for_each(|c| *c *= 1.0 + eps);
         let scaled = HillPencil {
             hb: self.hb,
-            parts: scaled_parts,
+            parts: Cow::Owned(scaled_parts),
             velocity: self.velocity.clone(),
             velocity_blocks: self.velocity_blocks.clone(),
             globals: self.globals.clone(),
