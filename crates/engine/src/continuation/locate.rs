@@ -223,6 +223,15 @@ impl<'a> Continuation<'a> {
         let tol_omega =
             (cur.tangent[nu] * to.tangent[nu] > 0.0).then_some(self.opts.bifurcation_tol_omega);
         let mut search = CrossingSearch::new(span, [g(f_a), g(f_b)], [cur.omega, to.omega]);
+        // A period doubling's test function and side are those of the frozen-temperature
+        // product's multipliers near −1, which no near-zero disk clear of flips can
+        // supersede: the trials skip Hill's eigenproblem (on a switched branch's doubled
+        // basis about half a trial's stability), and the point found is assessed in full
+        // once, as every trial was before.
+        let fast_trials = family == Family::Kind(BifurcationKind::PeriodDoubling)
+            && [f_a, f_b]
+                .iter()
+                .all(|f| f.near_zero.is_none_or(|d| d.clear_of_flips()));
         // the trial closest to the circle
         let mut best: Option<(f64, BranchPoint)> = None;
         for _ in 0..self.opts.max_bisections {
@@ -232,7 +241,11 @@ impl<'a> Continuation<'a> {
             };
             let (a, w, st) = (c.a, c.omega, c.stats);
             let mut p = self.bare_point(index, &a, w, &st, cur.arclength + mid);
-            (p.stability, p.stability_error) = self.assess_for_search(&p.solution, [f_a, f_b]);
+            (p.stability, p.stability_error) = if fast_trials {
+                self.assess_fast_for_search(&p.solution, [f_a, f_b])
+            } else {
+                self.assess_for_search(&p.solution, [f_a, f_b])
+            };
             let Some(fm) = p.stability.as_ref() else {
                 break;
             };
@@ -257,6 +270,10 @@ impl<'a> Continuation<'a> {
             }
         }
         let (g_best, mut p) = best?;
+        if fast_trials {
+            (p.stability, p.stability_error) = self.assess_for_search(&p.solution, [f_a, f_b]);
+            p.stability.as_ref()?;
+        }
         // The near-zero test is a cosine (see `excesses_of`): a pair that crosses fast
         // keeps it far from zero until the bracket is narrow in ω; a bracket whose ends
         // lie on either side with the crossing exponent complex at the trial nearest the

@@ -1208,6 +1208,23 @@ impl<'a> Continuation<'a> {
         })
     }
 
+    /// [`Self::assess_for_search`] without the coupled exponents nearest zero
+    /// ([`crate::stability::assess_fast`]): what a period-doubling search's trials need
+    /// where the disks at its ends are clear of flips ([`NearZeroDisk::clear_of_flips`]).
+    ///
+    /// [`NearZeroDisk::clear_of_flips`]: crate::stability::NearZeroDisk::clear_of_flips
+    fn assess_fast_for_search(
+        &self,
+        solution: &HbSolution,
+        ends: [&FloquetResult; 2],
+    ) -> (Option<FloquetResult>, Option<String>) {
+        self.assessed(|m| {
+            crate::stability::assess_fast(m, &self.hb, solution, |m, system, orbit| {
+                m.search_multipliers(system, orbit, ends)
+            })
+        })
+    }
+
     fn assess_with(
         &self,
         solution: &HbSolution,
@@ -1219,12 +1236,21 @@ impl<'a> Continuation<'a> {
         ) -> Result<FloquetResult, crate::stability::StabilityError>
         + Send,
     ) -> (Option<FloquetResult>, Option<String>) {
-        match self.stability {
+        self.assessed(|m| crate::stability::assess(m, &self.hb, solution, jacobian, evaluate))
+    }
+
+    /// What `run` gives with the continuation's stability method, as a point stores it:
+    /// the result or the error's message (neither without a method).
+    fn assessed(
+        &self,
+        run: impl FnOnce(
+            &dyn StabilityMethod,
+        ) -> Result<FloquetResult, crate::stability::StabilityError>,
+    ) -> (Option<FloquetResult>, Option<String>) {
+        match self.stability.map(run) {
             None => (None, None),
-            Some(m) => match crate::stability::assess(m, &self.hb, solution, jacobian, evaluate) {
-                Ok(f) => (Some(f), None),
-                Err(e) => (None, Some(e.to_string())),
-            },
+            Some(Ok(f)) => (Some(f), None),
+            Some(Err(e)) => (None, Some(e.to_string())),
         }
     }
 

@@ -163,6 +163,17 @@ impl NearZeroDisk {
         m.norm() > 0.0 && m.ln().norm() / self.period < self.radius
     }
 
+    /// Whether no multiplier of a period doubling can be superseded by this disk's
+    /// exponents: such a multiplier (real part negative, imaginary part at most `0.05·|μ|`,
+    /// [`BifurcationKind::of_multiplier`]) has `|ln μ|/P ≥ (π − asin 0.05)/P ≈ 3.0916/P`,
+    /// and the join takes its candidates from within twice the radius ([`join`]). With
+    /// the radius below 1.5/P (on the dual rotor it is 14–21 1/s against 1.5/P ≈ 120–240
+    /// 1/s) the multipliers of that kind, and so a period-doubling search's test function,
+    /// are those of the frozen-temperature product alone.
+    pub fn clear_of_flips(&self) -> bool {
+        self.radius * self.period < 1.5
+    }
+
     /// A Hill exponent's real part above this counts as unstable: a relative rounding
     /// margin of the Arnoldi eigenvalues (their residual tolerance is 1e-10).
     pub fn tol(&self) -> f64 {
@@ -669,18 +680,39 @@ pub fn assess(
     if system.n_therm() == 0 {
         return evaluate(method, system, solution);
     }
-    let frozen = FrozenTemperature::new(system, solution);
     let (fast, slow) = rayon::join(
-        || {
-            evaluate(
-                method,
-                &frozen,
-                &FrozenOrbit::new(solution, system.n_therm()),
-            )
-        },
+        || assess_fast(method, hb, solution, evaluate),
         || hill_near_zero::near_zero_exponents(hb, solution, jacobian, &HillOptions::default()),
     );
     Ok(fast?.with_near_zero(slow?, solution.period()))
+}
+
+/// The fast half of [`assess`]: the multipliers of `evaluate` on the frozen-temperature
+/// problem alone, without the coupled exponents nearest zero (on a system without thermal
+/// DoFs, `evaluate` on the system itself, as [`assess`]). For what needs only multipliers
+/// the near-zero disk cannot supersede: a period doubling's multiplier near −1 has
+/// `|ln μ|/P ≥ (π − 0.05)/P`, outside any disk of radius below half that
+/// ([`NearZeroDisk::clear_of_flips`]).
+pub fn assess_fast(
+    method: &dyn StabilityMethod,
+    hb: &crate::hb::HarmonicBalance<'_>,
+    solution: &crate::hb::HbSolution,
+    evaluate: impl FnOnce(
+        &dyn StabilityMethod,
+        &dyn System,
+        &dyn PeriodicOrbit,
+    ) -> Result<FloquetResult, StabilityError>,
+) -> Result<FloquetResult, StabilityError> {
+    let system = hb.system();
+    if system.n_therm() == 0 {
+        return evaluate(method, system, solution);
+    }
+    let frozen = FrozenTemperature::new(system, solution);
+    evaluate(
+        method,
+        &frozen,
+        &FrozenOrbit::new(solution, system.n_therm()),
+    )
 }
 
 #[cfg(test)]
