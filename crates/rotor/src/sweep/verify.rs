@@ -317,13 +317,22 @@ impl Window<'_> {
 /// has no solution near a start point's coefficients.
 const MAX_START_RETRIES: usize = 3;
 
+/// Starts tried before the window when none inside it has a solution of the higher order
+/// near its coefficients: recorded points one and two windows past the window's edge (see
+/// [`start_candidates`]). On W2 the fold at 541.00 rad/s and on W5 nine saddle-nodes went
+/// unchecked at orders 4 and 5 because every start inside the window failed: a fold that
+/// moved at the higher order ends the start's sheet before its ω.
+const OUTSIDE_STARTS_WINDOWS: [f64; 2] = [2.0, 3.0];
+
 /// Where a group's window may start, in the order tried: walking back along the branch
 /// from the group's first event (`before`: the recorded points up to it, in branch order)
 /// while the points stay inside the window (the branch may pass the same speeds on
 /// another sheet earlier), the first point at least half a window (`w`) from each event
 /// (`omegas`), then up to [`MAX_START_RETRIES`] further back inside the window (further
 /// from the events as the branch runs there, though not necessarily in ω); else the
-/// earliest of that stretch; else the point just before.
+/// earliest of that stretch; else the point just before. Then, walking on back past the
+/// window for as long as ω moves away from the events (no fold between, so the same
+/// sheet), the first points [`OUTSIDE_STARTS_WINDOWS`] windows from the nearest event.
 fn start_candidates<'p>(
     before: &[&'p StartPoint<'p>],
     omegas: &[f64],
@@ -337,7 +346,7 @@ fn start_candidates<'p>(
         .take_while(|p| p.omega_rad_s >= lo - w && p.omega_rad_s <= hi + w)
         .copied()
         .collect();
-    match stretch
+    let mut starts: Vec<&StartPoint> = match stretch
         .iter()
         .position(|p| omegas.iter().all(|o| (p.omega_rad_s - o).abs() >= 0.5 * w))
     {
@@ -352,7 +361,26 @@ fn start_candidates<'p>(
             .copied()
             .into_iter()
             .collect(),
+    };
+    // past the window: the distance from the events grows at every point (no fold)
+    let away = |p: &StartPoint| (lo - p.omega_rad_s).max(p.omega_rad_s - hi);
+    let mut last = stretch.last().map_or(0.0, |p| away(p));
+    let mut wanted = OUTSIDE_STARTS_WINDOWS.iter().map(|k| k * w).peekable();
+    for p in before[..before.len() - stretch.len()].iter().rev() {
+        let d = away(p);
+        let Some(&at) = wanted.peek() else { break };
+        if d < last {
+            break;
+        }
+        last = d;
+        if d >= at {
+            if !starts.iter().any(|q| q.index == p.index) {
+                starts.push(p);
+            }
+            while wanted.next_if(|&k| d >= k).is_some() {}
+        }
     }
+    starts
 }
 
 /// The settings of the finer pass's levels, coarsest first: each with a step
@@ -1075,7 +1103,8 @@ mod tests {
 
     /// A window starts from the first recorded point half a window before the event, and
     /// where the higher order has no solution there from the points further back inside
-    /// the window, at most three of them; never from a point outside it.
+    /// the window, at most three of them; then from points one and two windows past its
+    /// edge, on the same sheet only.
     #[test]
     fn a_window_starts_half_a_window_back_then_further_back_inside_it() {
         let at = |omegas: &[f64]| -> Vec<StartPoint<'static>> {
@@ -1104,9 +1133,21 @@ mod tests {
         let dense: Vec<f64> = (0..12).map(|k| 540.0 + 0.04 * k as f64).collect();
         assert_eq!(indices(&at(&dense), &[541.0]), vec![11, 10, 9, 8]);
         // every point of the window within half a window of the event: its earliest only
-        assert_eq!(indices(&at(&[539.0, 540.6, 540.8]), &[541.0]), vec![1]);
-        // none inside the window: the point just before
-        assert_eq!(indices(&at(&[538.0, 539.5]), &[541.0]), vec![1]);
+        // (then 539.0, two windows' width from the event)
+        assert_eq!(indices(&at(&[539.0, 540.6, 540.8]), &[541.0]), vec![1, 0]);
+        // none inside the window: the point just before (and one three windows away)
+        assert_eq!(indices(&at(&[538.0, 539.5]), &[541.0]), vec![1, 0]);
+        // past the window, the first points two and three windows' width from the event
+        let longer = [
+            537.9, 538.6, 538.95, 539.33, 539.70, 540.04, 540.25, 540.44, 540.63, 540.82,
+        ];
+        assert_eq!(indices(&at(&longer), &[541.0]), vec![7, 6, 5, 2, 0]);
+        // not past a fold: beyond 538.2 the branch came from higher speeds (another sheet)
+        let folded = [537.0, 538.6, 538.2, 539.6, 540.2, 540.6];
+        assert_eq!(indices(&at(&folded), &[541.0]), vec![4, 2]);
+        // a sweep down: the same on the other side
+        let down = [544.1, 543.4, 542.0, 541.6, 541.2];
+        assert_eq!(indices(&at(&down), &[540.5]), vec![4, 1, 0]);
     }
 
     /// The finer pass reaches a sixteenth of the step in two levels of a quarter each.
