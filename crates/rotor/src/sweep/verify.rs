@@ -318,11 +318,13 @@ impl Window<'_> {
 const MAX_START_RETRIES: usize = 3;
 
 /// Starts tried before the window when none inside it has a solution of the higher order
-/// near its coefficients: recorded points one and two windows past the window's edge (see
-/// [`start_candidates`]). On W2 the fold at 541.00 rad/s and on W5 nine saddle-nodes went
-/// unchecked at orders 4 and 5 because every start inside the window failed: a fold that
-/// moved at the higher order ends the start's sheet before its ω.
-const OUTSIDE_STARTS_WINDOWS: [f64; 2] = [2.0, 3.0];
+/// near its coefficients: the first recorded points these many windows' width from the
+/// events (see [`start_candidates`]). On W2 the fold at 541.00 rad/s and on W5 nine
+/// saddle-nodes went unchecked at orders 4 and 5 because every start inside the window
+/// failed (the higher order's solution there lies far from the recorded one); W2's fold
+/// starts at two, four of W5's at two or three, and W5's five folds near 499 rad/s at five
+/// windows' width. A start that fails costs one Newton solve.
+const OUTSIDE_STARTS_WINDOWS: [f64; 4] = [2.0, 3.0, 5.0, 8.0];
 
 /// Where a group's window may start, in the order tried: walking back along the branch
 /// from the group's first event (`before`: the recorded points up to it, in branch order)
@@ -332,7 +334,7 @@ const OUTSIDE_STARTS_WINDOWS: [f64; 2] = [2.0, 3.0];
 /// from the events as the branch runs there, though not necessarily in ω); else the
 /// earliest of that stretch; else the point just before. Then, walking on back past the
 /// window for as long as ω moves away from the events (no fold between, so the same
-/// sheet), the first points [`OUTSIDE_STARTS_WINDOWS`] windows from the nearest event.
+/// sheet), the first points [`OUTSIDE_STARTS_WINDOWS`] windows' width from the events.
 fn start_candidates<'p>(
     before: &[&'p StartPoint<'p>],
     omegas: &[f64],
@@ -1103,8 +1105,8 @@ mod tests {
 
     /// A window starts from the first recorded point half a window before the event, and
     /// where the higher order has no solution there from the points further back inside
-    /// the window, at most three of them; then from points one and two windows past its
-    /// edge, on the same sheet only.
+    /// the window, at most three of them; then from points two, three, five and eight
+    /// windows' width from the event, on the same sheet only.
     #[test]
     fn a_window_starts_half_a_window_back_then_further_back_inside_it() {
         let at = |omegas: &[f64]| -> Vec<StartPoint<'static>> {
@@ -1142,6 +1144,9 @@ mod tests {
             537.9, 538.6, 538.95, 539.33, 539.70, 540.04, 540.25, 540.44, 540.63, 540.82,
         ];
         assert_eq!(indices(&at(&longer), &[541.0]), vec![7, 6, 5, 2, 0]);
+        // and five and eight windows' width away
+        let run: Vec<f64> = (0..18).map(|k| 532.0 + 0.5 * k as f64).collect();
+        assert_eq!(indices(&at(&run), &[541.0]), vec![17, 16, 14, 12, 8, 2]);
         // not past a fold: beyond 538.2 the branch came from higher speeds (another sheet)
         let folded = [537.0, 538.6, 538.2, 539.6, 540.2, 540.6];
         assert_eq!(indices(&at(&folded), &[541.0]), vec![4, 2]);
