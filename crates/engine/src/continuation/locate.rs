@@ -225,9 +225,9 @@ impl<'a> Continuation<'a> {
         let mut search = CrossingSearch::new(span, [g(f_a), g(f_b)], [cur.omega, to.omega]);
         // A period doubling's test function and side are those of the frozen-temperature
         // product's multipliers near −1, which no near-zero disk clear of flips can
-        // supersede: the trials skip Hill's eigenproblem (on a switched branch's doubled
-        // basis about half a trial's stability), and the point found is assessed in full
-        // once, as every trial was before.
+        // supersede: the trials skip Hill's eigenproblem, and the point found is assessed
+        // in full once, as every trial was before (where that fails, it keeps the
+        // product's multipliers that located it).
         let fast_trials = family == Family::Kind(BifurcationKind::PeriodDoubling)
             && [f_a, f_b]
                 .iter()
@@ -270,9 +270,8 @@ impl<'a> Continuation<'a> {
             }
         }
         let (g_best, mut p) = best?;
-        if fast_trials {
-            (p.stability, p.stability_error) = self.assess_for_search(&p.solution, [f_a, f_b]);
-            p.stability.as_ref()?;
+        if fast_trials && let (Some(full), _) = self.assess_for_search(&p.solution, [f_a, f_b]) {
+            p.stability = Some(full);
         }
         // The near-zero test is a cosine (see `excesses_of`): a pair that crosses fast
         // keeps it far from zero until the bracket is narrow in ω; a bracket whose ends
