@@ -691,7 +691,7 @@ pub fn assess(
 /// problem alone, without the coupled exponents nearest zero (on a system without thermal
 /// DoFs, `evaluate` on the system itself, as [`assess`]). For what needs only multipliers
 /// the near-zero disk cannot supersede: a period doubling's multiplier near −1 has
-/// `|ln μ|/P ≥ (π − 0.05)/P`, outside any disk of radius below half that
+/// `|ln μ|/P ≥ (π − asin 0.05)/P`, outside any disk of radius below half that
 /// ([`NearZeroDisk::clear_of_flips`]).
 pub fn assess_fast(
     method: &dyn StabilityMethod,
