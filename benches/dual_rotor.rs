@@ -8,15 +8,24 @@
 //!   and on (the step includes the tangent, the corrector and the step control), the
 //!   third of a continuation from 400 rad/s (the second and later steps start their
 //!   corrector from the previous point's factorization).
+//! * `condensed_lu/*`: one LU factorization (faer's partial pivoting on one thread, the
+//!   call the condensation makes) of a dense matrix of the condensed size the dual rotor
+//!   has at orders 3, 4, 5, 7, 8 and 9, at orders 3, 4 and 5 without half orders, and on
+//!   the doubled basis of a switched branch (order 3 without half orders): the kernel that bounds the fixed workloads' cost from
+//!   below (docs/performance.md, "The floor of the method").
 //!
-//! Run: `cargo bench --bench dual_rotor`.
+//! Run: `cargo bench --bench dual_rotor` (`-- condensed_lu` for the factorizations alone).
 
 use criterion::{Criterion, criterion_group, criterion_main};
 
 /// The allocator of the `tmrotor` binary, so the figures are the ones a sweep sees.
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+use faer::Mat;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::lu::partial_pivoting::factor as lu;
 use std::hint::black_box;
+use tmrotor::continuation::switch::doubled_basis;
 use tmrotor::continuation::{Continuation, ContinuationOptions};
 use tmrotor::hb::{HarmonicBalance, HbSolution, LinearSolver, NewtonOptions, newton};
 use tmrotor::stability::{ExpSip, StabilityMethod};
@@ -96,6 +105,81 @@ fn bench(c: &mut Criterion) {
                     cont
                 },
                 |mut cont| cont.step().expect("step"),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    g.finish();
+    condensed_lu(c);
+}
+
+/// The condensed system's size (nonlinear DoFs × coefficients) of the dual rotor with
+/// `settings`, on its basis or (`doubled`) on the doubled basis of a switched branch.
+fn condensed_size(settings: &StudySettings, doubled: bool) -> usize {
+    let problem = SweepProblem::new(settings).expect("problem");
+    let basis = if doubled {
+        doubled_basis(&problem.basis).expect("doubled basis")
+    } else {
+        problem.basis.clone()
+    };
+    let hb = HarmonicBalance::new(&problem.system, &basis, None).expect("hb");
+    hb.nonlinear_global().len() * basis.n_coeffs()
+}
+
+fn condensed_lu(c: &mut Criterion) {
+    let mut cases: Vec<(String, usize)> = [3, 4, 5, 7, 8, 9]
+        .into_iter()
+        .map(|order| {
+            let mut s = StudySettings::default();
+            s.harmonic.order = order;
+            (format!("order_{order}"), condensed_size(&s, false))
+        })
+        .collect();
+    for order in [3, 4, 5] {
+        let mut s = StudySettings::default();
+        s.harmonic.order = order;
+        s.harmonic.half_orders = false;
+        cases.push((
+            format!("no_half_orders_order_{order}"),
+            condensed_size(&s, false),
+        ));
+        if order == 3 {
+            cases.push((
+                "doubled_no_half_orders".to_string(),
+                condensed_size(&s, true),
+            ));
+        }
+    }
+    let mut g = c.benchmark_group("condensed_lu");
+    g.sample_size(10);
+    for (name, n) in cases {
+        // dense and well conditioned; the factorization's cost does not depend on the
+        // entries (partial pivoting, no sparsity)
+        let a = Mat::<f64>::from_fn(n, n, |i, j| {
+            ((i * 7 + j * 13) % 101) as f64 / 101.0 + if i == j { 3.0 } else { 0.0 }
+        });
+        let par = faer::Par::Seq;
+        let mut mem = MemBuffer::new(lu::lu_in_place_scratch::<usize, f64>(
+            n,
+            n,
+            par,
+            Default::default(),
+        ));
+        let (mut perm, mut perm_inv) = (vec![0usize; n], vec![0usize; n]);
+        g.bench_function(format!("{name}_n{n}"), |b| {
+            b.iter_batched(
+                || a.clone(),
+                |mut m| {
+                    lu::lu_in_place(
+                        m.as_mut(),
+                        &mut perm,
+                        &mut perm_inv,
+                        par,
+                        MemStack::new(&mut mem),
+                        Default::default(),
+                    );
+                    m
+                },
                 criterion::BatchSize::LargeInput,
             )
         });
