@@ -9,10 +9,11 @@
 //!   third of a continuation from 400 rad/s (the second and later steps start their
 //!   corrector from the previous point's factorization).
 //! * `condensed_lu/*`: one LU factorization (faer's partial pivoting on one thread, the
-//!   call the condensation makes) of a dense matrix of the condensed size the dual rotor
-//!   has at orders 3, 4, 5, 7, 8 and 9, at orders 3, 4 and 5 without half orders, and on
-//!   the doubled basis of a switched branch (order 3 without half orders): the kernel that bounds the fixed workloads' cost from
-//!   below (docs/performance.md, "The floor of the method").
+//!   call the condensation makes, as the binaries run it) of a dense matrix of the
+//!   condensed size the dual rotor has at orders 3, 4, 5, 7, 8 and 9, at orders 3, 4 and 5
+//!   without half orders, and on the doubled basis of a switched branch (order 3 without
+//!   half orders): the kernel that bounds the fixed workloads' cost from below
+//!   (docs/performance.md, the eighth-session entry, "the floor of the method").
 //!
 //! Run: `cargo bench --bench dual_rotor` (`-- condensed_lu` for the factorizations alone).
 
