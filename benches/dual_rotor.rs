@@ -28,7 +28,7 @@ use faer::linalg::lu::partial_pivoting::factor as lu;
 use std::hint::black_box;
 use tmrotor::continuation::switch::doubled_basis;
 use tmrotor::continuation::{Continuation, ContinuationOptions};
-use tmrotor::hb::{HarmonicBalance, HbSolution, LinearSolver, NewtonOptions, newton};
+use tmrotor::hb::{Basis, HarmonicBalance, HbSolution, LinearSolver, NewtonOptions, newton};
 use tmrotor::stability::{ExpSip, StabilityMethod};
 use tmrotor::sweep::{StudySettings, SweepProblem, stability_method};
 use tmrotor::system::System;
@@ -114,41 +114,34 @@ fn bench(c: &mut Criterion) {
     condensed_lu(c);
 }
 
-/// The condensed system's size (nonlinear DoFs × coefficients) of the dual rotor with
-/// `settings`, on its basis or (`doubled`) on the doubled basis of a switched branch.
-fn condensed_size(settings: &StudySettings, doubled: bool) -> usize {
-    let problem = SweepProblem::new(settings).expect("problem");
-    let basis = if doubled {
-        doubled_basis(&problem.basis).expect("doubled basis")
-    } else {
-        problem.basis.clone()
-    };
-    let hb = HarmonicBalance::new(&problem.system, &basis, None).expect("hb");
+/// The condensed system's size (nonlinear DoFs × coefficients) of `problem`'s system on
+/// `basis`.
+fn condensed_size(problem: &SweepProblem, basis: &Basis) -> usize {
+    let hb = HarmonicBalance::new(&problem.system, basis, None).expect("hb");
     hb.nonlinear_global().len() * basis.n_coeffs()
 }
 
 fn condensed_lu(c: &mut Criterion) {
-    let mut cases: Vec<(String, usize)> = [3, 4, 5, 7, 8, 9]
-        .into_iter()
-        .map(|order| {
+    let mut cases: Vec<(String, usize)> = Vec::new();
+    for (half_orders, orders) in [(true, &[3, 4, 5, 7, 8, 9][..]), (false, &[3, 4, 5][..])] {
+        for &order in orders {
             let mut s = StudySettings::default();
             s.harmonic.order = order;
-            (format!("order_{order}"), condensed_size(&s, false))
-        })
-        .collect();
-    for order in [3, 4, 5] {
-        let mut s = StudySettings::default();
-        s.harmonic.order = order;
-        s.harmonic.half_orders = false;
-        cases.push((
-            format!("no_half_orders_order_{order}"),
-            condensed_size(&s, false),
-        ));
-        if order == 3 {
+            s.harmonic.half_orders = half_orders;
+            let problem = SweepProblem::new(&s).expect("problem");
+            let prefix = if half_orders { "" } else { "no_half_orders_" };
             cases.push((
-                "doubled_no_half_orders".to_string(),
-                condensed_size(&s, true),
+                format!("{prefix}order_{order}"),
+                condensed_size(&problem, &problem.basis),
             ));
+            // the switched branches of W5 (order 3 without half orders)
+            if !half_orders && order == 3 {
+                let doubled = doubled_basis(&problem.basis).expect("doubled basis");
+                cases.push((
+                    "doubled_no_half_orders".to_string(),
+                    condensed_size(&problem, &doubled),
+                ));
+            }
         }
     }
     let mut g = c.benchmark_group("condensed_lu");
