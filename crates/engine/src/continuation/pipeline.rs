@@ -38,7 +38,18 @@ use crate::hb::HbSolution;
 use crate::stability::FloquetResult;
 
 /// Accepted points the corrector may run ahead of the first point not yet handed out.
-const LEAD: usize = 4;
+///
+/// Why twelve: a point stays out until its searches end, and a crossing search is a
+/// chain of trials on one thread (at order 7 on the dual rotor seven trials of about
+/// 190 ms, Hill's eigenproblem in each on one core); with four points ahead the corrector
+/// soon waited and the other core idled (W4's searches used 1.53 of 2 cores). Measured
+/// against four, alternating, the recordings the same (docs/performance.md, ninth
+/// session): W1 5.47 / 5.27 s against 5.72 / 5.31 s, W2 37.69 / 36.24 s against 39.98 /
+/// 37.52 s, W5 135.33 / 132.72 s against 136.95 / 134.48 s, W4 with the literature
+/// values without the check 2.5 % less over five rounds. Each point ahead holds its
+/// factored Jacobian (about 3 MB at order 3, 10 MB at order 7): the peak memory grew by
+/// 10–100 MB on those workloads.
+const LEAD: usize = 12;
 
 /// How long a caller that found no task of its own to run waits for a finished one
 /// before it looks again.
