@@ -22,7 +22,8 @@
 //! * handed out: after all three, and after `k − 1`.
 //!
 //! The corrector runs at most [`LEAD`] points ahead of the first point not handed out
-//! (each holds a factored Jacobian, a few MB on the dual rotor).
+//! ([`LEAD_ONE_THREAD`] on a pool of one thread; each holds a factored Jacobian, a few MB
+//! on the dual rotor).
 
 use std::collections::VecDeque;
 use std::ops::ControlFlow;
@@ -48,8 +49,14 @@ use crate::stability::FloquetResult;
 /// 37.52 s, W5 135.33 / 132.72 s against 136.95 / 134.48 s, W4 with the literature
 /// values without the check 2.5 % less over five rounds. Each point ahead holds its
 /// factored Jacobian (about 3 MB at order 3, 10 MB at order 7): the peak memory grew by
-/// 10–100 MB on those workloads.
+/// 10–220 MB on those workloads. On a pool of one thread (a campaign's runs, two at a
+/// time on two cores) nothing runs beside the corrector, and running further ahead only
+/// held more matrices: the operating map (W7) took 55.18 / 56.95 s against 52.57 /
+/// 54.87 s; there [`LEAD_ONE_THREAD`] holds.
 const LEAD: usize = 12;
+
+/// [`LEAD`] on a pool of one thread: the driver's earlier value.
+const LEAD_ONE_THREAD: usize = 4;
 
 /// How long a caller that found no task of its own to run waits for a finished one
 /// before it looks again.
@@ -303,6 +310,11 @@ where
         observer: &mut dyn FnMut(StepOutcome) -> ControlFlow<()>,
     ) {
         let mut pausing = false;
+        let lead = if rayon::current_num_threads() > 1 {
+            LEAD
+        } else {
+            LEAD_ONE_THREAD
+        };
         loop {
             while let Ok(done) = self.rx.try_recv() {
                 self.take_in(done);
@@ -319,7 +331,7 @@ where
             if stopping && waiting == 0 {
                 return;
             }
-            if !stopping && waiting < LEAD {
+            if !stopping && waiting < lead {
                 let Some(last) = self.slots.back().map(|s| Arc::clone(&s.state)) else {
                     return;
                 };
