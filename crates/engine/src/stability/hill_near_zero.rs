@@ -114,10 +114,10 @@ pub const AUTO_BLOCK: usize = 4;
 /// system allocator, which maps and unmaps the larger basis at every point
 /// (docs/performance.md, fifth session). Below 612 (`examples/hill_spectrum.rs` over every
 /// point of a sweep, one thread, two rounds; docs/performance.md, ninth session): the
-/// Arnoldi iteration took as long or less with blocks of four at every size measured,
-/// 540 (order 3 without half orders: literature values 24.9 → 21.7 ms a point, built-in
-/// 25.4 → 24.4), 468 (order 2, 19.6 → 16.7), 396 (order 2 without half orders, 15.7 →
-/// 15.8) and 324 (order 1, 12.2 → 11.6). Below 324 not measured.
+/// Arnoldi iteration took less with blocks of four, or as long within 1 %, at every size
+/// measured: 540 (order 3 without half orders: literature values 24.9 → 21.7 ms a point,
+/// built-in 25.4 → 24.4), 468 (order 2, 19.6 → 16.7), 396 (order 2 without half orders,
+/// 15.7 → 15.8) and 324 (order 1, 12.2 → 11.6). Below 324 not measured.
 pub const AUTO_BLOCK_FROM: usize = 320;
 
 /// The Floquet exponents of the truncated balance in a disk around zero.
