@@ -190,8 +190,10 @@ fn nearest_real_to_one(f: &FloquetResult) -> Option<f64> {
 ///   with two folds (a pair inside one step) cannot tell and counts as confirmed;
 /// * a change of the number of multipliers outside the circle with nothing located gets
 ///   a warning with the reason: a real multiplier through +1 where the branch does not
-///   fold (the balance and the product disagree), time scales not separated, or a jump
-///   of the count (a collision of real multipliers outside the circle).
+///   fold (the balance and the product disagree), time scales not separated, a jump of
+///   the count (a collision of real multipliers outside the circle), or a change of the
+///   near-zero exponents' count by an odd number (an exponent that jumped: a pair
+///   changes it by two, and a real exponent passes zero only at a fold).
 pub fn audit_step(
     before: Option<&FloquetResult>,
     after: Option<&FloquetResult>,
@@ -257,7 +259,14 @@ pub fn audit_step(
         && located.is_empty()
         && a.unstable_count() != b.unstable_count()
     {
-        let reason = if exact && a.slow_unstable_count() != b.slow_unstable_count() {
+        let odd = a.slow_unstable_count().abs_diff(b.slow_unstable_count()) % 2 == 1;
+        let reason = if exact && odd {
+            format!(
+                "the coupled exponents nearest zero with a positive real part changed from {} to {}, by an odd number, where the branch does not fold: a pair crossing the imaginary axis changes that count by two and a real exponent passes zero only at a fold (det J = 0), so an exponent jumped, across the axis or through the edge of the disk, not a Neimark–Sacker point (nothing to locate) — where rolling elements lose contact, sampling the bearings makes such jumps (--exact-contacts integrates the contacts exactly and decides)",
+                a.slow_unstable_count(),
+                b.slow_unstable_count()
+            )
+        } else if exact && a.slow_unstable_count() != b.slow_unstable_count() {
             format!(
                 "the coupled exponents nearest zero changed from {} to {} with a positive real part, and the search could not follow a pair across the imaginary axis (a real exponent passes zero only at a fold, det J = 0, so the change is a pair's crossing, a Neimark–Sacker point, narrower than the step, or a fold pair inside it) — a smaller step (--ds-max) resolves it",
                 a.slow_unstable_count(),
@@ -1599,6 +1608,49 @@ mod tests {
             audit_step(Some(&a), Some(&a), &[], (1.0, 1.1), 1)
                 .notes
                 .is_empty()
+        );
+    }
+
+    #[test]
+    fn an_odd_change_of_the_near_zero_exponents_is_reported_as_a_jump() {
+        use num_complex::Complex64 as C;
+        // the coupled exponents nearest zero of an orbit of period 0.05 s, with one fast
+        // multiplier well inside the circle
+        let at = |exponents: Vec<C>| {
+            FloquetResult::new(vec![C::new(0.2, 0.0)]).with_near_zero(
+                crate::stability::NearZero {
+                    exponents,
+                    radius: 30.0,
+                    outer: 40.0,
+                    thermal: 1,
+                    steps: 0,
+                },
+                0.05,
+            )
+        };
+        let thermal = C::new(-0.01, 0.0);
+        // a real exponent above zero at one end, a stable pair at the other (as on the
+        // literature model at 612.68 rad/s): a count changed by one, not a pair's crossing
+        let a = at(vec![thermal, C::new(0.6, 0.0)]);
+        let b = at(vec![thermal, C::new(-2.4, 21.0), C::new(-2.4, -21.0)]);
+        assert_eq!((a.slow_unstable_count(), b.slow_unstable_count()), (1, 0));
+        let leap = audit_step(Some(&a), Some(&b), &[], (613.58, 612.48), 290);
+        assert_eq!(leap.notes.len(), 1, "{:?}", leap.notes);
+        assert!(
+            leap.notes[0].contains("by an odd number"),
+            "{}",
+            leap.notes[0]
+        );
+        assert!(leap.notes[0].contains("not a Neimark"), "{}", leap.notes[0]);
+        // a pair that crossed unseen changes it by two: the reason stays a crossing's
+        let c = at(vec![thermal, C::new(0.3, 5.0), C::new(0.3, -5.0)]);
+        let pair = audit_step(Some(&c), Some(&b), &[], (1.0, 1.1), 1);
+        assert_eq!(pair.notes.len(), 1, "{:?}", pair.notes);
+        assert!(!pair.notes[0].contains("odd"), "{}", pair.notes[0]);
+        assert!(
+            pair.notes[0].contains("could not follow a pair"),
+            "{}",
+            pair.notes[0]
         );
     }
 

@@ -273,14 +273,9 @@ impl<'a> Continuation<'a> {
         if fast_trials && let (Some(full), _) = self.assess_for_search(&p.solution, [f_a, f_b]) {
             p.stability = Some(full);
         }
-        // The near-zero test is a cosine (see `excesses_of`): a pair that crosses fast
-        // keeps it far from zero until the bracket is narrow in ω; a bracket whose ends
-        // lie on either side with the crossing exponent complex at the trial nearest the
-        // axis is a crossing, not a jump (a real exponent sits at ±1)
-        let pair_crossing = family == Family::NearZero
-            && (search.end_g[0] < 0.0) != (search.end_g[1] < 0.0)
-            && g_best.abs() < 1.0 - 1e-9;
-        if g_best.abs() > CROSSING_MODULUS_TOL && !pair_crossing {
+        let odd_without_fold =
+            tol_omega.is_some() && n_a.abs_diff(outside_of(f_b, family)) % 2 == 1;
+        if !found_a_crossing(family, search.end_g, g_best, odd_without_fold) {
             return None;
         }
         let kind = match family {
