@@ -1907,16 +1907,12 @@ mod tests {
         search.trials
     }
 
-    /// The converging secant of the last two trials reaches smooth crossings in fewer
-    /// trials than the guarded regula falsi alone, and to the same tolerance: test
-    /// functions shaped like the default sweep's period-doubling search at 617.19 rad/s
-    /// (the modulus from 1e-3 to 1.62 across a step of 0.063, `0.13 sinh(79.5 (s − r))`),
-    /// with the crossing moved across the step and the bend varied.
     #[test]
     fn a_near_zero_leap_on_an_odd_change_is_not_a_crossing() {
         let nz = Family::NearZero;
-        // W2's search at 613.58 → 612.48 rad/s: a real exponent (+1) at one end of the
-        // last bracket, a stable pair (cosine −0.51) at the other, the count 1 → 0
+        // the literature model's default sweep, 613.58 → 612.48 rad/s: a real exponent (+1) at
+        // one end of the last bracket, a stable pair (cosine −0.51) at the other, the count
+        // 1 → 0
         assert!(!found_a_crossing(nz, [1.0, -0.5109], -0.51, true));
         // the same bracket on a change by two: a pair that crossed fast
         assert!(found_a_crossing(nz, [1.0, -0.5109], -0.51, false));
@@ -1930,6 +1926,11 @@ mod tests {
         assert!(found_a_crossing(ns, [-0.01, 0.02], 0.015, false));
     }
 
+    /// The converging secant of the last two trials reaches smooth crossings in fewer
+    /// trials than the guarded regula falsi alone, and to the same tolerance: test
+    /// functions shaped like the default sweep's period-doubling search at 617.19 rad/s
+    /// (the modulus from 1e-3 to 1.62 across a step of 0.063, `0.13 sinh(79.5 (s − r))`),
+    /// with the crossing moved across the step and the bend varied.
     #[test]
     fn the_secant_trial_finds_smooth_crossings_in_fewer_trials() {
         let span = 0.06285;
