@@ -268,7 +268,7 @@ pub fn audit_step(
             )
         } else if exact && a.slow_unstable_count() != b.slow_unstable_count() {
             format!(
-                "the coupled exponents nearest zero changed from {} to {} with a positive real part, and the search could not follow a pair across the imaginary axis (a real exponent passes zero only at a fold, det J = 0, so the change is a pair's crossing, a Neimark–Sacker point, narrower than the step, or a fold pair inside it) — a smaller step (--ds-max) resolves it",
+                "the coupled exponents nearest zero changed from {} to {} with a positive real part, and the search could not follow a pair across the imaginary axis (a real exponent passes zero only at a fold, det J = 0, so the change is a pair's crossing, a Neimark–Sacker point, narrower than the step, a fold pair inside it, or a jump where rolling elements lose contact) — a smaller step (--ds-max) resolves the first two, --exact-contacts decides the last",
                 a.slow_unstable_count(),
                 b.slow_unstable_count()
             )

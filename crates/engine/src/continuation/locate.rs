@@ -234,6 +234,14 @@ impl<'a> Continuation<'a> {
                 .all(|f| f.near_zero.is_none_or(|d| d.clear_of_flips()));
         // the trial closest to the circle
         let mut best: Option<(f64, BranchPoint)> = None;
+        // how near the circle the crossing multiplier came (its modulus less one), at the
+        // step's ends and any trial
+        let modulus_gap = |f: &FloquetResult| {
+            ranked_of(f, family)
+                .get(k)
+                .map_or(f64::INFINITY, |(_, e)| e.abs())
+        };
+        let mut nearest_gap = modulus_gap(f_a).min(modulus_gap(f_b));
         for _ in 0..self.opts.max_bisections {
             let first = search.next_trial();
             let Some((mid, c)) = self.bracket_trial(cur, to, &search.bracket, first) else {
@@ -250,6 +258,7 @@ impl<'a> Continuation<'a> {
                 break;
             };
             let g_mid = g(fm);
+            nearest_gap = nearest_gap.min(modulus_gap(fm));
             let lo_side = outside_of(fm, family) == n_a;
             let done = search.record(
                 mid,
@@ -275,7 +284,8 @@ impl<'a> Continuation<'a> {
         }
         let odd_without_fold =
             tol_omega.is_some() && n_a.abs_diff(outside_of(f_b, family)) % 2 == 1;
-        if !found_a_crossing(family, search.end_g, g_best, odd_without_fold) {
+        let near_circle = nearest_gap <= CROSSING_MODULUS_TOL;
+        if !found_a_crossing(family, search.end_g, g_best, odd_without_fold, near_circle) {
             return None;
         }
         let kind = match family {

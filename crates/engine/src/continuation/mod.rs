@@ -231,18 +231,26 @@ impl Family {
 /// exponents, a few 1e-5 1/s below zero, would otherwise sit at zero on the stable side
 /// and end every search at its first trial; a real exponent crosses only at a fold).
 fn excesses_of(f: &FloquetResult, family: Family) -> Vec<f64> {
-    let mut m: Vec<f64> = f
+    ranked_of(f, family).into_iter().map(|(g, _)| g).collect()
+}
+
+/// [`excesses_of`] with each entry's own distance outside the circle beside it
+/// ([`crate::stability::Counted::excess`]: for a near-zero exponent `(Re λ − tol)·P`, the
+/// modulus of its multiplier less one to first order), in the same order.
+fn ranked_of(f: &FloquetResult, family: Family) -> Vec<(f64, f64)> {
+    let mut m: Vec<(f64, f64)> = f
         .counted()
         .iter()
         .filter(|c| family.holds(c))
         .map(|c| match (family, c.exponent) {
-            (Family::NearZero, Some(l)) if l.norm() > 0.0 => {
-                c.excess / (l.norm() * f.near_zero.map_or(1.0, |d| d.period))
-            }
-            _ => c.excess,
+            (Family::NearZero, Some(l)) if l.norm() > 0.0 => (
+                c.excess / (l.norm() * f.near_zero.map_or(1.0, |d| d.period)),
+                c.excess,
+            ),
+            _ => (c.excess, c.excess),
         })
         .collect();
-    m.sort_by(|x, y| y.total_cmp(x));
+    m.sort_by(|x, y| y.0.total_cmp(&x.0));
     m
 }
 
@@ -1076,9 +1084,25 @@ impl CrossingSearch {
 /// 2 L/min at 50 °C on the primary basis) the eleven searches on odd changes ended with
 /// the bracket's ends 0.04–17 1/s from the axis (a real exponent at one end in ten of
 /// them), and every search that came within `CROSSING_MODULUS_TOL` was on a change by two.
-fn found_a_crossing(family: Family, end_g: [f64; 2], g_best: f64, odd_without_fold: bool) -> bool {
+///
+/// A fast crossing is also a crossing of the multiplier's modulus: the search must have
+/// brought it within `CROSSING_MODULUS_TOL` of the circle at one end of its last bracket
+/// or at its nearest trial (`near_circle`), as for the fast multipliers. A pair that
+/// crosses close to zero keeps the cosine far from zero with a modulus at 1 (on the
+/// literature model's switched branches at 2 L/min and 50 °C, 608.916 rad/s: 0.011 ±
+/// 0.017i 1/s at one end, a modulus 1 + 6e-4), while a pair whose multiplier leaps from
+/// 0.56 to 2.4 within the last bracket (there at 587.11 and 587.84 rad/s, exponents 10–16
+/// 1/s from the axis at both ends) jumped.
+fn found_a_crossing(
+    family: Family,
+    end_g: [f64; 2],
+    g_best: f64,
+    odd_without_fold: bool,
+    near_circle: bool,
+) -> bool {
     let pair_crossing = family == Family::NearZero
         && !odd_without_fold
+        && near_circle
         && (end_g[0] < 0.0) != (end_g[1] < 0.0)
         && g_best.abs() < 1.0 - 1e-9;
     g_best.abs() <= CROSSING_MODULUS_TOL || pair_crossing
@@ -1913,17 +1937,27 @@ mod tests {
         // the literature model's default sweep, 613.58 → 612.48 rad/s: a real exponent (+1) at
         // one end of the last bracket, a stable pair (cosine −0.51) at the other, the count
         // 1 → 0
-        assert!(!found_a_crossing(nz, [1.0, -0.5109], -0.51, true));
+        // (its real exponent 0.038 1/s brings the modulus within 0.002 of the circle)
+        assert!(!found_a_crossing(nz, [1.0, -0.5109], -0.51, true, true));
         // the same bracket on a change by two: a pair that crossed fast
-        assert!(found_a_crossing(nz, [1.0, -0.5109], -0.51, false));
+        assert!(found_a_crossing(nz, [1.0, -0.5109], -0.51, false, true));
+        // ... unless its multiplier never came near the circle: a pair that leapt
+        // (the switched branches' 587.11 rad/s, cosines 0.97 and −0.87 at the ends)
+        assert!(!found_a_crossing(
+            nz,
+            [0.9714, -0.8746],
+            -0.8746,
+            false,
+            false
+        ));
         // a real exponent at the trial nearest the axis is no pair either way
-        assert!(!found_a_crossing(nz, [1.0, -0.5], 1.0, false));
+        assert!(!found_a_crossing(nz, [1.0, -0.5], 1.0, false, true));
         // a crossing brought to the axis is one, whatever the count
-        assert!(found_a_crossing(nz, [0.0026, -0.093], 0.0026, true));
+        assert!(found_a_crossing(nz, [0.0026, -0.093], 0.0026, true, true));
         // the fast multipliers' families are decided by the modulus alone
         let ns = Family::Kind(BifurcationKind::NeimarkSacker);
-        assert!(!found_a_crossing(ns, [-0.41, 4.77], -0.41, false));
-        assert!(found_a_crossing(ns, [-0.01, 0.02], 0.015, false));
+        assert!(!found_a_crossing(ns, [-0.41, 4.77], -0.41, false, false));
+        assert!(found_a_crossing(ns, [-0.01, 0.02], 0.015, false, true));
     }
 
     /// The converging secant of the last two trials reaches smooth crossings in fewer
