@@ -1091,8 +1091,9 @@ impl CrossingSearch {
 /// crosses close to zero keeps the cosine far from zero with a modulus at 1 (on the
 /// literature model's switched branches at 2 L/min and 50 °C, 608.916 rad/s: 0.011 ±
 /// 0.017i 1/s at one end, a modulus 1 + 6e-4), while a pair whose multiplier leaps from
-/// 0.56 to 2.4 within the last bracket (there at 587.11 and 587.84 rad/s, exponents 10–16
-/// 1/s from the axis at both ends) jumped.
+/// inside to far outside the circle within the last bracket (there at 587.11 and 587.84
+/// rad/s, exponents 10–16 1/s from the axis at both ends, moduli about 0.3 and 5 over the
+/// doubled period) jumped.
 fn found_a_crossing(
     family: Family,
     end_g: [f64; 2],
