@@ -259,18 +259,16 @@ pub fn audit_step(
         && located.is_empty()
         && a.unstable_count() != b.unstable_count()
     {
-        let odd = a.slow_unstable_count().abs_diff(b.slow_unstable_count()) % 2 == 1;
-        let reason = if exact && odd {
+        let (slow_a, slow_b) = (a.slow_unstable_count(), b.slow_unstable_count());
+        let reason = if exact && slow_a.abs_diff(slow_b) % 2 == 1 {
             format!(
                 "the coupled exponents nearest zero with a positive real part changed from {} to {}, by an odd number, where the branch does not fold: a pair crossing the imaginary axis changes that count by two and a real exponent passes zero only at a fold (det J = 0), so an exponent jumped, across the axis or through the edge of the disk, not a Neimark–Sacker point (nothing to locate) — where rolling elements lose contact, sampling the bearings makes such jumps (--exact-contacts integrates the contacts exactly and decides)",
-                a.slow_unstable_count(),
-                b.slow_unstable_count()
+                slow_a, slow_b
             )
-        } else if exact && a.slow_unstable_count() != b.slow_unstable_count() {
+        } else if exact && slow_a != slow_b {
             format!(
                 "the coupled exponents nearest zero changed from {} to {} with a positive real part, and the search could not follow a pair across the imaginary axis (a real exponent passes zero only at a fold, det J = 0, so the change is a pair's crossing, a Neimark–Sacker point, narrower than the step, a fold pair inside it, or a jump where rolling elements lose contact) — a smaller step (--ds-max) resolves the first two, --exact-contacts decides the last",
-                a.slow_unstable_count(),
-                b.slow_unstable_count()
+                slow_a, slow_b
             )
         } else if a.fold_parity_mismatch != b.fold_parity_mismatch {
             "a real multiplier of the monodromy product passes +1 where the branch does not fold: the truncated harmonic balance, whose real exponents pass zero only at folds, and the orbit's linearisation disagree here — where rolling elements lose contact, sampling the bearings moves folds (--exact-contacts integrates the contacts exactly and decides); else raise the truncation order"

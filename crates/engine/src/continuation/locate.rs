@@ -209,20 +209,24 @@ impl<'a> Continuation<'a> {
         // would be a slow thermal one just below +1 for as long as the crossing multiplier
         // is smaller: g would sit within 1e-5 of zero on that side, and the modulus
         // tolerance would end the search at its first trial, wherever that fell.
-        let n_a = outside_of(f_a, family);
-        let k = n_a.min(outside_of(f_b, family));
-        // (a side with fewer multipliers of that kind counts the missing ones as 0)
-        let g = |f: &FloquetResult| {
-            excesses_of(f, family)
+        let (n_a, n_b) = (outside_of(f_a, family), outside_of(f_b, family));
+        let k = n_a.min(n_b);
+        // The crossing multiplier's test value g and how near the circle it is (its
+        // modulus less one; `ranked_of`). A side with fewer multipliers of that kind counts
+        // the missing ones as 0.
+        let kth = |f: &FloquetResult| {
+            ranked_of(f, family)
                 .get(k)
-                .copied()
-                .unwrap_or(-(1.0 + UNIT_CIRCLE_TOL))
+                .map_or((-(1.0 + UNIT_CIRCLE_TOL), f64::INFINITY), |&(g, gap)| {
+                    (g, gap.abs())
+                })
         };
+        let ((g_a, gap_a), (g_b, gap_b)) = (kth(f_a), kth(f_b));
         let nu = self.hb.n_unknowns();
         // on a step without a fold ω is monotone along the bracket
         let tol_omega =
             (cur.tangent[nu] * to.tangent[nu] > 0.0).then_some(self.opts.bifurcation_tol_omega);
-        let mut search = CrossingSearch::new(span, [g(f_a), g(f_b)], [cur.omega, to.omega]);
+        let mut search = CrossingSearch::new(span, [g_a, g_b], [cur.omega, to.omega]);
         // A period doubling's test function and side are those of the frozen-temperature
         // product's multipliers near −1, which no near-zero disk clear of flips can
         // supersede: the trials skip Hill's eigenproblem, and the point found is assessed
@@ -234,14 +238,8 @@ impl<'a> Continuation<'a> {
                 .all(|f| f.near_zero.is_none_or(|d| d.clear_of_flips()));
         // the trial closest to the circle
         let mut best: Option<(f64, BranchPoint)> = None;
-        // how near the circle the crossing multiplier came (its modulus less one), at the
-        // step's ends and any trial
-        let modulus_gap = |f: &FloquetResult| {
-            ranked_of(f, family)
-                .get(k)
-                .map_or(f64::INFINITY, |(_, e)| e.abs())
-        };
-        let mut nearest_gap = modulus_gap(f_a).min(modulus_gap(f_b));
+        // how near the circle the crossing multiplier came, at the step's ends and any trial
+        let mut nearest_gap = gap_a.min(gap_b);
         for _ in 0..self.opts.max_bisections {
             let first = search.next_trial();
             let Some((mid, c)) = self.bracket_trial(cur, to, &search.bracket, first) else {
@@ -257,8 +255,8 @@ impl<'a> Continuation<'a> {
             let Some(fm) = p.stability.as_ref() else {
                 break;
             };
-            let g_mid = g(fm);
-            nearest_gap = nearest_gap.min(modulus_gap(fm));
+            let (g_mid, gap) = kth(fm);
+            nearest_gap = nearest_gap.min(gap);
             let lo_side = outside_of(fm, family) == n_a;
             let done = search.record(
                 mid,
@@ -282,8 +280,7 @@ impl<'a> Continuation<'a> {
         if fast_trials && let (Some(full), _) = self.assess_for_search(&p.solution, [f_a, f_b]) {
             p.stability = Some(full);
         }
-        let odd_without_fold =
-            tol_omega.is_some() && n_a.abs_diff(outside_of(f_b, family)) % 2 == 1;
+        let odd_without_fold = tol_omega.is_some() && n_a.abs_diff(n_b) % 2 == 1;
         let near_circle = nearest_gap <= CROSSING_MODULUS_TOL;
         if !found_a_crossing(family, search.end_g, g_best, odd_without_fold, near_circle) {
             return None;

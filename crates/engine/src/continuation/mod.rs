@@ -1935,10 +1935,9 @@ mod tests {
     #[test]
     fn a_near_zero_leap_on_an_odd_change_is_not_a_crossing() {
         let nz = Family::NearZero;
-        // the literature model's default sweep, 613.58 → 612.48 rad/s: a real exponent (+1) at
-        // one end of the last bracket, a stable pair (cosine −0.51) at the other, the count
-        // 1 → 0
-        // (its real exponent 0.038 1/s brings the modulus within 0.002 of the circle)
+        // the literature model's default sweep, 613.58 → 612.48 rad/s: a real exponent (+1,
+        // 0.038 1/s, its modulus within 0.002 of the circle) at one end of the last
+        // bracket, a stable pair (cosine −0.51) at the other, the count 1 → 0
         assert!(!found_a_crossing(nz, [1.0, -0.5109], -0.51, true, true));
         // the same bracket on a change by two: a pair that crossed fast
         assert!(found_a_crossing(nz, [1.0, -0.5109], -0.51, false, true));
